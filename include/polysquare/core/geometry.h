@@ -1,0 +1,49 @@
+// Small 2D vector type and predicates shared by every stage.
+#pragma once
+
+#include <cmath>
+
+namespace polysquare {
+
+/// A point or vector in the plane (double precision, the region's units).
+struct Vec2 {
+  double x = 0.0;
+  double y = 0.0;
+};
+
+inline Vec2 operator+(Vec2 a, Vec2 b) { return {a.x + b.x, a.y + b.y}; }
+inline Vec2 operator-(Vec2 a, Vec2 b) { return {a.x - b.x, a.y - b.y}; }
+inline Vec2 operator*(double s, Vec2 a) { return {s * a.x, s * a.y}; }
+inline Vec2 operator*(Vec2 a, double s) { return {s * a.x, s * a.y}; }
+inline bool operator==(Vec2 a, Vec2 b) { return a.x == b.x && a.y == b.y; }
+inline double dot(Vec2 a, Vec2 b) { return a.x * b.x + a.y * b.y; }
+/// z component of the 3D cross product: positive when b is counter-clockwise of a.
+inline double cross(Vec2 a, Vec2 b) { return a.x * b.y - a.y * b.x; }
+inline double norm(Vec2 a) { return std::hypot(a.x, a.y); }
+inline double distance(Vec2 a, Vec2 b) { return norm(a - b); }
+inline Vec2 lerp(Vec2 a, Vec2 b, double t) { return {a.x + t * (b.x - a.x), a.y + t * (b.y - a.y)}; }
+
+/// Twice the signed area of triangle abc (positive when counter-clockwise).
+inline double orient2(Vec2 a, Vec2 b, Vec2 c) { return cross(b - a, c - a); }
+
+/// Distance from p to the segment [a, b].
+inline double point_segment_distance(Vec2 p, Vec2 a, Vec2 b) {
+  const Vec2 d = b - a;
+  const double len2 = dot(d, d);
+  double t = len2 > 0.0 ? dot(p - a, d) / len2 : 0.0;
+  t = t < 0.0 ? 0.0 : (t > 1.0 ? 1.0 : t);
+  return distance(p, a + t * d);
+}
+
+/// Axis-aligned bounding box.
+struct Box2 {
+  Vec2 lo{INFINITY, INFINITY};
+  Vec2 hi{-INFINITY, -INFINITY};
+  void add(Vec2 p) {
+    lo = {std::fmin(lo.x, p.x), std::fmin(lo.y, p.y)};
+    hi = {std::fmax(hi.x, p.x), std::fmax(hi.y, p.y)};
+  }
+  double diagonal() const { return lo.x <= hi.x ? distance(lo, hi) : 0.0; }
+};
+
+}  // namespace polysquare

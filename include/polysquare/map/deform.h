@@ -1,0 +1,61 @@
+// Stage 4: inversion-free deformation of a triangle mesh towards a poly-square (FPPM Sec. 4.1-4.2).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "polysquare/core/geometry.h"
+
+namespace polysquare {
+
+struct DeformOptions {
+  double amips_alpha = 0.5;      ///< AMIPS balance of angle (alpha) against area (1 - alpha) distortion; paper: 0.5
+  double amips_s = 5.0;          ///< AMIPS penalty scale s; paper: 5
+  double boundary_weight = 5.0;  ///< lambda of E^B (eq. 8 in eq. 9); paper: 5
+  double feature_weight = 1.0;   ///< weight of E^F (eq. 10); paper: 1
+  /// Smoothing of |x| in the L1 terms, sqrt(x^2 + eps^2), decreasing over the solve because |x| is not
+  /// differentiable at axis-aligned edges.
+  std::vector<double> eps_schedule{0.2, 0.08, 0.03, 0.01};
+  int max_iterations = 1500;     ///< L-BFGS iterations per eps stage
+  double relative_tolerance = 1e-8;  ///< stop when the energy decrease per iteration is below this fraction
+  int lbfgs_memory = 8;          ///< L-BFGS history length
+};
+
+/// An edge whose deformed direction is pulled towards a coordinate axis (boundary or feature edge).
+struct AlignedEdge {
+  std::int32_t a = 0, b = 0;
+  double weight = 1.0;  ///< boundary_weight for boundary edges, feature_weight for feature edges
+};
+
+/// The deformation problem: rest shape, triangles (counter-clockwise in the rest shape) and aligned edges.
+struct DeformProblem {
+  std::vector<Vec2> rest;                              ///< #V rest positions
+  std::vector<std::array<std::int32_t, 3>> triangles;  ///< #T
+  std::vector<AlignedEdge> aligned;                    ///< E^B and E^F edges
+  std::vector<std::uint8_t> fixed;                     ///< #V, 1 = vertex does not move (may be empty)
+};
+
+struct DeformStats {
+  int iterations = 0;
+  double energy_before = 0.0;
+  double energy_after = 0.0;
+  double alignment_before = 0.0;  ///< E^B + E^F part (with the last eps), before and after
+  double alignment_after = 0.0;
+};
+
+/// Minimizes E^D (AMIPS, area-weighted) + weighted alignment terms from `x` (which must be un-inverted),
+/// never leaving the set of un-flipped triangles. Fixed vertices keep their positions.
+DeformStats deform_to_polysquare(const DeformProblem& problem, const DeformOptions& options, std::vector<Vec2>& x);
+
+/// Moves the vertices flagged in `target_mask` to `targets` along a path of un-inverted meshes: the displacement
+/// is extended harmonically to the free vertices, applied in steps that never flip a triangle, with the free
+/// vertices re-optimized for AMIPS after every step. Returns false when no valid path was found.
+bool move_constrained_vertices(const DeformProblem& problem, const DeformOptions& options,
+                               const std::vector<std::uint8_t>& target_mask, const std::vector<Vec2>& targets,
+                               std::vector<Vec2>& x);
+
+/// Smallest signed area over the triangles (negative means inverted).
+double min_signed_area(const std::vector<std::array<std::int32_t, 3>>& triangles, const std::vector<Vec2>& x);
+
+}  // namespace polysquare

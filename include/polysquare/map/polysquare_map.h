@@ -1,0 +1,50 @@
+// Stages 2 and 4-6 for one polygon part: background triangulation, pre-orientation, poly-square deformation,
+// layout, integer quantization, snapping and quad extraction.
+#pragma once
+
+#include <string>
+
+#include "polysquare/core/quad_mesh.h"
+#include "polysquare/core/region.h"
+#include "polysquare/map/deform.h"
+#include "polysquare/map/layout.h"
+#include "polysquare/map/quantize.h"
+#include "polysquare/triangulate/background_triangulation.h"
+
+namespace polysquare {
+
+struct PolysquareMapOptions {
+  double size = 1.0;               ///< target quad edge length h (region units); must be set by the caller
+  double parameterization_ratio = 1.0;  ///< background triangle edge length / h
+  double triangle_shape_bound = 0.125;  ///< CGAL shape bound (0.125 = 20.7 degree minimum angle)
+  std::size_t max_triangles = 20'000'000;  ///< refuse larger background triangulations
+  bool preorient = true;           ///< rotate by the eq. 11 optimum before deforming
+  DeformOptions deform;
+  LayoutOptions layout;
+  QuantizeOptions quantize;
+};
+
+struct PartMapStats {
+  int part = 0;
+  std::size_t triangles = 0, triangle_vertices = 0;
+  double rotation_deg = 0.0;       ///< pre-orientation angle
+  DeformStats deform;
+  std::size_t break_points = 0, segments = 0;
+  QuantizeStats quantize;
+  std::size_t quads = 0;
+  double seconds_triangulate = 0, seconds_deform = 0, seconds_quantize = 0, seconds_snap = 0, seconds_extract = 0;
+};
+
+struct PartMapResult {
+  QuadMesh mesh;  ///< quads of this part, quad_part set to the part index
+  PartMapStats stats;
+};
+
+/// Pre-orientation angle (radians) minimizing sum over edges of len * nx^2 ny^2 (eq. 11). With the normal at
+/// angle phi, nx^2 ny^2 = (1 - cos 4 phi) / 8, so the optimum is closed-form: theta = -arg(sum len e^{4 i phi})/4.
+double preorientation_angle(const std::vector<Vec2>& points, const std::vector<std::array<std::int32_t, 2>>& edges);
+
+/// Meshes one part with a single poly-square map. Throws MeshingError naming the part when the map fails.
+PartMapResult map_part(const Region& region, const RegionPart& part, const PolysquareMapOptions& options);
+
+}  // namespace polysquare

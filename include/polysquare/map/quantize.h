@@ -1,0 +1,35 @@
+// Stage 5: integer quantization of a poly-square layout (interval assignment).
+#pragma once
+
+#include <string>
+
+#include "polysquare/map/layout.h"
+
+namespace polysquare {
+
+struct QuantizeOptions {
+  double position_weight = 1e-3;  ///< weak pull of each break point towards its deformed position (anchors
+                                  ///< pieces, such as interior features, that no segment ties to the boundary)
+  int time_limit_ms = 20000;      ///< GLPK simplex time limit
+};
+
+struct QuantizeStats {
+  double max_relative_deviation = 0.0;  ///< max over segments of |n - target| / max(target, 1)
+  int segments = 0;
+  int variables = 0;
+};
+
+/// Chooses integer lattice positions for every break point so that each segment of label +-X (+-Y) keeps y (x)
+/// constant and advances by an integer n >= 1 in its direction, with n close to its target, minimizing
+/// sum |n - target| / max(target, 1). X and Y are independent integer programs solved with GLPK; the constraint
+/// matrices are network matrices, so the LP optimum is already integral and branch-and-bound is a formality.
+/// Fills layout.lattice. Throws MeshingError naming `part_name` when the layout has no integer solution.
+QuantizeStats quantize_layout(Layout& layout, const std::vector<Vec2>& deformed, const QuantizeOptions& options,
+                              const std::string& part_name);
+
+/// Checks that the quantized layout is a valid poly-square: no zero-length segment, and segments of different
+/// chains or non-adjacent segments of one chain meet only at shared break points. Returns an empty string when
+/// valid, otherwise a description of the first conflict.
+std::string check_layout(const Layout& layout);
+
+}  // namespace polysquare

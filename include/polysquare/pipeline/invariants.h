@@ -1,0 +1,25 @@
+// The invariants every output mesh must hold (design.md), checked before anything is written.
+#pragma once
+
+#include <string>
+
+#include "polysquare/core/quad_mesh.h"
+
+namespace polysquare {
+
+struct InvariantReport {
+  std::size_t degenerate_quads = 0;     ///< repeated node or zero area
+  std::size_t inverted_quads = 0;       ///< some corner with scaled Jacobian <= 0
+  std::size_t non_manifold_edges = 0;   ///< edges with more than two quads
+  std::size_t untagged_boundary_edges = 0;  ///< edges with one quad that are not tagged boundary edges
+  std::size_t tagged_edges_not_boundary = 0; ///< tagged boundary edges that do not have exactly one quad
+  std::size_t feature_edges_not_in_mesh = 0; ///< tagged feature edges that are not edges of any quad
+  std::string first_problem;            ///< description of the first violation (empty when valid)
+  bool ok() const { return first_problem.empty(); }
+};
+
+/// Checks invariants 1-3 of design.md and the consistency of the curve tags (boundary edges are exactly the
+/// edges with one quad; feature edges are quad edges).
+InvariantReport check_invariants(const QuadMesh& mesh);
+
+}  // namespace polysquare

@@ -1,0 +1,37 @@
+// The pipeline: the library owns the stage order; the CLI only parses options and reports.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "polysquare/core/quad_mesh.h"
+#include "polysquare/core/region.h"
+#include "polysquare/map/polysquare_map.h"
+#include "polysquare/smooth/smooth.h"
+
+namespace polysquare {
+
+struct MeshOptions {
+  double size = 0.0;             ///< target quad edge length h, region units (required, > 0)
+  int threads = 0;               ///< worker threads; 0 = all cores. The mesh does not depend on it.
+  std::uint64_t seed = 1;        ///< seed of every randomized stage (partitioning); the output depends only on it
+  double corner_threshold_deg = 30.0;  ///< input vertices turning by more than this are mesh nodes
+  std::size_t max_quads = 50'000'000;  ///< refuse sizes whose estimated quad count exceeds this
+  PolysquareMapOptions map;      ///< stages 2 and 4-6 (map.size and map.layout.corner_threshold_deg are set from above)
+  SmoothOptions smooth;          ///< stage 7 smoothing
+};
+
+struct MeshResult {
+  QuadMesh mesh;
+  std::vector<PartMapStats> parts;  ///< per polygon part, in part order
+  nlohmann::json report;            ///< options, timings, counts (quality is added by the caller's choice)
+};
+
+/// Meshes every polygon part of a validated region (parts in parallel with oneTBB), assembles them in part
+/// order, smooths, and checks the invariants. Throws InputError for bad options (size <= 0, too many quads) and
+/// MeshingError naming every part that failed; never returns a mesh that breaks an invariant.
+MeshResult mesh_region(const Region& region, const MeshOptions& options);
+
+}  // namespace polysquare

@@ -1,0 +1,55 @@
+// Stage 2: the background triangulation of one polygon part, conforming to its rings and feature curves.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "polysquare/core/geometry.h"
+#include "polysquare/core/region.h"
+
+namespace polysquare {
+
+struct TriangulationOptions {
+  double max_edge = 1.0;      ///< target longest edge of a triangle (region units); set from the mesh size
+  double shape_bound = 0.125; ///< CGAL bound B on circumradius / shortest edge squared / 4: 0.125 = 20.7 degrees
+  std::size_t max_triangles = 20'000'000;  ///< refuse to refine beyond this (memory guard)
+  bool split_constrained_edges = true;  ///< split interior edges joining two constrained vertices (corner ears)
+};
+
+/// A constrained chain of triangulation vertices: an input ring (closed) or a feature curve (closed or open),
+/// with the Steiner points CGAL inserted on it, in input order.
+struct TriChain {
+  enum class Kind : std::uint8_t { ring, feature };
+  Kind kind = Kind::ring;
+  int index = -1;            ///< ring or feature index in the Region
+  bool closed = false;       ///< closed chains do not repeat their first vertex
+  std::vector<std::int32_t> vertices;
+  std::vector<std::uint8_t> is_input;  ///< per chain vertex: 1 if it is an input vertex (not a Steiner point)
+};
+
+/// A triangle mesh of one part in flat arrays.
+struct TriMesh {
+  std::vector<Vec2> vertices;                          ///< #V positions
+  std::vector<std::array<std::int32_t, 3>> triangles;  ///< #T vertex indices, counter-clockwise
+  std::vector<TriChain> chains;                        ///< rings of the part, then its feature curves
+  std::vector<std::int32_t> feature_point_vertices;    ///< vertices of isolated feature points
+};
+
+/// One polygon part of a region: the indices of its rings and of the feature curves and points inside it.
+struct RegionPart {
+  int part = 0;
+  std::vector<int> rings;
+  std::vector<int> features;
+  std::vector<int> feature_points;
+};
+
+/// Groups the rings, features and feature points of a validated region by polygon part.
+std::vector<RegionPart> split_into_parts(const Region& region);
+
+/// Constrained Delaunay triangulation of `part`, refined by CGAL's Delaunay mesher to `options.max_edge`.
+/// Rings and feature curves are constraints; they come back as chains of triangulation vertices.
+/// Throws MeshingError when refinement would exceed options.max_triangles.
+TriMesh triangulate_part(const Region& region, const RegionPart& part, const TriangulationOptions& options);
+
+}  // namespace polysquare

@@ -1,0 +1,2 @@
+# Sources of the input module (relative to this folder).
+list(APPEND MODULE_SOURCES)

@@ -1,0 +1,305 @@
+#include "polysquare/map/deform.h"
+
+#include <Eigen/Sparse>
+#include <Eigen/SparseCholesky>
+
+#include <algorithm>
+#include <cmath>
+#include <deque>
+#include <limits>
+
+namespace polysquare {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// Precomputed rest-shape data of one triangle: inverse of the rest edge matrix and its weight.
+struct RestTriangle {
+  double r00, r01, r10, r11;  // inverse of [p1-p0, p2-p0]
+  double weight;              // area / mean area, so the energy scale does not depend on units or resolution
+};
+
+struct Energy {
+  const DeformProblem& problem;
+  double c_angle, c_area;  // alpha*s/4 and (1-alpha)*s/2
+  double expo_rest;        // exponent of AMIPS at a rigid motion
+  double eps = 0.1;
+  bool with_alignment = true;
+  std::vector<RestTriangle> rest;
+  std::vector<double> edge_scale;  // rest length / mean rest length of aligned edges
+
+  Energy(const DeformProblem& p, const DeformOptions& o)
+      : problem(p), c_angle(o.amips_alpha * o.amips_s / 4.0), c_area((1.0 - o.amips_alpha) * o.amips_s / 2.0),
+        expo_rest(2.0 * c_angle + 2.0 * c_area) {
+    double total = 0.0;
+    rest.reserve(p.triangles.size());
+    for (const auto& t : p.triangles) {
+      const Vec2 e1 = p.rest[t[1]] - p.rest[t[0]], e2 = p.rest[t[2]] - p.rest[t[0]];
+      const double det = cross(e1, e2);
+      rest.push_back({e2.y / det, -e2.x / det, -e1.y / det, e1.x / det, 0.5 * det});
+      total += 0.5 * det;
+    }
+    // E^D is the area-weighted mean distortion and the alignment terms are length-weighted means over all
+    // aligned edges, so both are dimensionless and independent of the resolution: lambda = 5 then means what
+    // the paper intends (alignment five times as important as distortion) on any mesh.
+    for (auto& r : rest) r.weight /= total;
+    double len = 0.0;
+    for (const auto& e : p.aligned) len += distance(p.rest[e.a], p.rest[e.b]);
+    for (const auto& e : p.aligned) edge_scale.push_back(distance(p.rest[e.a], p.rest[e.b]) / len);
+  }
+
+  // Energy and (optionally) gradient at x. Returns +inf if any triangle is inverted or degenerate.
+  double eval(const std::vector<Vec2>& x, std::vector<Vec2>* grad, double* alignment_part = nullptr) const {
+    if (grad) std::fill(grad->begin(), grad->end(), Vec2{});
+    double e = 0.0;
+    for (std::size_t t = 0; t < problem.triangles.size(); ++t) {
+      const auto& tri = problem.triangles[t];
+      const RestTriangle& r = rest[t];
+      const Vec2 d1 = x[tri[1]] - x[tri[0]], d2 = x[tri[2]] - x[tri[0]];
+      // J = D * R with D = [d1 d2] (columns).
+      const double j00 = d1.x * r.r00 + d2.x * r.r10, j01 = d1.x * r.r01 + d2.x * r.r11;
+      const double j10 = d1.y * r.r00 + d2.y * r.r10, j11 = d1.y * r.r01 + d2.y * r.r11;
+      const double det = j00 * j11 - j01 * j10;
+      if (!(det > 1e-300)) return kInf;
+      const double fro = j00 * j00 + j01 * j01 + j10 * j10 + j11 * j11;
+      const double expo = c_angle * fro / det + c_area * (det + 1.0 / det);
+      if (expo - expo_rest > 600.0) return kInf;
+      // Divided by the AMIPS of a rigid motion (exp(2 c_angle + 2 c_area)): a per-triangle distortion of 1 at
+      // rest keeps the alignment weights of the paper (lambda = 5) meaningful whatever the mesh resolution.
+      const double val = r.weight * std::exp(expo - expo_rest);
+      e += val;
+      if (!grad) continue;
+      // dE/dJ = val * (c_angle (2J/det - fro/det^2 cof) + c_area (1 - 1/det^2) cof), cof = d det / dJ.
+      const double a = val * c_angle * 2.0 / det;
+      const double b = val * (-c_angle * fro / (det * det) + c_area * (1.0 - 1.0 / (det * det)));
+      const double g00 = a * j00 + b * j11, g01 = a * j01 - b * j10;
+      const double g10 = a * j10 - b * j01, g11 = a * j11 + b * j00;
+      // dE/dD = dE/dJ * R^T.
+      const Vec2 gd1{g00 * r.r00 + g01 * r.r01, g10 * r.r00 + g11 * r.r01};
+      const Vec2 gd2{g00 * r.r10 + g01 * r.r11, g10 * r.r10 + g11 * r.r11};
+      (*grad)[tri[1]] = (*grad)[tri[1]] + gd1;
+      (*grad)[tri[2]] = (*grad)[tri[2]] + gd2;
+      (*grad)[tri[0]] = (*grad)[tri[0]] - gd1 - gd2;
+    }
+    double align = 0.0;
+    if (with_alignment) {
+      const double eps2 = eps * eps;
+      for (std::size_t k = 0; k < problem.aligned.size(); ++k) {
+        const AlignedEdge& ed = problem.aligned[k];
+        const Vec2 d = x[ed.b] - x[ed.a];
+        const double len = norm(d);
+        if (!(len > 0.0)) return kInf;
+        const Vec2 u = (1.0 / len) * d;
+        const double sx = std::sqrt(u.x * u.x + eps2), sy = std::sqrt(u.y * u.y + eps2);
+        // Smoothed ||n||_1 - 1 (the L1 norm of the unit normal equals that of the unit direction).
+        const double w = ed.weight * edge_scale[k];
+        align += w * (sx + sy - 1.0);
+        if (!grad) continue;
+        const Vec2 q{u.x / sx, u.y / sy};
+        const double uq = dot(u, q);
+        const Vec2 g = (w / len) * (q - uq * u);  // (I - u u^T) q / |d|
+        (*grad)[ed.b] = (*grad)[ed.b] + g;
+        (*grad)[ed.a] = (*grad)[ed.a] - g;
+      }
+    }
+    if (alignment_part) *alignment_part = align;
+    if (grad && !problem.fixed.empty())
+      for (std::size_t v = 0; v < grad->size(); ++v)
+        if (problem.fixed[v]) (*grad)[v] = {};
+    return e + align;
+  }
+};
+
+// Largest step along p before some triangle's signed area reaches zero (inf if none does).
+double max_feasible_step(const DeformProblem& pr, const std::vector<Vec2>& x, const std::vector<Vec2>& p) {
+  double tmax = kInf;
+  for (const auto& t : pr.triangles) {
+    const Vec2 a = x[t[1]] - x[t[0]], b = x[t[2]] - x[t[0]];
+    const Vec2 da = p[t[1]] - p[t[0]], db = p[t[2]] - p[t[0]];
+    // area(s) = c + s*bb + s^2*aa
+    const double c = cross(a, b), bb = cross(a, db) + cross(da, b), aa = cross(da, db);
+    double root = kInf;
+    if (std::abs(aa) < 1e-300) {
+      if (bb < 0) root = -c / bb;
+    } else {
+      const double disc = bb * bb - 4 * aa * c;
+      if (disc >= 0) {
+        const double sq = std::sqrt(disc);
+        // Numerically stable roots.
+        const double q = -0.5 * (bb + (bb >= 0 ? sq : -sq));
+        const double r1 = q / aa, r2 = (q != 0.0) ? c / q : kInf;
+        for (double r : {r1, r2})
+          if (r > 0 && r < root) root = r;
+      }
+    }
+    tmax = std::min(tmax, root);
+  }
+  return tmax;
+}
+
+double dotv(const std::vector<Vec2>& a, const std::vector<Vec2>& b) {
+  double s = 0.0;
+  for (std::size_t i = 0; i < a.size(); ++i) s += dot(a[i], b[i]);
+  return s;
+}
+
+// L-BFGS with an inversion-free backtracking line search. Returns the iteration count.
+int minimize(const Energy& energy, const DeformProblem& pr, std::vector<Vec2>& x, int max_iter, double rtol, int memory) {
+  const std::size_t n = x.size();
+  std::vector<Vec2> g(n), g_new(n), p(n), x_new(n);
+  double f = energy.eval(x, &g);
+  if (!std::isfinite(f)) return 0;
+  std::deque<std::vector<Vec2>> S, Y;
+  std::deque<double> rho;
+  int it = 0, small_steps = 0;
+  for (; it < max_iter; ++it) {
+    // Two-loop recursion: p = -H g.
+    p = g;
+    std::vector<double> alpha(S.size());
+    for (int i = static_cast<int>(S.size()) - 1; i >= 0; --i) {
+      alpha[i] = rho[i] * dotv(S[i], p);
+      for (std::size_t v = 0; v < n; ++v) p[v] = p[v] - alpha[i] * Y[i][v];
+    }
+    if (!S.empty()) {
+      const double gamma = dotv(S.back(), Y.back()) / dotv(Y.back(), Y.back());
+      for (auto& v : p) v = gamma * v;
+    }
+    for (std::size_t i = 0; i < S.size(); ++i) {
+      const double beta = rho[i] * dotv(Y[i], p);
+      for (std::size_t v = 0; v < n; ++v) p[v] = p[v] + (alpha[i] - beta) * S[i][v];
+    }
+    for (auto& v : p) v = -1.0 * v;
+    double slope = dotv(g, p);
+    if (!(slope < 0)) {  // not a descent direction: restart with steepest descent
+      S.clear(); Y.clear(); rho.clear();
+      for (std::size_t v = 0; v < n; ++v) p[v] = -1.0 * g[v];
+      slope = dotv(g, p);
+      if (!(slope < 0)) break;
+    }
+    double step = 1.0;
+    if (S.empty()) {  // first step: limit the largest move to a fraction of the mean edge
+      double pmax = 0.0;
+      for (const auto& v : p) pmax = std::max(pmax, norm(v));
+      if (pmax > 0) step = std::min(1.0, 0.1 / pmax);
+    }
+    step = std::min(step, 0.8 * max_feasible_step(pr, x, p));
+    double f_new = kInf;
+    bool ok = false;
+    for (int ls = 0; ls < 50; ++ls) {
+      for (std::size_t v = 0; v < n; ++v) x_new[v] = x[v] + step * p[v];
+      f_new = energy.eval(x_new, &g_new);
+      if (std::isfinite(f_new) && f_new <= f + 1e-4 * step * slope) { ok = true; break; }
+      step *= 0.5;
+    }
+    if (!ok) {
+      if (S.empty()) break;
+      S.clear(); Y.clear(); rho.clear();
+      continue;
+    }
+    std::vector<Vec2> s(n), y(n);
+    for (std::size_t v = 0; v < n; ++v) { s[v] = x_new[v] - x[v]; y[v] = g_new[v] - g[v]; }
+    const double sy = dotv(s, y);
+    if (sy > 1e-300) {
+      S.push_back(std::move(s)); Y.push_back(std::move(y)); rho.push_back(1.0 / sy);
+      if (static_cast<int>(S.size()) > memory) { S.pop_front(); Y.pop_front(); rho.pop_front(); }
+    }
+    const double decrease = f - f_new;
+    x.swap(x_new);
+    g.swap(g_new);
+    f = f_new;
+    small_steps = decrease < rtol * std::abs(f) ? small_steps + 1 : 0;
+    if (small_steps >= 5) { ++it; break; }
+  }
+  return it;
+}
+
+}  // namespace
+
+double min_signed_area(const std::vector<std::array<std::int32_t, 3>>& triangles, const std::vector<Vec2>& x) {
+  double m = kInf;
+  for (const auto& t : triangles) m = std::min(m, 0.5 * orient2(x[t[0]], x[t[1]], x[t[2]]));
+  return m;
+}
+
+DeformStats deform_to_polysquare(const DeformProblem& problem, const DeformOptions& options, std::vector<Vec2>& x) {
+  Energy energy(problem, options);
+  DeformStats stats;
+  energy.eps = options.eps_schedule.empty() ? 0.01 : options.eps_schedule.back();
+  stats.energy_before = energy.eval(x, nullptr, &stats.alignment_before);
+  for (double eps : options.eps_schedule) {
+    energy.eps = eps;
+    stats.iterations += minimize(energy, problem, x, options.max_iterations, options.relative_tolerance,
+                                 options.lbfgs_memory);
+  }
+  stats.energy_after = energy.eval(x, nullptr, &stats.alignment_after);
+  return stats;
+}
+
+bool move_constrained_vertices(const DeformProblem& problem, const DeformOptions& options,
+                               const std::vector<std::uint8_t>& target_mask, const std::vector<Vec2>& targets,
+                               std::vector<Vec2>& x) {
+  const std::size_t n = x.size();
+  // Harmonic (uniform graph Laplacian) extension of the constrained displacement to the free vertices, so a
+  // step moves the interior along with the boundary instead of crushing the first ring of triangles.
+  std::vector<int> free_index(n, -1);
+  int nfree = 0;
+  for (std::size_t v = 0; v < n; ++v)
+    if (!target_mask[v]) free_index[v] = nfree++;
+  std::vector<Vec2> disp(n);
+  for (std::size_t v = 0; v < n; ++v)
+    if (target_mask[v]) disp[v] = targets[v] - x[v];
+  if (nfree > 0) {
+    std::vector<Eigen::Triplet<double>> trip;
+    Eigen::VectorXd bx = Eigen::VectorXd::Zero(nfree), by = Eigen::VectorXd::Zero(nfree);
+    auto add_edge = [&](int a, int b) {
+      for (auto [u, w] : {std::pair{a, b}, std::pair{b, a}}) {
+        if (free_index[u] < 0) continue;
+        trip.emplace_back(free_index[u], free_index[u], 1.0);
+        if (free_index[w] >= 0) trip.emplace_back(free_index[u], free_index[w], -1.0);
+        else { bx[free_index[u]] += disp[w].x; by[free_index[u]] += disp[w].y; }
+      }
+    };
+    for (const auto& t : problem.triangles)  // each interior edge appears twice: weights stay symmetric
+      for (int k = 0; k < 3; ++k) add_edge(t[k], t[(k + 1) % 3]);
+    Eigen::SparseMatrix<double> L(nfree, nfree);
+    L.setFromTriplets(trip.begin(), trip.end());
+    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(L);
+    if (solver.info() == Eigen::Success) {
+      const Eigen::VectorXd sx = solver.solve(bx), sy = solver.solve(by);
+      for (std::size_t v = 0; v < n; ++v)
+        if (free_index[v] >= 0) disp[v] = {sx[free_index[v]], sy[free_index[v]]};
+    }
+  }
+  DeformProblem inner = problem;
+  inner.aligned.clear();
+  inner.fixed.assign(n, 0);
+  for (std::size_t v = 0; v < n; ++v) inner.fixed[v] = target_mask[v] || (!problem.fixed.empty() && problem.fixed[v]);
+  Energy energy(inner, options);
+  energy.with_alignment = false;
+
+  const std::vector<Vec2> start = x;
+  double t = 0.0, step = 1.0;
+  std::vector<Vec2> trial(n);
+  while (t < 1.0) {
+    const double t_new = std::min(1.0, t + step);
+    for (std::size_t v = 0; v < n; ++v)
+      trial[v] = target_mask[v] ? lerp(start[v], targets[v], t_new) : x[v] + (t_new - t) * disp[v];
+    if (min_signed_area(problem.triangles, trial) <= 0.0) {
+      step *= 0.5;
+      if (step < 1e-7) {
+        return false;
+      }
+      continue;
+    }
+    x.swap(trial);
+    minimize(energy, inner, x, 200, 1e-7, options.lbfgs_memory);
+    t = t_new;
+    step = std::min(1.0, step * 2.0);
+  }
+  for (std::size_t v = 0; v < n; ++v)
+    if (target_mask[v]) x[v] = targets[v];
+  minimize(energy, inner, x, options.max_iterations, options.relative_tolerance, options.lbfgs_memory);
+  return min_signed_area(problem.triangles, x) > 0.0;
+}
+
+}  // namespace polysquare

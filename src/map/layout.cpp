@@ -1,0 +1,167 @@
+#include "polysquare/map/layout.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "polysquare/core/error.h"
+
+namespace polysquare {
+namespace {
+
+const Vec2 kLabelDir[4] = {{1, 0}, {0, 1}, {-1, 0}, {0, -1}};
+
+// Labels of one chain by dynamic programming: each edge pays its length times (1 - cos) of the angle between
+// its deformed direction and the label's axis direction; each label change pays `change_cost` (nothing at a
+// sharp input vertex, where a corner is natural); U-turns are forbidden. This removes the staircases that the
+// L1 term alone favours and the short runs that would become spurious corners. Closed chains are solved once
+// per label of their first edge.
+std::vector<int> label_chain(const std::vector<Vec2>& edge_vec, const std::vector<std::uint8_t>& free_change,
+                             bool closed, double change_cost) {
+  const int m = static_cast<int>(edge_vec.size());
+  constexpr double kBig = 1e300;
+  auto edge_cost = [&](int i, int l) {
+    return norm(edge_vec[i]) - dot(edge_vec[i], kLabelDir[l]);  // = length * (1 - cos)
+  };
+  auto change = [&](int i, int from, int to) {  // transition into edge i
+    if (from == to) return 0.0;
+    if ((from + 2) % 4 == to) return kBig;
+    return free_change[i] ? 0.0 : change_cost;
+  };
+  std::vector<int> best_labels;
+  double best_total = kBig;
+  const int first_options = closed ? 4 : 1;
+  for (int f = 0; f < first_options; ++f) {
+    std::vector<std::array<double, 4>> cost(m);
+    std::vector<std::array<int, 4>> from(m);
+    for (int l = 0; l < 4; ++l) cost[0][l] = (closed && l != f) ? kBig : edge_cost(0, l);
+    for (int i = 1; i < m; ++i)
+      for (int l = 0; l < 4; ++l) {
+        cost[i][l] = kBig;
+        for (int k = 0; k < 4; ++k) {
+          const double c = cost[0 + i - 1][k] + change(i, k, l);
+          if (c < cost[i][l]) { cost[i][l] = c; from[i][l] = k; }
+        }
+        cost[i][l] += edge_cost(i, l);
+      }
+    int last = 0;
+    double total = kBig;
+    for (int l = 0; l < 4; ++l) {
+      const double c = cost[m - 1][l] + (closed ? change(0, l, f) : 0.0);
+      if (c < total) { total = c; last = l; }
+    }
+    if (total >= best_total) continue;
+    best_total = total;
+    best_labels.assign(m, 0);
+    for (int i = m - 1; i >= 0; --i) {
+      best_labels[i] = last;
+      if (i > 0) last = from[i][last];
+    }
+  }
+  return best_labels;
+}
+
+}  // namespace
+
+Layout build_layout(const TriMesh& mesh, const std::vector<Vec2>& original, const std::vector<Vec2>& deformed,
+                    const LayoutOptions& options, const std::string& part_name) {
+  const std::size_t nv = mesh.vertices.size();
+  Layout layout;
+  layout.vertex_break.assign(nv, -1);
+  std::vector<int> appearances(nv, 0);
+  std::vector<std::uint8_t> corner(nv, 0), is_break(nv, 0);
+  const double cos_threshold = std::cos(options.corner_threshold_deg * std::numbers::pi / 180.0);
+
+  for (const TriChain& ch : mesh.chains) {
+    const int n = static_cast<int>(ch.vertices.size());
+    for (int i = 0; i < n; ++i) {
+      const std::int32_t v = ch.vertices[i];
+      appearances[v]++;
+      const bool end = !ch.closed && (i == 0 || i == n - 1);
+      if (end) { corner[v] = 1; continue; }
+      if (!ch.is_input[i]) continue;
+      const Vec2 a = original[ch.vertices[(i + n - 1) % n]], b = original[v], c = original[ch.vertices[(i + 1) % n]];
+      const Vec2 u = b - a, w = c - b;
+      if (dot(u, w) < cos_threshold * norm(u) * norm(w)) corner[v] = 1;
+    }
+  }
+  for (std::int32_t v : mesh.feature_point_vertices) corner[v] = 1;
+  for (std::size_t v = 0; v < nv; ++v)
+    if (appearances[v] > 1) corner[v] = 1;  // chains meet: a crossing or a feature ending on the boundary
+  for (std::size_t v = 0; v < nv; ++v) is_break[v] = corner[v];
+
+  layout.chain_labels.resize(mesh.chains.size());
+  for (std::size_t c = 0; c < mesh.chains.size(); ++c) {
+    const TriChain& ch = mesh.chains[c];
+    const int n = static_cast<int>(ch.vertices.size());
+    const int m = ch.closed ? n : n - 1;
+    std::vector<Vec2> edge_vec(m);
+    std::vector<std::uint8_t> free_change(m, 0);
+    for (int i = 0; i < m; ++i) {
+      edge_vec[i] = deformed[ch.vertices[(i + 1) % n]] - deformed[ch.vertices[i]];
+      free_change[i] = corner[ch.vertices[i]];
+    }
+    std::vector<int>& labels = layout.chain_labels[c];
+    labels = label_chain(edge_vec, free_change, ch.closed, options.label_change_cost);
+    int turning = 0;
+    for (int i = 0; i < m; ++i) {
+      if (!ch.closed && i == 0) continue;
+      const int prev = labels[(i + m - 1) % m];
+      if (prev == labels[i]) continue;
+      is_break[ch.vertices[i]] = 1;
+      const int diff = (labels[i] - prev + 4) % 4;
+      if (diff == 2)
+        throw MeshingError(part_name + ": the poly-square of " +
+                           std::string(ch.kind == TriChain::Kind::ring ? "ring " : "feature ") +
+                           std::to_string(ch.index) + " folds back on itself near (" +
+                           std::to_string(original[ch.vertices[i]].x) + ", " +
+                           std::to_string(original[ch.vertices[i]].y) + ")");
+      turning += diff == 1 ? 1 : -1;
+    }
+    if (ch.closed && std::abs(turning) != 4)
+      throw MeshingError(part_name + ": the poly-square of " +
+                         std::string(ch.kind == TriChain::Kind::ring ? "ring " : "feature loop ") +
+                         std::to_string(ch.index) + " turns by " + std::to_string(turning) +
+                         " quarter turns instead of 4; one poly-square cannot represent this region");
+  }
+
+  for (std::size_t v = 0; v < nv; ++v) {
+    if (!is_break[v]) continue;
+    layout.vertex_break[v] = static_cast<std::int32_t>(layout.break_vertex.size());
+    layout.break_vertex.push_back(static_cast<std::int32_t>(v));
+    layout.break_is_corner.push_back(corner[v]);
+  }
+
+  for (std::size_t c = 0; c < mesh.chains.size(); ++c) {
+    const TriChain& ch = mesh.chains[c];
+    const int n = static_cast<int>(ch.vertices.size());
+    const int m = ch.closed ? n : n - 1;
+    const auto& labels = layout.chain_labels[c];
+    int start = -1;
+    for (int i = 0; i < n && start < 0; ++i)
+      if (is_break[ch.vertices[i]]) start = i;
+    if (start < 0)
+      throw MeshingError(part_name + ": chain without a corner (ring or feature " + std::to_string(ch.index) + ")");
+    int first = start;
+    for (int k = 1; k <= (ch.closed ? m : m - start); ++k) {
+      const int i = ch.closed ? (start + k) % n : start + k;
+      if (!is_break[ch.vertices[i]]) continue;
+      LayoutSegment s;
+      s.chain = static_cast<int>(c);
+      s.first = first;
+      s.count = (i - first + n) % n == 0 ? n : (i - first + n) % n;
+      if (!ch.closed) s.count = i - first;
+      s.label = labels[first % m];
+      // Chord rather than arc length: a side that still zig-zags after the deformation would otherwise get
+      // far too many elements.
+      s.target = distance(deformed[ch.vertices[first]], deformed[ch.vertices[i]]);
+      s.break_a = layout.vertex_break[ch.vertices[first]];
+      s.break_b = layout.vertex_break[ch.vertices[i]];
+      layout.segments.push_back(s);
+      first = i;
+    }
+  }
+  return layout;
+}
+
+}  // namespace polysquare

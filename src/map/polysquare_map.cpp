@@ -1,0 +1,105 @@
+#include "polysquare/map/polysquare_map.h"
+
+#include <chrono>
+#include <cmath>
+#include <complex>
+#include <numbers>
+
+#include "polysquare/core/error.h"
+#include "polysquare/map/extract.h"
+
+namespace polysquare {
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+
+double preorientation_angle(const std::vector<Vec2>& points, const std::vector<std::array<std::int32_t, 2>>& edges) {
+  std::complex<double> sum{0.0, 0.0};
+  for (const auto& e : edges) {
+    const Vec2 d = points[e[1]] - points[e[0]];
+    const double len = norm(d);
+    if (len <= 0.0) continue;
+    const double phi = std::atan2(d.y, d.x);  // direction angle; the normal differs by pi/2, same 4*phi class
+    sum += len * std::polar(1.0, 4.0 * phi);
+  }
+  if (std::abs(sum) < 1e-12) return 0.0;
+  return -std::arg(sum) / 4.0;
+}
+
+PartMapResult map_part(const Region& region, const RegionPart& part, const PolysquareMapOptions& options) {
+  PartMapResult result;
+  PartMapStats& st = result.stats;
+  st.part = part.part;
+  const std::string name = (region.source.empty() ? std::string("region") : region.source) + ": part " +
+                           std::to_string(part.part);
+  const double h = options.size;
+
+  auto t0 = std::chrono::steady_clock::now();
+  TriangulationOptions topt;
+  topt.max_edge = options.parameterization_ratio * h;
+  topt.shape_bound = options.triangle_shape_bound;
+  topt.max_triangles = options.max_triangles;
+  const TriMesh tri = triangulate_part(region, part, topt);
+  st.triangles = tri.triangles.size();
+  st.triangle_vertices = tri.vertices.size();
+  st.seconds_triangulate = seconds_since(t0);
+
+  // Rest shape in lattice units (1 = one quad edge), centred and pre-oriented.
+  t0 = std::chrono::steady_clock::now();
+  DeformProblem problem;
+  problem.triangles = tri.triangles;
+  std::vector<std::array<std::int32_t, 2>> ring_edges;
+  for (const TriChain& ch : tri.chains) {
+    const int n = static_cast<int>(ch.vertices.size());
+    const int m = ch.closed ? n : n - 1;
+    const double w = ch.kind == TriChain::Kind::ring ? options.deform.boundary_weight : options.deform.feature_weight;
+    for (int i = 0; i < m; ++i) {
+      const std::int32_t a = ch.vertices[i], b = ch.vertices[(i + 1) % n];
+      problem.aligned.push_back({a, b, w});
+      if (ch.kind == TriChain::Kind::ring) ring_edges.push_back({a, b});
+    }
+  }
+  const Box2 box = [&] { Box2 b; for (Vec2 p : tri.vertices) b.add(p); return b; }();
+  const Vec2 centre = 0.5 * (box.lo + box.hi);
+  const double theta = options.preorient ? preorientation_angle(tri.vertices, ring_edges) : 0.0;
+  st.rotation_deg = theta * 180.0 / std::numbers::pi;
+  const double c = std::cos(theta), s = std::sin(theta);
+  problem.rest.reserve(tri.vertices.size());
+  for (Vec2 p : tri.vertices) {
+    const Vec2 q = p - centre;
+    problem.rest.push_back({(c * q.x - s * q.y) / h, (s * q.x + c * q.y) / h});
+  }
+  std::vector<Vec2> x = problem.rest;
+  st.deform = deform_to_polysquare(problem, options.deform, x);
+  st.seconds_deform = seconds_since(t0);
+
+  t0 = std::chrono::steady_clock::now();
+  Layout layout = build_layout(tri, tri.vertices, x, options.layout, name);
+  st.break_points = layout.break_vertex.size();
+  st.segments = layout.segments.size();
+  st.quantize = quantize_layout(layout, x, options.quantize, name);
+  if (const std::string problem_text = check_layout(layout); !problem_text.empty())
+    throw MeshingError(name + ": the quantized poly-square is not valid: " + problem_text);
+  st.seconds_quantize = seconds_since(t0);
+
+  t0 = std::chrono::steady_clock::now();
+  std::vector<Vec2> targets;
+  std::vector<std::uint8_t> mask;
+  polysquare_targets(tri, x, layout, targets, mask);
+  if (!move_constrained_vertices(problem, options.deform, mask, targets, x))
+    throw MeshingError(name + ": the deformation cannot reach the quantized poly-square without inverting triangles");
+  st.seconds_snap = seconds_since(t0);
+
+  t0 = std::chrono::steady_clock::now();
+  result.mesh = extract_quads(tri, tri.vertices, x, layout, name);
+  result.mesh.quad_part.assign(result.mesh.quads.size(), part.part);
+  st.quads = result.mesh.quads.size();
+  st.seconds_extract = seconds_since(t0);
+  return result;
+}
+
+}  // namespace polysquare

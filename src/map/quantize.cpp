@@ -1,0 +1,177 @@
+#include "polysquare/map/quantize.h"
+
+#include <glpk.h>
+#include <cstdio>
+#include <cstdlib>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <memory>
+
+#include "polysquare/core/error.h"
+
+namespace polysquare {
+namespace {
+
+struct UnionFind {
+  std::vector<int> parent;
+  explicit UnionFind(int n) : parent(static_cast<std::size_t>(n)) { std::iota(parent.begin(), parent.end(), 0); }
+  int find(int a) { return parent[a] == a ? a : parent[a] = find(parent[a]); }
+  void unite(int a, int b) { parent[find(a)] = find(b); }
+};
+
+// Solves one axis. Returns lattice coordinates of every break point along `axis`.
+std::vector<long long> solve_axis(const Layout& layout, const std::vector<Vec2>& deformed, int axis,
+                                  const QuantizeOptions& options, const std::string& part_name, QuantizeStats& stats) {
+  const int nb = static_cast<int>(layout.break_vertex.size());
+  UnionFind uf(nb);
+  for (const LayoutSegment& s : layout.segments)
+    if (label_axis(s.label) != axis) uf.unite(s.break_a, s.break_b);
+  std::vector<int> cls(nb, -1);
+  int ncls = 0;
+  std::vector<int> root_cls(nb, -1);
+  for (int b = 0; b < nb; ++b) {
+    const int r = uf.find(b);
+    if (root_cls[r] < 0) root_cls[r] = ncls++;
+    cls[b] = root_cls[r];
+  }
+  // Mean deformed coordinate of each class: the anchor of the weak position term.
+  std::vector<double> anchor(ncls, 0.0);
+  std::vector<int> members(ncls, 0);
+  for (int b = 0; b < nb; ++b) {
+    const Vec2 p = deformed[layout.break_vertex[b]];
+    anchor[cls[b]] += axis == 0 ? p.x : p.y;
+    members[cls[b]]++;
+  }
+  for (int c = 0; c < ncls; ++c) anchor[c] = std::round(anchor[c] / members[c]);
+
+  std::unique_ptr<glp_prob, void (*)(glp_prob*)> lp(glp_create_prob(), glp_delete_prob);
+  glp_prob* P = lp.get();
+  glp_set_obj_dir(P, GLP_MIN);
+  // Columns: class coordinates X_c (integer), deviation u_s per segment, deviation v_c per class.
+  glp_add_cols(P, ncls);
+  for (int c = 0; c < ncls; ++c) {
+    glp_set_col_bnds(P, c + 1, GLP_DB, -1e8, 1e8);
+  }
+  std::vector<int> seg_idx;
+  for (std::size_t k = 0; k < layout.segments.size(); ++k)
+    if (label_axis(layout.segments[k].label) == axis) seg_idx.push_back(static_cast<int>(k));
+  const int nseg = static_cast<int>(seg_idx.size());
+  const int u0 = glp_add_cols(P, nseg);
+  const int v0 = glp_add_cols(P, ncls);
+  std::vector<int> ia{0}, ja{0};
+  std::vector<double> ar{0.0};
+  auto add_row = [&](std::initializer_list<std::pair<int, double>> terms, int type, double lo, double hi) {
+    const int row = glp_add_rows(P, 1);
+    glp_set_row_bnds(P, row, type, lo, hi);
+    for (auto [col, val] : terms) { ia.push_back(row); ja.push_back(col); ar.push_back(val); }
+  };
+  for (int k = 0; k < nseg; ++k) {
+    const LayoutSegment& s = layout.segments[seg_idx[k]];
+    const int ca = cls[s.break_a], cb = cls[s.break_b];
+    if (ca == cb)
+      throw MeshingError(part_name + ": quantization is infeasible: a side of the poly-square (chain " +
+                         std::to_string(s.chain) + ") would have zero length");
+    const double sg = label_sign(s.label);
+    const int u = u0 + k;
+    glp_set_col_bnds(P, u, GLP_LO, 0.0, 0.0);
+    const double w = 1.0 / std::max(s.target, 1.0);
+    glp_set_obj_coef(P, u, w);
+    // Integer right-hand sides keep the LP vertex integral (the matrix is totally unimodular).
+    const double t = std::max(std::round(s.target), 1.0);
+    // n = sg (X_b - X_a) >= 1 ; u >= n - t ; u >= t - n
+    add_row({{cb + 1, sg}, {ca + 1, -sg}}, GLP_LO, 1.0, 0.0);
+    add_row({{u, 1.0}, {cb + 1, -sg}, {ca + 1, sg}}, GLP_LO, -t, 0.0);
+    add_row({{u, 1.0}, {cb + 1, sg}, {ca + 1, -sg}}, GLP_LO, t, 0.0);
+  }
+  for (int c = 0; c < ncls; ++c) {
+    const int v = v0 + c;
+    glp_set_col_bnds(P, v, GLP_LO, 0.0, 0.0);
+    glp_set_obj_coef(P, v, options.position_weight);
+    add_row({{v, 1.0}, {c + 1, -1.0}}, GLP_LO, -anchor[c], 0.0);
+    add_row({{v, 1.0}, {c + 1, 1.0}}, GLP_LO, anchor[c], 0.0);
+  }
+  glp_load_matrix(P, static_cast<int>(ia.size()) - 1, ia.data(), ja.data(), ar.data());
+  // The constraint matrix is a network matrix plus unit columns, hence totally unimodular: with integer
+  // right-hand sides the simplex optimum is integral, so no branch-and-bound is needed.
+  glp_smcp parm;
+  glp_init_smcp(&parm);
+  parm.presolve = GLP_ON;
+  parm.msg_lev = GLP_MSG_OFF;
+  parm.tm_lim = options.time_limit_ms;
+  const int ret = glp_simplex(P, &parm);
+  if (ret != 0 || glp_get_status(P) != GLP_OPT)
+    throw MeshingError(part_name + ": quantization of the " + (axis == 0 ? std::string("x") : std::string("y")) +
+                       " sides has no integer solution (the labelled sides cannot close into a poly-square)");
+  for (int c = 0; c < ncls; ++c) {
+    const double v = glp_get_col_prim(P, c + 1);
+    if (std::abs(v - std::round(v)) > 1e-6)
+      throw MeshingError(part_name + ": quantization returned a fractional coordinate " + std::to_string(v));
+  }
+  std::vector<long long> out(nb);
+  for (int b = 0; b < nb; ++b) out[b] = std::llround(glp_get_col_prim(P, cls[b] + 1));
+  for (int k = 0; k < nseg; ++k) {
+    const LayoutSegment& s = layout.segments[seg_idx[k]];
+    const double n = std::abs(static_cast<double>(out[s.break_b] - out[s.break_a]));
+    stats.max_relative_deviation = std::max(stats.max_relative_deviation, std::abs(n - s.target) / std::max(s.target, 1.0));
+  }
+  stats.segments += nseg;
+  stats.variables += ncls;
+  return out;
+}
+
+}  // namespace
+
+QuantizeStats quantize_layout(Layout& layout, const std::vector<Vec2>& deformed, const QuantizeOptions& options,
+                              const std::string& part_name) {
+  QuantizeStats stats;
+  glp_term_out(GLP_OFF);
+  const auto xs = solve_axis(layout, deformed, 0, options, part_name, stats);
+  const auto ys = solve_axis(layout, deformed, 1, options, part_name, stats);
+  layout.lattice.resize(layout.break_vertex.size());
+  for (std::size_t b = 0; b < xs.size(); ++b) layout.lattice[b] = {xs[b], ys[b]};
+  return stats;
+}
+
+std::string check_layout(const Layout& layout) {
+  struct Seg { long long x0, y0, x1, y1; int a, b, index; };
+  std::vector<Seg> segs;
+  for (std::size_t k = 0; k < layout.segments.size(); ++k) {
+    const auto& s = layout.segments[k];
+    const auto pa = layout.lattice[s.break_a], pb = layout.lattice[s.break_b];
+    if (pa == pb) return "segment " + std::to_string(k) + " has zero length";
+    segs.push_back({std::min(pa[0], pb[0]), std::min(pa[1], pb[1]), std::max(pa[0], pb[0]), std::max(pa[1], pb[1]),
+                    s.break_a, s.break_b, static_cast<int>(k)});
+  }
+  // Distinct break points must not share a lattice point.
+  std::vector<std::pair<std::array<long long, 2>, int>> pts;
+  for (std::size_t b = 0; b < layout.lattice.size(); ++b) pts.push_back({layout.lattice[b], static_cast<int>(b)});
+  std::sort(pts.begin(), pts.end());
+  for (std::size_t i = 1; i < pts.size(); ++i)
+    if (pts[i].first == pts[i - 1].first)
+      return "break points " + std::to_string(pts[i - 1].second) + " and " + std::to_string(pts[i].second) +
+             " land on the same lattice point";
+  // Axis-aligned boxes overlap test; segments may only share an end point that is a common break point.
+  std::sort(segs.begin(), segs.end(), [](const Seg& a, const Seg& b) { return a.x0 < b.x0; });
+  for (std::size_t i = 0; i < segs.size(); ++i) {
+    for (std::size_t j = i + 1; j < segs.size() && segs[j].x0 <= segs[i].x1; ++j) {
+      const Seg &s = segs[i], &t = segs[j];
+      const long long ox0 = std::max(s.x0, t.x0), ox1 = std::min(s.x1, t.x1);
+      const long long oy0 = std::max(s.y0, t.y0), oy1 = std::min(s.y1, t.y1);
+      if (ox0 > ox1 || oy0 > oy1) continue;
+      // They touch: allowed only at a single point that is a shared break point.
+      if (ox0 == ox1 && oy0 == oy1) {
+        const bool shared = (s.a == t.a || s.a == t.b || s.b == t.a || s.b == t.b);
+        const auto at = std::array<long long, 2>{ox0, oy0};
+        auto is_end = [&](const Seg& q) { return layout.lattice[q.a] == at || layout.lattice[q.b] == at; };
+        if (shared && is_end(s) && is_end(t)) continue;
+      }
+      return "sides " + std::to_string(s.index) + " and " + std::to_string(t.index) + " of the poly-square overlap at (" +
+             std::to_string(ox0) + ", " + std::to_string(oy0) + ")";
+    }
+  }
+  return {};
+}
+
+}  // namespace polysquare

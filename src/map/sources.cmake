@@ -1,0 +1,7 @@
+# Sources of the map module (relative to this folder).
+list(APPEND MODULE_SOURCES)
+list(APPEND MODULE_SOURCES deform.cpp)
+list(APPEND MODULE_SOURCES layout.cpp)
+list(APPEND MODULE_SOURCES quantize.cpp)
+list(APPEND MODULE_SOURCES extract.cpp)
+list(APPEND MODULE_SOURCES polysquare_map.cpp)

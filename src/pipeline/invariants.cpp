@@ -1,0 +1,63 @@
+#include "polysquare/pipeline/invariants.h"
+
+#include <algorithm>
+#include <unordered_map>
+
+#include "polysquare/smooth/smooth.h"
+
+namespace polysquare {
+namespace {
+std::uint64_t edge_key(std::int32_t a, std::int32_t b) {
+  if (a > b) std::swap(a, b);
+  return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) | static_cast<std::uint32_t>(b);
+}
+}  // namespace
+
+InvariantReport check_invariants(const QuadMesh& mesh) {
+  InvariantReport r;
+  auto problem = [&](const std::string& text) {
+    if (r.first_problem.empty()) r.first_problem = text;
+  };
+  std::unordered_map<std::uint64_t, int> edge_count;
+  edge_count.reserve(mesh.quads.size() * 2);
+  for (std::size_t q = 0; q < mesh.quads.size(); ++q) {
+    const auto& quad = mesh.quads[q];
+    bool degenerate = false;
+    for (int i = 0; i < 4; ++i)
+      for (int j = i + 1; j < 4; ++j) degenerate |= quad[i] == quad[j];
+    if (degenerate) {
+      r.degenerate_quads++;
+      problem("quad " + std::to_string(q) + " repeats a node");
+      continue;
+    }
+    if (quad_min_corner_sj(mesh, q) <= 0.0) {
+      r.inverted_quads++;
+      const Vec2 p = mesh.nodes[quad[0]];
+      problem("quad " + std::to_string(q) + " at (" + std::to_string(p.x) + ", " + std::to_string(p.y) +
+              ") is inverted or has a flat corner");
+    }
+    for (int k = 0; k < 4; ++k) edge_count[edge_key(quad[k], quad[(k + 1) % 4])]++;
+  }
+  if (!mesh.triangles.empty()) problem(std::to_string(mesh.triangles.size()) + " triangles in an all-quad mesh");
+  std::unordered_map<std::uint64_t, int> tagged;
+  for (const auto& e : mesh.boundary_edges) tagged[edge_key(e[0], e[1])]++;
+  for (const auto& [key, count] : edge_count) {
+    if (count > 2) { r.non_manifold_edges++; problem("an edge is shared by " + std::to_string(count) + " quads"); }
+    if (count == 1 && !tagged.count(key)) { r.untagged_boundary_edges++; problem("a boundary edge is not on the input boundary"); }
+  }
+  for (const auto& [key, count] : tagged) {
+    auto it = edge_count.find(key);
+    if (count != 1 || it == edge_count.end() || it->second != 1) {
+      r.tagged_edges_not_boundary++;
+      problem("a tagged boundary edge does not have exactly one quad");
+    }
+  }
+  for (const auto& e : mesh.feature_edges)
+    if (!edge_count.count(edge_key(e[0], e[1]))) {
+      r.feature_edges_not_in_mesh++;
+      problem("a feature edge is not an edge of the mesh");
+    }
+  return r;
+}
+
+}  // namespace polysquare

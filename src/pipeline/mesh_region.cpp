@@ -1,0 +1,142 @@
+#include "polysquare/pipeline/mesh_region.h"
+
+#include <oneapi/tbb/global_control.h>
+#include <oneapi/tbb/info.h>
+#include <oneapi/tbb/parallel_for.h>
+
+#include <chrono>
+#include <cmath>
+#include <optional>
+#include <sstream>
+
+#include "polysquare/core/error.h"
+#include "polysquare/pipeline/invariants.h"
+#include "polysquare/triangulate/background_triangulation.h"
+
+namespace polysquare {
+namespace {
+
+double region_area(const Region& region) {
+  double a = 0.0;
+  for (const Ring& r : region.rings) {
+    double s = 0.0;
+    for (std::size_t i = 0; i < r.points.size(); ++i) s += cross(r.points[i], r.points[(i + 1) % r.points.size()]);
+    a += 0.5 * s;  // outer rings counter-clockwise (+), holes clockwise (-)
+  }
+  return a;
+}
+
+nlohmann::json part_json(const PartMapStats& s) {
+  return {{"part", s.part},
+          {"triangles", s.triangles},
+          {"rotation_deg", s.rotation_deg},
+          {"deform", {{"iterations", s.deform.iterations},
+                      {"energy_before", s.deform.energy_before},
+                      {"energy_after", s.deform.energy_after},
+                      {"alignment_before", s.deform.alignment_before},
+                      {"alignment_after", s.deform.alignment_after}}},
+          {"break_points", s.break_points},
+          {"segments", s.segments},
+          {"quantization_max_relative_deviation", s.quantize.max_relative_deviation},
+          {"quads", s.quads},
+          {"seconds", {{"triangulate", s.seconds_triangulate},
+                       {"deform", s.seconds_deform},
+                       {"quantize", s.seconds_quantize},
+                       {"snap", s.seconds_snap},
+                       {"extract", s.seconds_extract}}}};
+}
+
+}  // namespace
+
+MeshResult mesh_region(const Region& region, const MeshOptions& options) {
+  const std::string src = region.source.empty() ? std::string("region") : region.source;
+  if (!(options.size > 0.0) || !std::isfinite(options.size))
+    throw InputError(src + ": size must be a positive number, got " + std::to_string(options.size));
+  const Box2 box = region.bounding_box();
+  const double area = region_area(region);
+  if (options.size > 0.5 * std::min(box.hi.x - box.lo.x, box.hi.y - box.lo.y))
+    throw InputError(src + ": size " + std::to_string(options.size) + " is larger than half the region's extent (" +
+                     std::to_string(box.hi.x - box.lo.x) + " x " + std::to_string(box.hi.y - box.lo.y) + ")");
+  const double estimate = area / (options.size * options.size);
+  if (estimate > static_cast<double>(options.max_quads))
+    throw InputError(src + ": size " + std::to_string(options.size) + " would need about " +
+                     std::to_string(static_cast<long long>(estimate)) + " quads, more than the limit of " +
+                     std::to_string(options.max_quads) + " (raise --max-quads)");
+
+  const auto t_start = std::chrono::steady_clock::now();
+  PolysquareMapOptions map = options.map;
+  map.size = options.size;
+  map.layout.corner_threshold_deg = options.corner_threshold_deg;
+  const std::vector<RegionPart> parts = split_into_parts(region);
+
+  // Parts are independent: mesh them in parallel; results land in part order, so the output does not depend
+  // on the thread count. A failure in one part is recorded and reported with all the others, never dropped.
+  std::vector<std::optional<PartMapResult>> results(parts.size());
+  std::vector<std::string> errors(parts.size());
+  {
+    const int threads = options.threads > 0 ? options.threads : static_cast<int>(oneapi::tbb::info::default_concurrency());
+    oneapi::tbb::global_control limit(oneapi::tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
+    oneapi::tbb::parallel_for(std::size_t{0}, parts.size(), [&](std::size_t k) {
+      try {
+        results[k] = map_part(region, parts[k], map);
+      } catch (const std::exception& e) {
+        errors[k] = e.what();
+      }
+    });
+  }
+  std::ostringstream failed;
+  int nfailed = 0;
+  for (std::size_t k = 0; k < parts.size(); ++k)
+    if (!errors[k].empty()) { failed << (nfailed++ ? "; " : "") << errors[k]; }
+  if (nfailed > 0)
+    throw MeshingError(std::to_string(nfailed) + " of " + std::to_string(parts.size()) + " parts failed: " + failed.str());
+  const double seconds_parts = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+
+  MeshResult out;
+  QuadMesh& mesh = out.mesh;
+  mesh.crs = region.crs;
+  mesh.units = region.units;
+  for (auto& r : results) {
+    const QuadMesh& m = r->mesh;
+    const auto offset = static_cast<std::int32_t>(mesh.nodes.size());
+    auto shift = [offset](auto arr) { for (auto& v : arr) v += offset; return arr; };
+    mesh.nodes.insert(mesh.nodes.end(), m.nodes.begin(), m.nodes.end());
+    mesh.node_kind.insert(mesh.node_kind.end(), m.node_kind.begin(), m.node_kind.end());
+    for (const auto& q : m.quads) mesh.quads.push_back(shift(q));
+    mesh.quad_part.insert(mesh.quad_part.end(), m.quad_part.begin(), m.quad_part.end());
+    for (const auto& e : m.boundary_edges) mesh.boundary_edges.push_back(shift(e));
+    mesh.boundary_edge_ring.insert(mesh.boundary_edge_ring.end(), m.boundary_edge_ring.begin(), m.boundary_edge_ring.end());
+    for (const auto& e : m.feature_edges) mesh.feature_edges.push_back(shift(e));
+    mesh.feature_edge_curve.insert(mesh.feature_edge_curve.end(), m.feature_edge_curve.begin(), m.feature_edge_curve.end());
+    out.parts.push_back(r->stats);
+  }
+
+  const auto t_smooth = std::chrono::steady_clock::now();
+  const SmoothStats smooth = smooth_quads(mesh, options.smooth);
+  const double seconds_smooth = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_smooth).count();
+
+  const InvariantReport inv = check_invariants(mesh);
+  if (!inv.ok()) throw MeshingError(src + ": the assembled mesh breaks an invariant: " + inv.first_problem);
+
+  nlohmann::json parts_json = nlohmann::json::array();
+  for (const auto& s : out.parts) parts_json.push_back(part_json(s));
+  out.report = {
+      {"input", {{"source", region.source}, {"crs", region.crs}, {"units", region.units},
+                 {"parts", region.num_parts}, {"rings", region.rings.size()}, {"feature_curves", region.features.size()},
+                 {"area", area}}},
+      {"options", {{"size", options.size}, {"threads", options.threads}, {"seed", options.seed},
+                   {"corner_threshold_deg", options.corner_threshold_deg}, {"max_quads", options.max_quads},
+                   {"map", "single poly-square per part"},
+                   {"amips_alpha", map.deform.amips_alpha}, {"amips_s", map.deform.amips_s},
+                   {"boundary_weight", map.deform.boundary_weight}, {"feature_weight", map.deform.feature_weight},
+                   {"parameterization_ratio", map.parameterization_ratio}}},
+      {"counts", {{"nodes", mesh.nodes.size()}, {"quads", mesh.quads.size()},
+                  {"boundary_edges", mesh.boundary_edges.size()}, {"feature_edges", mesh.feature_edges.size()}}},
+      {"parts", parts_json},
+      {"smooth", {{"sweeps", smooth.sweeps}, {"moves", smooth.moves}}},
+      {"seconds", {{"parts", seconds_parts}, {"smooth", seconds_smooth}}},
+  };
+  return out;
+}
+
+}  // namespace polysquare

@@ -1,0 +1,1 @@
+list(APPEND MODULE_SOURCES smooth.cpp)

@@ -1,0 +1,278 @@
+#include "polysquare/triangulate/background_triangulation.h"
+
+#include <CGAL/Constrained_Delaunay_triangulation_2.h>
+#include <CGAL/Delaunay_mesh_face_base_2.h>
+#include <CGAL/Delaunay_mesh_size_criteria_2.h>
+#include <CGAL/Delaunay_mesh_vertex_base_2.h>
+#include <CGAL/Delaunay_mesher_2.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Triangulation_vertex_base_with_info_2.h>
+
+#include <deque>
+#include <unordered_map>
+#include <string>
+#include <unordered_set>
+
+#include "polysquare/core/error.h"
+
+namespace polysquare {
+namespace {
+
+using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+using Vb0 = CGAL::Delaunay_mesh_vertex_base_2<K>;
+using Vb = CGAL::Triangulation_vertex_base_with_info_2<std::int32_t, K, Vb0>;
+using Fb = CGAL::Delaunay_mesh_face_base_2<K>;
+using Tds = CGAL::Triangulation_data_structure_2<Vb, Fb>;
+using CDT = CGAL::Constrained_Delaunay_triangulation_2<K, Tds, CGAL::Exact_predicates_tag>;
+using Criteria = CGAL::Delaunay_mesh_size_criteria_2<CDT>;
+using Mesher = CGAL::Delaunay_mesher_2<CDT, Criteria>;
+using VH = CDT::Vertex_handle;
+using FH = CDT::Face_handle;
+
+bool point_in_ring(Vec2 p, const std::vector<Vec2>& ring) {
+  bool inside = false;
+  for (std::size_t i = 0, j = ring.size() - 1; i < ring.size(); j = i++) {
+    const Vec2 a = ring[i], b = ring[j];
+    if ((a.y > p.y) != (b.y > p.y) && p.x < (b.x - a.x) * (p.y - a.y) / (b.y - a.y) + a.x) inside = !inside;
+  }
+  return inside;
+}
+
+// A point to decide which part a feature belongs to: the midpoint of its first segment (its end points may
+// lie on the boundary, its interior never does after splitting).
+Vec2 feature_probe(const FeatureCurve& f) {
+  return f.points.size() >= 2 ? lerp(f.points[0], f.points[1], 0.5) : f.points.front();
+}
+
+struct PairHash {
+  std::size_t operator()(std::pair<const void*, const void*> p) const {
+    return std::hash<const void*>()(p.first) * 31u ^ std::hash<const void*>()(p.second);
+  }
+};
+
+// Splits every interior edge whose two end points lie on constraints (e.g. the edge cutting off a corner ear).
+// When the poly-square map straightens the constraints, such an edge would be squeezed to zero length together
+// with its triangles; its new midpoint vertex is free to move inwards. Triangles with one, two or three split
+// edges are subdivided into two, three or four, keeping counter-clockwise order.
+void split_constrained_interior_edges(TriMesh& mesh) {
+  std::vector<std::uint8_t> on_chain(mesh.vertices.size(), 0);
+  std::unordered_set<std::uint64_t> chain_edges;
+  auto ekey = [](std::int32_t a, std::int32_t b) {
+    if (a > b) std::swap(a, b);
+    return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) | static_cast<std::uint32_t>(b);
+  };
+  for (const TriChain& ch : mesh.chains) {
+    const std::size_t n = ch.vertices.size();
+    for (std::size_t i = 0; i < n; ++i) {
+      on_chain[ch.vertices[i]] = 1;
+      if (ch.closed || i + 1 < n) chain_edges.insert(ekey(ch.vertices[i], ch.vertices[(i + 1) % n]));
+    }
+  }
+  for (auto v : mesh.feature_point_vertices) on_chain[v] = 1;
+  std::unordered_map<std::uint64_t, std::int32_t> midpoint;
+  auto mid = [&](std::int32_t a, std::int32_t b) -> std::int32_t {
+    if (!on_chain[a] || !on_chain[b] || chain_edges.count(ekey(a, b))) return -1;
+    auto [it, inserted] = midpoint.try_emplace(ekey(a, b), static_cast<std::int32_t>(mesh.vertices.size()));
+    if (inserted) mesh.vertices.push_back(lerp(mesh.vertices[a], mesh.vertices[b], 0.5));
+    return it->second;
+  };
+  std::vector<std::array<std::int32_t, 3>> out;
+  out.reserve(mesh.triangles.size());
+  for (const auto& t : mesh.triangles) {
+    const std::array<std::int32_t, 3> m{mid(t[0], t[1]), mid(t[1], t[2]), mid(t[2], t[0])};
+    const int count = (m[0] >= 0) + (m[1] >= 0) + (m[2] >= 0);
+    if (count == 0) { out.push_back(t); continue; }
+    if (count == 3) {
+      out.push_back({t[0], m[0], m[2]});
+      out.push_back({t[1], m[1], m[0]});
+      out.push_back({t[2], m[2], m[1]});
+      out.push_back({m[0], m[1], m[2]});
+      continue;
+    }
+    // Rotate so that edge k = 0 (t0 t1) is split; for two splits make edge 2 unsplit.
+    int r = 0;
+    if (count == 1) r = m[0] >= 0 ? 0 : (m[1] >= 0 ? 1 : 2);
+    else r = m[2] < 0 ? 0 : (m[0] < 0 ? 1 : 2);
+    const std::int32_t a = t[r], b = t[(r + 1) % 3], c = t[(r + 2) % 3];
+    const std::int32_t mab = m[r], mbc = m[(r + 1) % 3];
+    if (count == 1) {
+      out.push_back({a, mab, c});
+      out.push_back({mab, b, c});
+    } else {
+      out.push_back({a, mab, c});
+      out.push_back({mab, b, mbc});
+      out.push_back({mab, mbc, c});
+    }
+  }
+  mesh.triangles = std::move(out);
+}
+
+}  // namespace
+
+std::vector<RegionPart> split_into_parts(const Region& region) {
+  std::vector<RegionPart> parts(static_cast<std::size_t>(region.num_parts));
+  std::vector<int> outer(parts.size(), -1);
+  for (std::size_t p = 0; p < parts.size(); ++p) parts[p].part = static_cast<int>(p);
+  for (std::size_t r = 0; r < region.rings.size(); ++r) {
+    const Ring& ring = region.rings[r];
+    parts.at(static_cast<std::size_t>(ring.part)).rings.push_back(static_cast<int>(r));
+    if (!ring.hole) outer[static_cast<std::size_t>(ring.part)] = static_cast<int>(r);
+  }
+  // A point belongs to the part whose outer ring contains it and none of whose holes does.
+  auto owner = [&](Vec2 p) {
+    for (std::size_t k = 0; k < parts.size(); ++k) {
+      if (outer[k] < 0 || !point_in_ring(p, region.rings[static_cast<std::size_t>(outer[k])].points)) continue;
+      bool in_hole = false;
+      for (int r : parts[k].rings)
+        if (region.rings[static_cast<std::size_t>(r)].hole && point_in_ring(p, region.rings[static_cast<std::size_t>(r)].points))
+          in_hole = true;
+      if (!in_hole) return static_cast<int>(k);
+    }
+    return -1;
+  };
+  for (std::size_t f = 0; f < region.features.size(); ++f) {
+    const int k = owner(feature_probe(region.features[f]));
+    if (k < 0)
+      throw InputError(region.source + ": feature curve " + std::to_string(region.features[f].source_feature) +
+                       " does not lie inside the domain");
+    parts[static_cast<std::size_t>(k)].features.push_back(static_cast<int>(f));
+  }
+  for (std::size_t f = 0; f < region.feature_points.size(); ++f) {
+    const int k = owner(region.feature_points[f]);
+    if (k >= 0) parts[static_cast<std::size_t>(k)].feature_points.push_back(static_cast<int>(f));
+  }
+  return parts;
+}
+
+TriMesh triangulate_part(const Region& region, const RegionPart& part, const TriangulationOptions& options) {
+  CDT cdt;
+  // Insert every input point once; keep the handles to trace the chains after refinement.
+  auto insert = [&](Vec2 p) { return cdt.insert(K::Point_2(p.x, p.y)); };
+  std::vector<std::vector<VH>> chain_handles;
+  std::vector<TriChain> chains;
+  std::unordered_set<std::pair<const void*, const void*>, PairHash> ring_edges;
+  auto key = [](VH a, VH b) {
+    const void* pa = &*a;
+    const void* pb = &*b;
+    return pa < pb ? std::make_pair(pa, pb) : std::make_pair(pb, pa);
+  };
+  for (int r : part.rings) {
+    const Ring& ring = region.rings[static_cast<std::size_t>(r)];
+    std::vector<VH> hs;
+    hs.reserve(ring.points.size());
+    for (Vec2 p : ring.points) hs.push_back(insert(p));
+    for (std::size_t i = 0; i < hs.size(); ++i) {
+      VH a = hs[i], b = hs[(i + 1) % hs.size()];
+      cdt.insert_constraint(a, b);
+      ring_edges.insert(key(a, b));
+    }
+    chain_handles.push_back(std::move(hs));
+    chains.push_back({TriChain::Kind::ring, r, true, {}, {}});
+  }
+  for (int f : part.features) {
+    const FeatureCurve& curve = region.features[static_cast<std::size_t>(f)];
+    std::vector<VH> hs;
+    for (Vec2 p : curve.points) hs.push_back(insert(p));
+    const std::size_t nseg = curve.closed ? hs.size() : hs.size() - 1;
+    for (std::size_t i = 0; i < nseg; ++i) cdt.insert_constraint(hs[i], hs[(i + 1) % hs.size()]);
+    chain_handles.push_back(std::move(hs));
+    chains.push_back({TriChain::Kind::feature, f, curve.closed, {}, {}});
+  }
+  std::vector<VH> point_handles;
+  for (int f : part.feature_points) point_handles.push_back(insert(region.feature_points[static_cast<std::size_t>(f)]));
+
+  // Domain = odd nesting depth, counting ring constraints only (feature constraints do not change sides).
+  for (auto f = cdt.all_faces_begin(); f != cdt.all_faces_end(); ++f) f->set_in_domain(false);
+  {
+    std::unordered_map<const void*, int> depth;
+    std::deque<std::pair<FH, int>> queue{{cdt.infinite_face(), 0}};
+    depth[&*cdt.infinite_face()] = 0;
+    while (!queue.empty()) {
+      auto [fh, d] = queue.front();
+      queue.pop_front();
+      fh->set_in_domain(d % 2 == 1);
+      for (int i = 0; i < 3; ++i) {
+        FH n = fh->neighbor(i);
+        if (depth.count(&*n)) continue;
+        const bool crosses_ring = fh->is_constrained(i) &&
+                                  ring_edges.count(key(fh->vertex(CDT::cw(i)), fh->vertex(CDT::ccw(i))));
+        const int nd = crosses_ring ? d + 1 : d;
+        depth[&*n] = nd;
+        // Breadth-first by depth: same-depth neighbours first keeps depths minimal.
+        if (crosses_ring) queue.emplace_back(n, nd); else queue.emplace_front(n, nd);
+      }
+    }
+  }
+
+  const double area_guess = [&] {
+    double a = 0.0;
+    for (int r : part.rings) {
+      const auto& pts = region.rings[static_cast<std::size_t>(r)].points;
+      double s = 0.0;
+      for (std::size_t i = 0; i < pts.size(); ++i) s += cross(pts[i], pts[(i + 1) % pts.size()]);
+      a += 0.5 * s;
+    }
+    return std::abs(a);
+  }();
+  const double expected = area_guess / (0.35 * options.max_edge * options.max_edge);
+  if (expected > static_cast<double>(options.max_triangles))
+    throw MeshingError("triangulation of part " + std::to_string(part.part) + " would need about " +
+                       std::to_string(static_cast<long long>(expected)) + " triangles (limit " +
+                       std::to_string(options.max_triangles) + ")");
+
+  Mesher mesher(cdt, Criteria(options.shape_bound, options.max_edge));
+  mesher.init(true);
+  mesher.refine_mesh();
+
+  TriMesh out;
+  std::int32_t next = 0;
+  for (auto v = cdt.finite_vertices_begin(); v != cdt.finite_vertices_end(); ++v) {
+    v->info() = next++;
+    out.vertices.push_back({v->point().x(), v->point().y()});
+  }
+  for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f) {
+    if (!f->is_in_domain()) continue;
+    out.triangles.push_back({f->vertex(0)->info(), f->vertex(1)->info(), f->vertex(2)->info()});
+  }
+
+  // Trace each input segment through the Steiner points the mesher put on it.
+  auto trace = [&](VH a, VH b, std::vector<std::int32_t>& verts, std::vector<std::uint8_t>& is_input) {
+    const Vec2 pa{a->point().x(), a->point().y()}, pb{b->point().x(), b->point().y()};
+    const double len = distance(pa, pb);
+    VH cur = a, prev;
+    verts.push_back(a->info());
+    is_input.push_back(1);
+    while (cur != b) {
+      VH best;
+      double best_d = distance(Vec2{cur->point().x(), cur->point().y()}, pb);
+      auto circ = cdt.incident_edges(cur), end = circ;
+      do {
+        if (cdt.is_infinite(circ) || !cdt.is_constrained(*circ)) continue;
+        FH fh = circ->first;
+        const int i = circ->second;
+        VH w = fh->vertex(CDT::cw(i)) == cur ? fh->vertex(CDT::ccw(i)) : fh->vertex(CDT::cw(i));
+        const Vec2 pw{w->point().x(), w->point().y()};
+        if (point_segment_distance(pw, pa, pb) > 1e-9 * len) continue;
+        const double dw = distance(pw, pb);
+        if (dw < best_d) { best_d = dw; best = w; }
+      } while (++circ != end);
+      if (best == VH())
+        throw MeshingError("triangulation of part " + std::to_string(part.part) + ": lost a constrained segment");
+      cur = best;
+      if (cur != b) { verts.push_back(cur->info()); is_input.push_back(0); }
+    }
+  };
+  for (std::size_t c = 0; c < chains.size(); ++c) {
+    const auto& hs = chain_handles[c];
+    TriChain& ch = chains[c];
+    const std::size_t nseg = ch.closed ? hs.size() : hs.size() - 1;
+    for (std::size_t i = 0; i < nseg; ++i) trace(hs[i], hs[(i + 1) % hs.size()], ch.vertices, ch.is_input);
+    if (!ch.closed) { ch.vertices.push_back(hs.back()->info()); ch.is_input.push_back(1); }
+  }
+  out.chains = std::move(chains);
+  for (VH h : point_handles) out.feature_point_vertices.push_back(h->info());
+  if (options.split_constrained_edges) split_constrained_interior_edges(out);
+  return out;
+}
+
+}  // namespace polysquare
