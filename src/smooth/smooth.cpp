@@ -66,6 +66,45 @@ SmoothStats smooth_quads(QuadMesh& mesh, const SmoothOptions& options) {
     stats.moves += moved;
     if (moved == 0) break;
   }
+  // Then a derivative-free pattern search on the worst corner around the nodes of poor quads: it untangles and
+  // lifts the minimum where the Laplacian average cannot (next to poly-square corners).
+  const Vec2 dirs[8] = {{1, 0}, {0.7071, 0.7071}, {0, 1}, {-0.7071, 0.7071}, {-1, 0}, {-0.7071, -0.7071}, {0, -1}, {0.7071, -0.7071}};
+  for (int sweep = 0; sweep < options.worst_sweeps; ++sweep) {
+    std::size_t moved = 0;
+    for (std::size_t v = 0; v < nn; ++v) {
+      if (mesh.node_kind.empty() || mesh.node_kind[v] != NodeKind::interior) continue;
+      double before = 1.0, edge = 0.0;
+      int nedge = 0;
+      for (std::size_t k = qoff[v]; k < qoff[v + 1]; ++k) {
+        before = std::min(before, quad_min_corner_sj(mesh, qadj[k]));
+        const auto& q = mesh.quads[qadj[k]];
+        for (int c = 0; c < 4; ++c) { edge += distance(mesh.nodes[q[c]], mesh.nodes[q[(c + 1) % 4]]); ++nedge; }
+      }
+      if (before >= options.worst_threshold) continue;
+      auto worst = [&] {
+        double m = 1.0;
+        for (std::size_t k = qoff[v]; k < qoff[v + 1]; ++k) m = std::min(m, quad_min_corner_sj(mesh, qadj[k]));
+        return m;
+      };
+      double best = before;
+      double step = 0.25 * edge / nedge;
+      for (int level = 0; level < 12; ++level) {
+        bool improved = false;
+        const Vec2 centre = mesh.nodes[v];
+        Vec2 best_p = centre;
+        for (const Vec2& d : dirs) {
+          mesh.nodes[v] = centre + step * d;
+          const double w = worst();
+          if (w > best + 1e-12) { best = w; best_p = mesh.nodes[v]; improved = true; }
+        }
+        mesh.nodes[v] = best_p;
+        if (!improved) step *= 0.5;
+      }
+      if (best > before) ++moved;
+    }
+    stats.moves += moved;
+    if (moved == 0) break;
+  }
   return stats;
 }
 
