@@ -1,2 +1,6 @@
 # Sources of the io module (relative to this folder).
 list(APPEND MODULE_SOURCES)
+list(APPEND MODULE_SOURCES geojson.cpp)
+list(APPEND MODULE_SOURCES atomic_file.cpp)
+list(APPEND MODULE_SOURCES msh.cpp)
+list(APPEND MODULE_SOURCES vtu_svg.cpp)

@@ -1,0 +1,19 @@
+// Writing outputs so that a target path never holds a partial file.
+#pragma once
+
+#include <filesystem>
+#include <functional>
+#include <ostream>
+
+namespace polysquare {
+
+/// Writes through `write` into a temporary file next to `target`, checks the stream, then renames it onto
+/// `target`. On any failure the temporary is removed and the exception propagates; `target` is untouched.
+void write_file_atomically(const std::filesystem::path& target, const std::function<void(std::ostream&)>& write,
+                           bool binary);
+
+/// Removes the temporaries of writes in flight (for SIGINT/SIGTERM handlers). Uses only unlink() on paths
+/// prepared before the write started, so it is safe to call from a signal handler.
+void remove_pending_temporaries() noexcept;
+
+}  // namespace polysquare

@@ -1,0 +1,60 @@
+// Stage 9: quality figures, with the definitions of anchors.md, for our meshes and for other tools' meshes.
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "polysquare/core/quad_mesh.h"
+#include "polysquare/core/region.h"
+
+namespace polysquare {
+
+struct Stats {
+  double min = 0, avg = 0, max = 0, std = 0;  ///< std is the population standard deviation
+  std::size_t count = 0;
+};
+
+/// Per-quad metrics (#quads each). Corner scaled Jacobian = cross(e_next, e_prev) / (|e_next| |e_prev|).
+struct QuadMetrics {
+  std::vector<double> sj;          ///< Verdict scaled Jacobian: minimum over the four corners
+  std::vector<double> eta;         ///< paper's eta: mean over the four corners
+  std::vector<double> skew;        ///< paper eq. 16 = Verdict quad_equiangle_skew
+  std::vector<double> edge_ratio;  ///< longest / shortest edge
+};
+QuadMetrics quad_metrics(const QuadMesh& mesh);
+
+struct QualityReport {
+  std::size_t nodes = 0, quads = 0, triangles = 0;
+  std::size_t inverted = 0;            ///< quads with SJ <= 0
+  std::size_t non_manifold_edges = 0;  ///< edges with more than two cells
+  std::size_t boundary_edges = 0;      ///< edges with one cell
+  Stats sj, eta, skew, edge_ratio;     ///< over quads
+  std::size_t singularities = 0;            ///< paper: boundary valence != 3 plus interior valence != 4
+  std::size_t interior_singularities = 0;   ///< interior vertices of valence != 4
+  std::size_t boundary_singularities = 0;   ///< boundary vertices of valence != 3
+};
+/// Valence counts distinct edges of all cells (quads and triangles) at a vertex.
+QualityReport compute_quality(const QuadMesh& mesh);
+
+struct DomainDistanceOptions {
+  double corner_threshold_deg = 30.0;  ///< input vertices turning more than this must be mesh nodes
+};
+struct DomainDistance {
+  double boundary_max_distance = 0;  ///< max over mesh boundary nodes of the distance to the input rings
+  double boundary_max_relative = 0;  ///< the same divided by the region's bounding-box diagonal
+  double feature_max_distance = 0;   ///< max over samples of the feature curves of the distance to the mesh edges
+  double feature_node_max_distance = 0;  ///< max over mesh feature nodes of the distance to the feature curves
+  double area_relative_change = 0;   ///< (mesh area - region area) / region area
+  std::size_t sharp_vertices_total = 0, sharp_vertices_missing = 0;
+};
+DomainDistance domain_distance(const QuadMesh& mesh, const Region& region, const DomainDistanceOptions& options = {});
+
+nlohmann::json to_json(const QualityReport& q);
+nlohmann::json to_json(const DomainDistance& d);
+/// Human-readable table, one figure per line.
+std::string format_quality_text(const QualityReport& q, const DomainDistance* domain = nullptr);
+
+}  // namespace polysquare

@@ -1,0 +1,222 @@
+#include "polysquare/input/read_region.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include "polysquare/core/error.h"
+#include "polysquare/io/geojson.h"
+
+namespace polysquare {
+namespace {
+
+std::string pt(Vec2 p) {
+  std::ostringstream os;
+  os.precision(12);
+  os << "(" << p.x << ", " << p.y << ")";
+  return os.str();
+}
+
+double signed_area(const std::vector<Vec2>& r) {
+  double s = 0.0;
+  for (std::size_t i = 0; i < r.size(); ++i) s += cross(r[i], r[(i + 1) % r.size()]);
+  return 0.5 * s;
+}
+
+bool inside_ring(Vec2 p, const std::vector<Vec2>& ring) {
+  bool in = false;
+  for (std::size_t i = 0, j = ring.size() - 1; i < ring.size(); j = i++) {
+    const Vec2 a = ring[i], b = ring[j];
+    if ((a.y > p.y) != (b.y > p.y) && p.x < (b.x - a.x) * (p.y - a.y) / (b.y - a.y) + a.x) in = !in;
+  }
+  return in;
+}
+
+struct Segment {
+  Vec2 a, b;
+  int owner;     // ring index, or -1 - feature index for features
+  int index;     // segment index within its owner
+  int count;     // number of segments of the owner (to detect cyclic neighbours)
+  bool closed;
+};
+
+int sgn(double v) { return (v > 0) - (v < 0); }
+
+// Intersection of two segments (touching included); writes a point of contact.
+bool segments_meet(const Segment& s, const Segment& t, Vec2& at) {
+  const int d1 = sgn(orient2(s.a, s.b, t.a)), d2 = sgn(orient2(s.a, s.b, t.b));
+  const int d3 = sgn(orient2(t.a, t.b, s.a)), d4 = sgn(orient2(t.a, t.b, s.b));
+  auto on = [](Vec2 p, Vec2 q, Vec2 r) {  // r on segment pq, given collinear
+    return std::min(p.x, q.x) <= r.x && r.x <= std::max(p.x, q.x) && std::min(p.y, q.y) <= r.y && r.y <= std::max(p.y, q.y);
+  };
+  if (d1 != d2 && d3 != d4 && d1 * d2 <= 0 && d3 * d4 <= 0 && (d1 | d2 | d3 | d4) != 0) {
+    if (d1 == 0) { at = t.a; return true; }
+    if (d2 == 0) { at = t.b; return true; }
+    if (d3 == 0) { at = s.a; return true; }
+    if (d4 == 0) { at = s.b; return true; }
+    const double u = orient2(t.a, t.b, s.a) / (orient2(t.a, t.b, s.a) - orient2(t.a, t.b, s.b));
+    at = lerp(s.a, s.b, u);
+    return true;
+  }
+  if (d1 == 0 && on(s.a, s.b, t.a)) { at = t.a; return true; }
+  if (d2 == 0 && on(s.a, s.b, t.b)) { at = t.b; return true; }
+  if (d3 == 0 && on(t.a, t.b, s.a)) { at = s.a; return true; }
+  if (d4 == 0 && on(t.a, t.b, s.b)) { at = s.b; return true; }
+  return false;
+}
+
+bool adjacent(const Segment& s, const Segment& t) {
+  if (s.owner != t.owner) return false;
+  const int d = std::abs(s.index - t.index);
+  return d == 1 || (s.closed && d == s.count - 1);
+}
+
+// Sweep over segments sorted by their smallest x; calls `report` for every meeting pair that is not two
+// consecutive segments of one chain. Stops at the first pair for which report returns true.
+template <typename F>
+void for_each_meeting(std::vector<Segment>& segs, F report) {
+  std::sort(segs.begin(), segs.end(), [](const Segment& s, const Segment& t) {
+    return std::min(s.a.x, s.b.x) < std::min(t.a.x, t.b.x);
+  });
+  for (std::size_t i = 0; i < segs.size(); ++i) {
+    const double maxx = std::max(segs[i].a.x, segs[i].b.x);
+    for (std::size_t j = i + 1; j < segs.size() && std::min(segs[j].a.x, segs[j].b.x) <= maxx; ++j) {
+      if (adjacent(segs[i], segs[j])) continue;
+      Vec2 at;
+      if (segments_meet(segs[i], segs[j], at) && report(segs[i], segs[j], at)) return;
+    }
+  }
+}
+
+void check_points(const std::vector<Vec2>& pts, const std::string& where, const InputOptions& o) {
+  for (Vec2 p : pts) {
+    if (!std::isfinite(p.x) || !std::isfinite(p.y)) throw InputError(where + " has a non-finite coordinate " + pt(p));
+    if (std::abs(p.x) > o.max_abs_coordinate || std::abs(p.y) > o.max_abs_coordinate)
+      throw InputError(where + " has a coordinate beyond " + std::to_string(o.max_abs_coordinate) + ": " + pt(p));
+  }
+}
+
+void dedupe(std::vector<Vec2>& pts, bool closed) {
+  pts.erase(std::unique(pts.begin(), pts.end()), pts.end());
+  while (closed && pts.size() > 1 && pts.front() == pts.back()) pts.pop_back();
+}
+
+}  // namespace
+
+void validate_region(Region& region, const InputOptions& options) {
+  const std::string& src = region.source;
+  auto ring_name = [&](std::size_t r) {
+    return src + ": feature " + std::to_string(region.rings[r].source_feature) + ": ring " + std::to_string(r);
+  };
+  auto feature_name = [&](std::size_t f) {
+    return src + ": feature " + std::to_string(region.features[f].source_feature) + " (curve " + std::to_string(f) + ")";
+  };
+  for (std::size_t r = 0; r < region.rings.size(); ++r) {
+    Ring& ring = region.rings[r];
+    check_points(ring.points, ring_name(r), options);
+    dedupe(ring.points, true);
+    if (ring.points.size() < 3)
+      throw InputError(ring_name(r) + " has fewer than 3 distinct points, at " + pt(ring.points.front()));
+    const double a = signed_area(ring.points);
+    if (a == 0.0) throw InputError(ring_name(r) + " has zero area, at " + pt(ring.points.front()));
+    if ((a > 0) == ring.hole) std::reverse(ring.points.begin(), ring.points.end());
+  }
+  for (std::size_t f = 0; f < region.features.size(); ++f) {
+    FeatureCurve& c = region.features[f];
+    check_points(c.points, feature_name(f), options);
+    dedupe(c.points, c.closed);
+    if (c.points.size() < 2 || (c.closed && c.points.size() < 3))
+      throw InputError(feature_name(f) + " has too few distinct points" +
+                       (c.points.empty() ? std::string() : ", at " + pt(c.points.front())));
+  }
+  check_points(region.feature_points, src + ": feature points", options);
+
+  // Rings must not cross or touch themselves or each other.
+  std::vector<Segment> segs;
+  for (std::size_t r = 0; r < region.rings.size(); ++r) {
+    const auto& p = region.rings[r].points;
+    for (std::size_t i = 0; i < p.size(); ++i)
+      segs.push_back({p[i], p[(i + 1) % p.size()], static_cast<int>(r), static_cast<int>(i), static_cast<int>(p.size()), true});
+  }
+  for_each_meeting(segs, [&](const Segment& s, const Segment& t, Vec2 at) -> bool {
+    if (s.owner == t.owner) throw InputError(ring_name(static_cast<std::size_t>(s.owner)) + " intersects itself at " + pt(at));
+    throw InputError(ring_name(static_cast<std::size_t>(s.owner)) + " meets ring " + std::to_string(t.owner) + " at " + pt(at));
+  });
+  // Nesting: holes inside their own outer ring, parts not inside each other (outside their holes).
+  std::vector<int> outer(static_cast<std::size_t>(region.num_parts), -1);
+  for (std::size_t r = 0; r < region.rings.size(); ++r)
+    if (!region.rings[r].hole) outer[static_cast<std::size_t>(region.rings[r].part)] = static_cast<int>(r);
+  auto in_domain_of_part = [&](Vec2 p, int part) {
+    if (!inside_ring(p, region.rings[static_cast<std::size_t>(outer[static_cast<std::size_t>(part)])].points)) return false;
+    for (const Ring& h : region.rings)
+      if (h.part == part && h.hole && inside_ring(p, h.points)) return false;
+    return true;
+  };
+  for (std::size_t r = 0; r < region.rings.size(); ++r) {
+    const Ring& ring = region.rings[r];
+    const Vec2 p = ring.points.front();
+    if (ring.hole && !inside_ring(p, region.rings[static_cast<std::size_t>(outer[static_cast<std::size_t>(ring.part)])].points))
+      throw InputError(ring_name(r) + " is a hole outside its polygon, at " + pt(p));
+    if (!ring.hole)
+      for (int k = 0; k < region.num_parts; ++k)
+        if (k != ring.part && in_domain_of_part(p, k))
+          throw InputError(ring_name(r) + " lies inside polygon part " + std::to_string(k) + " (overlapping parts), at " + pt(p));
+  }
+  auto in_domain = [&](Vec2 p) {
+    for (int k = 0; k < region.num_parts; ++k)
+      if (in_domain_of_part(p, k)) return true;
+    return false;
+  };
+  // Features: inside (or on) the domain, crossing neither the boundary's interior nor each other.
+  for (std::size_t f = 0; f < region.features.size(); ++f) {
+    const auto& p = region.features[f].points;
+    const Vec2 probe = lerp(p[0], p[1], 0.5);
+    if (!in_domain(probe))
+      throw InputError(feature_name(f) + " lies outside the domain, at " + pt(probe));
+  }
+  std::vector<Segment> all = segs;
+  for (std::size_t f = 0; f < region.features.size(); ++f) {
+    const auto& p = region.features[f].points;
+    const bool closed = region.features[f].closed;
+    const std::size_t m = closed ? p.size() : p.size() - 1;
+    for (std::size_t i = 0; i < m; ++i)
+      all.push_back({p[i], p[(i + 1) % p.size()], -1 - static_cast<int>(f), static_cast<int>(i), static_cast<int>(m), closed});
+  }
+  for_each_meeting(all, [&](const Segment& s, const Segment& t, Vec2 at) -> bool {
+    if (s.owner >= 0 && t.owner >= 0) return false;  // ring pairs were checked above
+    const Segment& fs = s.owner < 0 ? s : t;
+    const Segment& other = s.owner < 0 ? t : s;
+    const std::size_t f = static_cast<std::size_t>(-1 - fs.owner);
+    const auto& pts = region.features[f].points;
+    const bool at_end = !region.features[f].closed && (at == pts.front() || at == pts.back());
+    if (other.owner >= 0) {
+      // A feature may end on the boundary; it may not cross it.
+      if (at_end) return false;
+      throw InputError(feature_name(f) + " crosses the boundary (ring " + std::to_string(other.owner) + ") at " + pt(at));
+    }
+    const std::size_t g = static_cast<std::size_t>(-1 - other.owner);
+    const auto& q = region.features[g].points;
+    const bool other_end = !region.features[g].closed && (at == q.front() || at == q.back());
+    if (at_end && other_end) return false;  // curves meeting at their end points
+    throw InputError(feature_name(f) + " crosses feature curve " + std::to_string(g) + " at " + pt(at) +
+                     "; split crossing features at their intersection (automatic splitting is not implemented yet)");
+  });
+}
+
+Region read_region(const std::filesystem::path& path, const InputOptions& options) {
+  const std::string name = path.string();
+  std::string ext = path.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (ext != ".geojson" && ext != ".json")
+    throw InputError(name + ": unsupported input format '" + ext + "' (supported: .geojson, .json)");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(name + ": cannot open the file");
+  std::ostringstream buf;
+  buf << in.rdbuf();
+  Region region = parse_geojson(buf.str(), name);
+  validate_region(region, options);
+  return region;
+}
+
+}  // namespace polysquare

@@ -1,0 +1,125 @@
+#include "polysquare/io/geojson.h"
+
+#include <nlohmann/json.hpp>
+
+#include <regex>
+
+#include "polysquare/core/error.h"
+
+namespace polysquare {
+namespace {
+
+using json = nlohmann::json;
+
+struct Context {
+  const std::string& source;
+  std::size_t feature = 0;
+  [[noreturn]] void fail(const std::string& what) const {
+    throw InputError(source + ": feature " + std::to_string(feature) + ": " + what);
+  }
+};
+
+Vec2 position(const json& p, const Context& ctx) {
+  if (!p.is_array() || p.size() < 2 || !p[0].is_number() || !p[1].is_number())
+    ctx.fail("a position must be an array of at least two numbers, got " + p.dump().substr(0, 80));
+  return {p[0].get<double>(), p[1].get<double>()};
+}
+
+std::vector<Vec2> positions(const json& arr, const Context& ctx) {
+  if (!arr.is_array()) ctx.fail("expected an array of positions");
+  std::vector<Vec2> out;
+  out.reserve(arr.size());
+  for (const json& p : arr) out.push_back(position(p, ctx));
+  return out;
+}
+
+// A GeoJSON ring repeats its first point at the end; the closing point is dropped here.
+std::vector<Vec2> ring(const json& arr, const Context& ctx, std::size_t ring_index) {
+  std::vector<Vec2> pts = positions(arr, ctx);
+  if (pts.size() < 4)
+    ctx.fail("ring " + std::to_string(ring_index) + " has " + std::to_string(pts.size()) +
+             " positions; a closed ring needs at least 4");
+  if (!(pts.front() == pts.back())) {
+    const Vec2 a = pts.front(), b = pts.back();
+    ctx.fail("ring " + std::to_string(ring_index) + " is not closed: first point (" + std::to_string(a.x) + ", " +
+             std::to_string(a.y) + ") differs from last point (" + std::to_string(b.x) + ", " + std::to_string(b.y) + ")");
+  }
+  pts.pop_back();
+  return pts;
+}
+
+void add_polygon(Region& region, const json& rings, const Context& ctx) {
+  if (!rings.is_array() || rings.empty()) ctx.fail("a Polygon needs at least one ring");
+  const int part = region.num_parts++;
+  for (std::size_t r = 0; r < rings.size(); ++r)
+    region.rings.push_back({ring(rings[r], ctx, r), part, r > 0, static_cast<int>(ctx.feature)});
+}
+
+std::string crs_of(const json& doc) {
+  if (!doc.contains("crs") || !doc["crs"].is_object()) return {};
+  const json& c = doc["crs"];
+  std::string name;
+  if (c.contains("properties") && c["properties"].is_object() && c["properties"].contains("name") &&
+      c["properties"]["name"].is_string())
+    name = c["properties"]["name"].get<std::string>();
+  std::smatch m;
+  static const std::regex epsg(R"(EPSG:{1,2}(\d+))", std::regex::icase);
+  if (std::regex_search(name, m, epsg)) return "EPSG:" + m[1].str();
+  return name;
+}
+
+}  // namespace
+
+Region parse_geojson(std::string_view text, const std::string& source_name) {
+  json doc;
+  try {
+    doc = json::parse(text.begin(), text.end());
+  } catch (const json::parse_error& e) {
+    throw InputError(source_name + ": not valid JSON: " + e.what());
+  }
+  if (!doc.is_object() || doc.value("type", json()) != "FeatureCollection" || !doc.contains("features") ||
+      !doc["features"].is_array())
+    throw InputError(source_name + ": expected a GeoJSON FeatureCollection with a \"features\" array");
+  Region region;
+  region.source = source_name;
+  region.crs = crs_of(doc);
+  if (!region.crs.empty()) region.units = "m";
+  Context ctx{source_name};
+  for (const json& feature : doc["features"]) {
+    if (!feature.is_object() || !feature.contains("geometry") || !feature["geometry"].is_object())
+      ctx.fail("expected a Feature object with a geometry");
+    const json& g = feature["geometry"];
+    if (!g.contains("type") || !g["type"].is_string() || !g.contains("coordinates"))
+      ctx.fail("geometry needs a string \"type\" and \"coordinates\"");
+    const std::string type = g["type"].get<std::string>();
+    const json& coords = g["coordinates"];
+    std::string role;
+    if (feature.contains("properties") && feature["properties"].is_object() &&
+        feature["properties"].contains("role") && feature["properties"]["role"].is_string())
+      role = feature["properties"]["role"].get<std::string>();
+    if (role.empty()) role = (type == "Polygon" || type == "MultiPolygon") ? "domain" : "feature";
+    const int src = static_cast<int>(ctx.feature);
+    if (role == "domain") {
+      if (type == "Polygon") add_polygon(region, coords, ctx);
+      else if (type == "MultiPolygon" && coords.is_array()) for (const json& poly : coords) add_polygon(region, poly, ctx);
+      else ctx.fail("a domain must be a Polygon or MultiPolygon, got " + type);
+    } else if (role == "feature") {
+      if (type == "LineString") region.features.push_back({positions(coords, ctx), false, src});
+      else if (type == "MultiLineString" && coords.is_array())
+        for (const json& line : coords) region.features.push_back({positions(line, ctx), false, src});
+      else if (type == "Polygon" && coords.is_array() && !coords.empty())
+        region.features.push_back({ring(coords[0], ctx, 0), true, src});
+      else if (type == "Point") region.feature_points.push_back(position(coords, ctx));
+      else if (type == "MultiPoint") for (Vec2 p : positions(coords, ctx)) region.feature_points.push_back(p);
+      else ctx.fail("a feature must be a LineString, MultiLineString, Polygon, Point or MultiPoint, got " + type);
+    } else {
+      ctx.fail("unknown role \"" + role + "\" (expected \"domain\" or \"feature\")");
+    }
+    ++ctx.feature;
+  }
+  if (region.rings.empty())
+    throw InputError(source_name + ": no domain: the collection has no Polygon or MultiPolygon with role \"domain\"");
+  return region;
+}
+
+}  // namespace polysquare

@@ -1,0 +1,157 @@
+// VTK XML unstructured grid (write; read ASCII), the SVG picture, and the extension dispatch.
+#include <algorithm>
+#include <fstream>
+#include <regex>
+#include <sstream>
+
+#include "polysquare/core/error.h"
+#include "polysquare/io/atomic_file.h"
+#include "polysquare/io/mesh_io.h"
+#include "polysquare/io/svg.h"
+#include "polysquare/quality/quality.h"
+
+namespace polysquare {
+namespace {
+
+std::string lower_extension(const std::filesystem::path& p) {
+  std::string ext = p.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return ext;
+}
+
+// Text of the first DataArray whose Name (or, for points, the Points section) matches.
+std::string data_array(const std::string& xml, const std::string& name, const std::string& path) {
+  const std::regex re("<DataArray[^>]*Name=\"" + name + "\"[^>]*>([^<]*)</DataArray>");
+  std::smatch m;
+  if (!std::regex_search(xml, m, re)) throw InputError(path + ": no ASCII DataArray named " + name);
+  return m[1].str();
+}
+
+template <typename T>
+std::vector<T> numbers(const std::string& text, const std::string& path) {
+  std::istringstream is(text);
+  std::vector<T> out;
+  T v;
+  while (is >> v) out.push_back(v);
+  if (!is.eof()) throw InputError(path + ": malformed number in a DataArray");
+  return out;
+}
+
+}  // namespace
+
+QuadMesh read_vtu(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path.string() + ": cannot open the file");
+  std::ostringstream buf;
+  buf << in.rdbuf();
+  const std::string xml = buf.str(), name = path.string();
+  if (xml.find("<UnstructuredGrid") == std::string::npos) throw InputError(name + ": not a VTK UnstructuredGrid file");
+  std::smatch m;
+  const std::regex points_re("<Points>\\s*<DataArray[^>]*>([^<]*)</DataArray>");
+  if (!std::regex_search(xml, m, points_re)) throw InputError(name + ": no ASCII Points DataArray");
+  const auto xyz = numbers<double>(m[1].str(), name);
+  const auto conn = numbers<long long>(data_array(xml, "connectivity", name), name);
+  const auto offs = numbers<long long>(data_array(xml, "offsets", name), name);
+  const auto types = numbers<int>(data_array(xml, "types", name), name);
+  if (xyz.size() % 3 != 0 || offs.size() != types.size()) throw InputError(name + ": inconsistent array sizes");
+  QuadMesh mesh;
+  for (std::size_t i = 0; i + 2 < xyz.size(); i += 3) mesh.nodes.push_back({xyz[i], xyz[i + 1]});
+  long long start = 0;
+  auto node = [&](long long k) {
+    if (k < 0 || static_cast<std::size_t>(k) >= conn.size() || conn[k] < 0 || static_cast<std::size_t>(conn[k]) >= mesh.nodes.size())
+      throw InputError(name + ": connectivity out of range");
+    return static_cast<std::int32_t>(conn[k]);
+  };
+  for (std::size_t c = 0; c < types.size(); ++c) {
+    const long long end = offs[c];
+    if (end < start) throw InputError(name + ": decreasing offsets");
+    if (types[c] == 9 && end - start == 4) mesh.quads.push_back({node(start), node(start + 1), node(start + 2), node(start + 3)});
+    else if (types[c] == 5 && end - start == 3) mesh.triangles.push_back({node(start), node(start + 1), node(start + 2)});
+    start = end;
+  }
+  return mesh;
+}
+
+void write_vtu(const std::filesystem::path& path, const QuadMesh& mesh) {
+  const QuadMetrics q = quad_metrics(mesh);
+  write_file_atomically(path, [&](std::ostream& os) {
+    os.precision(17);
+    os << "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\">\n"
+       << "<UnstructuredGrid>\n<Piece NumberOfPoints=\"" << mesh.nodes.size() << "\" NumberOfCells=\"" << mesh.quads.size() << "\">\n"
+       << "<Points>\n<DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n";
+    for (Vec2 p : mesh.nodes) os << p.x << " " << p.y << " 0\n";
+    os << "</DataArray>\n</Points>\n<Cells>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n";
+    for (const auto& c : mesh.quads) os << c[0] << " " << c[1] << " " << c[2] << " " << c[3] << "\n";
+    os << "</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n";
+    for (std::size_t i = 1; i <= mesh.quads.size(); ++i) os << 4 * i << "\n";
+    os << "</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n";
+    for (std::size_t i = 0; i < mesh.quads.size(); ++i) os << "9\n";
+    os << "</DataArray>\n</Cells>\n<CellData Scalars=\"scaled_jacobian\">\n";
+    auto field = [&](const char* name, const std::vector<double>& v) {
+      os << "<DataArray type=\"Float64\" Name=\"" << name << "\" format=\"ascii\">\n";
+      for (double x : v) os << x << "\n";
+      os << "</DataArray>\n";
+    };
+    field("scaled_jacobian", q.sj);
+    field("eta", q.eta);
+    field("skewness", q.skew);
+    field("edge_ratio", q.edge_ratio);
+    os << "<DataArray type=\"Int32\" Name=\"part\" format=\"ascii\">\n";
+    for (std::size_t i = 0; i < mesh.quads.size(); ++i) os << (mesh.quad_part.empty() ? 0 : mesh.quad_part[i]) << "\n";
+    os << "</DataArray>\n</CellData>\n<PointData>\n<DataArray type=\"UInt8\" Name=\"node_kind\" format=\"ascii\">\n";
+    for (std::size_t i = 0; i < mesh.nodes.size(); ++i)
+      os << (mesh.node_kind.empty() ? 0 : static_cast<int>(mesh.node_kind[i])) << "\n";
+    os << "</DataArray>\n</PointData>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n";
+  }, false);
+}
+
+QuadMesh read_mesh(const std::filesystem::path& path) {
+  const std::string ext = lower_extension(path);
+  if (ext == ".msh") return read_msh(path);
+  if (ext == ".vtu") return read_vtu(path);
+  throw InputError(path.string() + ": unsupported mesh format '" + ext + "' (supported: .msh, .vtu)");
+}
+
+void write_mesh(const std::filesystem::path& path, const QuadMesh& mesh, const MeshWriteOptions& options) {
+  const std::string ext = lower_extension(path);
+  if (ext == ".msh") return write_msh(path, mesh, options);
+  if (ext == ".vtu") return write_vtu(path, mesh);
+  throw InputError(path.string() + ": unsupported output format '" + ext + "' (supported: .msh, .vtu)");
+}
+
+void write_svg(const std::filesystem::path& path, const QuadMesh& mesh, const Region* region, const SvgOptions& options) {
+  Box2 box;
+  for (Vec2 p : mesh.nodes) box.add(p);
+  if (region) for (const Ring& r : region->rings) for (Vec2 p : r.points) box.add(p);
+  const double w = box.hi.x - box.lo.x, h = box.hi.y - box.lo.y;
+  const double scale = (options.width_px - 20) / std::max(w, 1e-300);
+  const int height = static_cast<int>(h * scale) + 60;
+  auto X = [&](Vec2 p) { return 10 + (p.x - box.lo.x) * scale; };
+  auto Y = [&](Vec2 p) { return 10 + (box.hi.y - p.y) * scale; };  // y axis up
+  const QuadMetrics q = quad_metrics(mesh);
+  const double sj_min = q.sj.empty() ? 0.0 : *std::min_element(q.sj.begin(), q.sj.end());
+  write_file_atomically(path, [&](std::ostream& os) {
+    os.precision(6);
+    os << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << options.width_px << "\" height=\"" << height << "\">\n"
+       << "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n";
+    for (std::size_t k = 0; k < mesh.quads.size(); ++k) {
+      // Red (SJ <= 0.3, below the acceptable range) to green (SJ = 1).
+      const double t = std::clamp((q.sj[k] - 0.3) / 0.7, 0.0, 1.0);
+      os << "<polygon points=\"";
+      for (auto v : mesh.quads[k]) os << X(mesh.nodes[v]) << "," << Y(mesh.nodes[v]) << " ";
+      os << "\" fill=\"rgb(" << static_cast<int>(230 * (1 - t) + 120 * t) << "," << static_cast<int>(80 + 140 * t) << ",90)\" "
+         << "stroke=\"black\" stroke-width=\"0.3\"/>\n";
+    }
+    auto lines = [&](const std::vector<std::array<std::int32_t, 2>>& edges, const char* colour, double width) {
+      for (const auto& e : edges)
+        os << "<line x1=\"" << X(mesh.nodes[e[0]]) << "\" y1=\"" << Y(mesh.nodes[e[0]]) << "\" x2=\"" << X(mesh.nodes[e[1]])
+           << "\" y2=\"" << Y(mesh.nodes[e[1]]) << "\" stroke=\"" << colour << "\" stroke-width=\"" << width << "\"/>\n";
+    };
+    lines(mesh.boundary_edges, "black", 1.5);
+    lines(mesh.feature_edges, "blue", 1.5);
+    os << "<text x=\"10\" y=\"" << height - 15 << "\" font-family=\"sans-serif\" font-size=\"14\">" << mesh.quads.size()
+       << " quads, scaled Jacobian min " << sj_min << " (red &lt;= 0.3, green = 1)</text>\n</svg>\n";
+  }, false);
+}
+
+}  // namespace polysquare

@@ -1,0 +1,257 @@
+#include "polysquare/quality/quality.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <sstream>
+#include <unordered_map>
+#include <unordered_set>
+
+namespace polysquare {
+namespace {
+
+std::uint64_t edge_key(std::int32_t a, std::int32_t b) {
+  if (a > b) std::swap(a, b);
+  return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) | static_cast<std::uint32_t>(b);
+}
+
+Stats stats_of(const std::vector<double>& v) {
+  Stats s;
+  s.count = v.size();
+  if (v.empty()) return s;
+  s.min = *std::min_element(v.begin(), v.end());
+  s.max = *std::max_element(v.begin(), v.end());
+  double sum = 0.0;
+  for (double x : v) sum += x;
+  s.avg = sum / static_cast<double>(v.size());
+  double var = 0.0;
+  for (double x : v) var += (x - s.avg) * (x - s.avg);
+  s.std = std::sqrt(var / static_cast<double>(v.size()));
+  return s;
+}
+
+// Uniform grid of segments for nearest-segment queries.
+struct SegmentGrid {
+  std::vector<std::array<Vec2, 2>> segs;
+  Box2 box;
+  double cell = 1;
+  long long nx = 1, ny = 1;
+  std::vector<std::vector<std::int32_t>> buckets;
+  explicit SegmentGrid(std::vector<std::array<Vec2, 2>> s) : segs(std::move(s)) {
+    for (const auto& e : segs) { box.add(e[0]); box.add(e[1]); }
+    double len = 0;
+    for (const auto& e : segs) len += distance(e[0], e[1]);
+    cell = std::max(box.diagonal() * 1e-6, 2.0 * len / std::max<std::size_t>(1, segs.size()));
+    nx = std::min(4096LL, static_cast<long long>((box.hi.x - box.lo.x) / cell) + 1);
+    ny = std::min(4096LL, static_cast<long long>((box.hi.y - box.lo.y) / cell) + 1);
+    cell = std::max((box.hi.x - box.lo.x) / static_cast<double>(nx), (box.hi.y - box.lo.y) / static_cast<double>(ny)) * 1.000001 + 1e-300;
+    buckets.resize(static_cast<std::size_t>(nx * ny));
+    for (std::size_t k = 0; k < segs.size(); ++k) {
+      const auto [i0, j0] = idx({std::min(segs[k][0].x, segs[k][1].x), std::min(segs[k][0].y, segs[k][1].y)});
+      const auto [i1, j1] = idx({std::max(segs[k][0].x, segs[k][1].x), std::max(segs[k][0].y, segs[k][1].y)});
+      for (long long i = i0; i <= i1; ++i)
+        for (long long j = j0; j <= j1; ++j) buckets[static_cast<std::size_t>(j * nx + i)].push_back(static_cast<std::int32_t>(k));
+    }
+  }
+  std::pair<long long, long long> idx(Vec2 p) const {
+    return {std::clamp(static_cast<long long>((p.x - box.lo.x) / cell), 0LL, nx - 1),
+            std::clamp(static_cast<long long>((p.y - box.lo.y) / cell), 0LL, ny - 1)};
+  }
+  // Distance to the nearest segment: grows rings of cells until the ring distance exceeds the best found.
+  double nearest(Vec2 p) const {
+    if (segs.empty()) return INFINITY;
+    const auto [ci, cj] = idx(p);
+    double best = INFINITY;
+    for (long long r = 0; r <= std::max(nx, ny); ++r) {
+      for (long long i = ci - r; i <= ci + r; ++i)
+        for (long long j = cj - r; j <= cj + r; ++j) {
+          if (std::max(std::llabs(i - ci), std::llabs(j - cj)) != r || i < 0 || j < 0 || i >= nx || j >= ny) continue;
+          for (auto k : buckets[static_cast<std::size_t>(j * nx + i)])
+            best = std::min(best, point_segment_distance(p, segs[k][0], segs[k][1]));
+        }
+      // A segment not met yet crosses only cells of later rings, which are at least r cells away.
+      if (best <= static_cast<double>(r) * cell) break;
+    }
+    return best;
+  }
+};
+
+}  // namespace
+
+QuadMetrics quad_metrics(const QuadMesh& mesh) {
+  QuadMetrics m;
+  const std::size_t n = mesh.quads.size();
+  m.sj.resize(n); m.eta.resize(n); m.skew.resize(n); m.edge_ratio.resize(n);
+  for (std::size_t q = 0; q < n; ++q) {
+    const auto& quad = mesh.quads[q];
+    double mn = INFINITY, sum = 0, amin = INFINITY, amax = -INFINITY, lmin = INFINITY, lmax = 0;
+    bool degenerate = false;
+    for (int k = 0; k < 4; ++k) {
+      const Vec2 p = mesh.nodes[quad[k]];
+      const Vec2 en = mesh.nodes[quad[(k + 1) % 4]] - p, ep = mesh.nodes[quad[(k + 3) % 4]] - p;
+      const double ln = norm(en), lp = norm(ep);
+      lmin = std::min(lmin, ln);
+      lmax = std::max(lmax, ln);
+      if (ln == 0 || lp == 0) { degenerate = true; continue; }
+      const double c = cross(en, ep) / (ln * lp);
+      mn = std::min(mn, c);
+      sum += c;
+      // Interior angle in degrees, in (0, 360): reflex when the corner is inverted.
+      double ang = std::atan2(cross(en, ep), dot(en, ep)) * 180.0 / std::numbers::pi;
+      if (ang < 0) ang += 360.0;
+      amin = std::min(amin, ang);
+      amax = std::max(amax, ang);
+    }
+    if (degenerate) {
+      m.sj[q] = m.eta[q] = -1.0;
+      m.skew[q] = 1.0;
+      m.edge_ratio[q] = 1e300;
+      continue;
+    }
+    m.sj[q] = mn;
+    m.eta[q] = sum / 4.0;
+    m.skew[q] = std::max((amax - 90.0) / 90.0, (90.0 - amin) / 90.0);
+    m.edge_ratio[q] = lmax / lmin;
+  }
+  return m;
+}
+
+QualityReport compute_quality(const QuadMesh& mesh) {
+  QualityReport r;
+  r.nodes = mesh.nodes.size();
+  r.quads = mesh.quads.size();
+  r.triangles = mesh.triangles.size();
+  const QuadMetrics m = quad_metrics(mesh);
+  r.sj = stats_of(m.sj);
+  r.eta = stats_of(m.eta);
+  r.skew = stats_of(m.skew);
+  r.edge_ratio = stats_of(m.edge_ratio);
+  r.inverted = static_cast<std::size_t>(std::count_if(m.sj.begin(), m.sj.end(), [](double v) { return v <= 0; }));
+  std::unordered_map<std::uint64_t, int> cells_of_edge;
+  auto add_cell = [&](const auto& cell) {
+    const std::size_t k = cell.size();
+    for (std::size_t i = 0; i < k; ++i) cells_of_edge[edge_key(cell[i], cell[(i + 1) % k])]++;
+  };
+  for (const auto& q : mesh.quads) add_cell(q);
+  for (const auto& t : mesh.triangles) add_cell(t);
+  std::vector<int> valence(mesh.nodes.size(), 0);
+  std::vector<std::uint8_t> on_boundary(mesh.nodes.size(), 0), used(mesh.nodes.size(), 0);
+  for (const auto& [key, count] : cells_of_edge) {
+    const auto a = static_cast<std::int32_t>(key >> 32), b = static_cast<std::int32_t>(key & 0xffffffffu);
+    valence[a]++; valence[b]++;
+    used[a] = used[b] = 1;
+    if (count == 1) { on_boundary[a] = on_boundary[b] = 1; r.boundary_edges++; }
+    if (count > 2) r.non_manifold_edges++;
+  }
+  for (std::size_t v = 0; v < mesh.nodes.size(); ++v) {
+    if (!used[v]) continue;
+    if (on_boundary[v] && valence[v] != 3) r.boundary_singularities++;
+    if (!on_boundary[v] && valence[v] != 4) r.interior_singularities++;
+  }
+  r.singularities = r.boundary_singularities + r.interior_singularities;
+  return r;
+}
+
+DomainDistance domain_distance(const QuadMesh& mesh, const Region& region, const DomainDistanceOptions& options) {
+  DomainDistance d;
+  std::vector<std::array<Vec2, 2>> ring_segs, feature_segs, mesh_edges;
+  double region_area = 0;
+  for (const Ring& r : region.rings) {
+    double s = 0;
+    for (std::size_t i = 0; i < r.points.size(); ++i) {
+      ring_segs.push_back({r.points[i], r.points[(i + 1) % r.points.size()]});
+      s += cross(r.points[i], r.points[(i + 1) % r.points.size()]);
+    }
+    region_area += r.hole ? -std::abs(0.5 * s) : std::abs(0.5 * s);
+  }
+  for (const FeatureCurve& f : region.features) {
+    const std::size_t m = f.closed ? f.points.size() : f.points.size() - 1;
+    for (std::size_t i = 0; i < m; ++i) feature_segs.push_back({f.points[i], f.points[(i + 1) % f.points.size()]});
+  }
+  std::unordered_map<std::uint64_t, int> cells_of_edge;
+  for (const auto& q : mesh.quads)
+    for (int k = 0; k < 4; ++k) cells_of_edge[edge_key(q[k], q[(k + 1) % 4])]++;
+  for (const auto& t : mesh.triangles)
+    for (int k = 0; k < 3; ++k) cells_of_edge[edge_key(t[k], t[(k + 1) % 3])]++;
+  std::unordered_set<std::int32_t> boundary_nodes;
+  for (const auto& [key, count] : cells_of_edge) {
+    const auto a = static_cast<std::int32_t>(key >> 32), b = static_cast<std::int32_t>(key & 0xffffffffu);
+    mesh_edges.push_back({mesh.nodes[a], mesh.nodes[b]});
+    if (count == 1) { boundary_nodes.insert(a); boundary_nodes.insert(b); }
+  }
+  const SegmentGrid rings(ring_segs);
+  for (auto v : boundary_nodes) d.boundary_max_distance = std::max(d.boundary_max_distance, rings.nearest(mesh.nodes[v]));
+  const double diag = region.bounding_box().diagonal();
+  d.boundary_max_relative = diag > 0 ? d.boundary_max_distance / diag : 0;
+  if (!feature_segs.empty()) {
+    const SegmentGrid edges(mesh_edges);
+    for (const auto& s : feature_segs)
+      for (int k = 0; k <= 8; ++k) d.feature_max_distance = std::max(d.feature_max_distance, edges.nearest(lerp(s[0], s[1], k / 8.0)));
+    const SegmentGrid features(feature_segs);
+    for (const auto& e : mesh.feature_edges)
+      for (auto v : e) d.feature_node_max_distance = std::max(d.feature_node_max_distance, features.nearest(mesh.nodes[v]));
+  }
+  double mesh_area = 0;
+  for (const auto& q : mesh.quads)
+    mesh_area += 0.5 * (cross(mesh.nodes[q[0]], mesh.nodes[q[1]]) + cross(mesh.nodes[q[1]], mesh.nodes[q[2]]) +
+                        cross(mesh.nodes[q[2]], mesh.nodes[q[3]]) + cross(mesh.nodes[q[3]], mesh.nodes[q[0]]));
+  for (const auto& t : mesh.triangles) mesh_area += 0.5 * orient2(mesh.nodes[t[0]], mesh.nodes[t[1]], mesh.nodes[t[2]]);
+  d.area_relative_change = region_area != 0 ? (mesh_area - region_area) / region_area : 0;
+  // Sharp input vertices must coincide with a mesh node.
+  std::vector<std::array<Vec2, 2>> node_points;
+  for (Vec2 p : mesh.nodes) node_points.push_back({p, p});
+  const SegmentGrid nodes(node_points);
+  const double cos_t = std::cos(options.corner_threshold_deg * std::numbers::pi / 180.0);
+  for (const Ring& r : region.rings) {
+    const std::size_t n = r.points.size();
+    for (std::size_t i = 0; i < n; ++i) {
+      const Vec2 u = r.points[i] - r.points[(i + n - 1) % n], w = r.points[(i + 1) % n] - r.points[i];
+      if (dot(u, w) >= cos_t * norm(u) * norm(w)) continue;
+      d.sharp_vertices_total++;
+      if (nodes.nearest(r.points[i]) > 1e-9 * diag) d.sharp_vertices_missing++;
+    }
+  }
+  return d;
+}
+
+nlohmann::json to_json(const QualityReport& q) {
+  auto st = [](const Stats& s) { return nlohmann::json{{"min", s.min}, {"avg", s.avg}, {"max", s.max}, {"std", s.std}}; };
+  return {{"nodes", q.nodes}, {"quads", q.quads}, {"triangles", q.triangles}, {"inverted", q.inverted},
+          {"non_manifold_edges", q.non_manifold_edges}, {"boundary_edges", q.boundary_edges},
+          {"sj", st(q.sj)}, {"eta", st(q.eta)}, {"skew", st(q.skew)}, {"edge_ratio", st(q.edge_ratio)},
+          {"singularities", q.singularities}, {"interior_singularities", q.interior_singularities},
+          {"boundary_singularities", q.boundary_singularities}};
+}
+
+nlohmann::json to_json(const DomainDistance& d) {
+  return {{"boundary_max_distance", d.boundary_max_distance}, {"boundary_max_relative", d.boundary_max_relative},
+          {"feature_max_distance", d.feature_max_distance}, {"feature_node_max_distance", d.feature_node_max_distance},
+          {"area_relative_change", d.area_relative_change}, {"sharp_vertices_total", d.sharp_vertices_total},
+          {"sharp_vertices_missing", d.sharp_vertices_missing}};
+}
+
+std::string format_quality_text(const QualityReport& q, const DomainDistance* d) {
+  std::ostringstream os;
+  os.precision(4);
+  auto line = [&](const char* name, const Stats& s) {
+    os << "  " << name << ": min " << s.min << "  avg " << s.avg << "  max " << s.max << "  std " << s.std << "\n";
+  };
+  os << "  nodes " << q.nodes << ", quads " << q.quads << ", triangles " << q.triangles << ", inverted " << q.inverted
+     << ", non-manifold edges " << q.non_manifold_edges << "\n";
+  line("scaled Jacobian (Verdict, min corner)", q.sj);
+  line("eta (paper, mean corner)            ", q.eta);
+  line("skewness (eq. 16)                   ", q.skew);
+  line("edge ratio                          ", q.edge_ratio);
+  os << "  singularities: " << q.singularities << " (paper: boundary valence != 3 + interior valence != 4), interior "
+     << q.interior_singularities << "\n";
+  if (d) {
+    os << "  boundary distance max " << d->boundary_max_distance << " (relative " << d->boundary_max_relative
+       << "), area change " << d->area_relative_change << ", sharp vertices missing " << d->sharp_vertices_missing << " of "
+       << d->sharp_vertices_total << "\n";
+    os << "  feature distance to mesh edges max " << d->feature_max_distance << ", feature nodes off curves max "
+       << d->feature_node_max_distance << "\n";
+  }
+  return os.str();
+}
+
+}  // namespace polysquare

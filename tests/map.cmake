@@ -1,0 +1,1 @@
+list(APPEND TEST_SOURCES map/test_map_stages.cpp)

@@ -1,0 +1,128 @@
+// Stage-level tests of the poly-square map on hand-made inputs with known answers.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "polysquare/core/error.h"
+#include "polysquare/map/deform.h"
+#include "polysquare/map/polysquare_map.h"
+#include "polysquare/map/quantize.h"
+
+using namespace polysquare;
+
+TEST(Preorientation, RotatesARotatedSquareBackToTheAxes) {
+  for (double deg : {0.0, 10.0, 30.0, -22.0}) {
+    const double a = deg * std::numbers::pi / 180.0;
+    std::vector<Vec2> pts;
+    for (Vec2 p : {Vec2{0, 0}, Vec2{2, 0}, Vec2{2, 1}, Vec2{0, 1}})
+      pts.push_back({std::cos(a) * p.x - std::sin(a) * p.y, std::sin(a) * p.x + std::cos(a) * p.y});
+    const double theta = preorientation_angle(pts, {{0, 1}, {1, 2}, {2, 3}, {3, 0}});
+    // The rotated edges must be axis-aligned again: theta = -a modulo quarter turns.
+    const double r = std::remainder(theta + a, std::numbers::pi / 2);
+    EXPECT_NEAR(r, 0.0, 1e-12) << deg;
+  }
+}
+
+TEST(Deformation, AlignsAQuadrilateralWithoutInverting) {
+  DeformProblem p;
+  p.rest = {{0, 0}, {1, 0.3}, {0.2, 1}, {1.3, 1.2}};
+  p.triangles = {{0, 1, 2}, {1, 3, 2}};
+  p.aligned = {{0, 1, 5.0}, {1, 3, 5.0}, {3, 2, 5.0}, {2, 0, 5.0}};
+  std::vector<Vec2> x = p.rest;
+  const DeformStats st = deform_to_polysquare(p, DeformOptions{}, x);
+  EXPECT_LT(st.alignment_after, 0.1 * st.alignment_before);
+  EXPECT_GT(min_signed_area(p.triangles, x), 0.0);
+  for (const auto& e : p.aligned) {  // every boundary edge within 5 degrees of an axis
+    const Vec2 d = x[e.b] - x[e.a];
+    const double off = std::min(std::abs(d.x), std::abs(d.y)) / norm(d);
+    EXPECT_LT(off, std::sin(5.0 * std::numbers::pi / 180.0));
+  }
+}
+
+TEST(Deformation, ConstrainedMoveReachesTargetsAndStaysValid) {
+  // A fan around one free centre vertex; the ring is moved onto a square.
+  DeformProblem p;
+  const int n = 12;
+  p.rest.push_back({0, 0});
+  for (int i = 0; i < n; ++i) {
+    const double a = 2 * std::numbers::pi * i / n;
+    p.rest.push_back({std::cos(a), std::sin(a)});
+  }
+  for (int i = 0; i < n; ++i) p.triangles.push_back({0, 1 + i, 1 + (i + 1) % n});
+  std::vector<Vec2> x = p.rest, targets = p.rest;
+  std::vector<std::uint8_t> mask(p.rest.size(), 1);
+  mask[0] = 0;
+  for (int i = 1; i <= n; ++i) {
+    const Vec2 q = p.rest[i];
+    const double s = std::max(std::abs(q.x), std::abs(q.y));
+    targets[i] = {q.x / s + 3.0, q.y / s - 1.0};  // project to the square and translate
+  }
+  ASSERT_TRUE(move_constrained_vertices(p, DeformOptions{}, mask, targets, x));
+  for (int i = 1; i <= n; ++i) EXPECT_EQ(x[i], targets[i]);
+  EXPECT_GT(min_signed_area(p.triangles, x), 0.0);
+  EXPECT_NEAR(x[0].x, 3.0, 0.2);
+  EXPECT_NEAR(x[0].y, -1.0, 0.2);
+}
+
+namespace {
+// A layout of an L-shaped poly-square: 6 break points, sides labelled CCW, targets slightly off integers.
+Layout l_shape(std::vector<Vec2>& deformed) {
+  Layout L;
+  deformed = {{0, 0}, {4.2, 0}, {4.2, 2.1}, {2.1, 2.1}, {2.1, 5.9}, {0, 5.9}};
+  for (int i = 0; i < 6; ++i) { L.break_vertex.push_back(i); L.break_is_corner.push_back(1); }
+  L.vertex_break = {0, 1, 2, 3, 4, 5};
+  const int labels[6] = {0, 1, 2, 1, 2, 3};
+  for (int i = 0; i < 6; ++i) {
+    LayoutSegment s;
+    s.chain = 0; s.first = i; s.count = 1; s.label = labels[i];
+    s.break_a = i; s.break_b = (i + 1) % 6;
+    s.target = distance(deformed[i], deformed[(i + 1) % 6]);
+    L.segments.push_back(s);
+  }
+  return L;
+}
+}  // namespace
+
+TEST(Quantization, LShapeClosesWithCountsNearTargets) {
+  std::vector<Vec2> deformed;
+  Layout L = l_shape(deformed);
+  const QuantizeStats st = quantize_layout(L, deformed, QuantizeOptions{}, "test");
+  EXPECT_EQ(check_layout(L), "");
+  // Closure: every segment keeps its perpendicular coordinate and has length >= 1.
+  for (const auto& s : L.segments) {
+    const auto a = L.lattice[s.break_a], b = L.lattice[s.break_b];
+    const int ax = label_axis(s.label);
+    EXPECT_EQ(a[1 - ax], b[1 - ax]);
+    EXPECT_GE(label_sign(s.label) * (b[ax] - a[ax]), 1);
+    EXPECT_LE(std::abs(std::abs(b[ax] - a[ax]) - s.target), 1.0);
+  }
+  EXPECT_LT(st.max_relative_deviation, 0.5);
+  // The two +Y sides must sum to the -Y side: 2 + 4 = 6.
+  EXPECT_EQ(L.lattice[5][1] - L.lattice[0][1], 6);
+}
+
+TEST(Quantization, ContradictoryLabelsAreInfeasible) {
+  std::vector<Vec2> deformed;
+  Layout L = l_shape(deformed);
+  // Relabel the closing -Y side as -X: the two +Y sides then require y(2,3) > y(0,1,4,5) > y(2,3).
+  L.segments[5].label = 2;
+  EXPECT_THROW(quantize_layout(L, deformed, QuantizeOptions{}, "test"), MeshingError);
+}
+
+TEST(Quantization, SelfOverlappingSolutionIsRejectedByTheCheck) {
+  std::vector<Vec2> deformed;
+  Layout L = l_shape(deformed);
+  // +Y notch side relabelled +X: the integer program is feasible but the polygon folds over itself.
+  L.segments[3].label = 0;
+  quantize_layout(L, deformed, QuantizeOptions{}, "test");
+  EXPECT_NE(check_layout(L), "");
+}
+
+TEST(Quantization, OverlappingSidesAreReported) {
+  std::vector<Vec2> deformed;
+  Layout L = l_shape(deformed);
+  quantize_layout(L, deformed, QuantizeOptions{}, "test");
+  L.lattice[3] = L.lattice[1];  // fold the notch onto another corner
+  EXPECT_NE(check_layout(L), "");
+}
