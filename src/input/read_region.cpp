@@ -118,9 +118,6 @@ void validate_region(Region& region, const InputOptions& options) {
     dedupe(ring.points, true);
     if (ring.points.size() < 3)
       throw InputError(ring_name(r) + " has fewer than 3 distinct points, at " + pt(ring.points.front()));
-    const double a = signed_area(ring.points);
-    if (a == 0.0) throw InputError(ring_name(r) + " has zero area, at " + pt(ring.points.front()));
-    if ((a > 0) == ring.hole) std::reverse(ring.points.begin(), ring.points.end());
   }
   for (std::size_t f = 0; f < region.features.size(); ++f) {
     FeatureCurve& c = region.features[f];
@@ -143,6 +140,13 @@ void validate_region(Region& region, const InputOptions& options) {
     if (s.owner == t.owner) throw InputError(ring_name(static_cast<std::size_t>(s.owner)) + " intersects itself at " + pt(at));
     throw InputError(ring_name(static_cast<std::size_t>(s.owner)) + " meets ring " + std::to_string(t.owner) + " at " + pt(at));
   });
+  // Orientation after the crossing check, so a bow-tie is reported as what it is rather than as zero area.
+  for (std::size_t r = 0; r < region.rings.size(); ++r) {
+    Ring& ring = region.rings[r];
+    const double a = signed_area(ring.points);
+    if (a == 0.0) throw InputError(ring_name(r) + " has zero area, at " + pt(ring.points.front()));
+    if ((a > 0) == ring.hole) std::reverse(ring.points.begin(), ring.points.end());
+  }
   // Nesting: holes inside their own outer ring, parts not inside each other (outside their holes).
   std::vector<int> outer(static_cast<std::size_t>(region.num_parts), -1);
   for (std::size_t r = 0; r < region.rings.size(); ++r)

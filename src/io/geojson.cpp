@@ -74,7 +74,7 @@ Region parse_geojson(std::string_view text, const std::string& source_name) {
   json doc;
   try {
     doc = json::parse(text.begin(), text.end());
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {  // syntax errors and numbers out of range (1e400)
     throw InputError(source_name + ": not valid JSON: " + e.what());
   }
   if (!doc.is_object() || doc.value("type", json()) != "FeatureCollection" || !doc.contains("features") ||
@@ -109,9 +109,11 @@ Region parse_geojson(std::string_view text, const std::string& source_name) {
         for (const json& line : coords) region.features.push_back({positions(line, ctx), false, src});
       else if (type == "Polygon" && coords.is_array() && !coords.empty())
         region.features.push_back({ring(coords[0], ctx, 0), true, src});
+      else if (type == "LinearRing")  // not in RFC 7946, but written by some tools for closed curves
+        region.features.push_back({ring(coords, ctx, 0), true, src});
       else if (type == "Point") region.feature_points.push_back(position(coords, ctx));
       else if (type == "MultiPoint") for (Vec2 p : positions(coords, ctx)) region.feature_points.push_back(p);
-      else ctx.fail("a feature must be a LineString, MultiLineString, Polygon, Point or MultiPoint, got " + type);
+      else ctx.fail("a feature must be a LineString, MultiLineString, Polygon, LinearRing, Point or MultiPoint, got " + type);
     } else {
       ctx.fail("unknown role \"" + role + "\" (expected \"domain\" or \"feature\")");
     }

@@ -1,7 +1,6 @@
 // VTK XML unstructured grid (write; read ASCII), the SVG picture, and the extension dispatch.
 #include <algorithm>
 #include <fstream>
-#include <regex>
 #include <sstream>
 
 #include "polysquare/core/error.h"
@@ -19,12 +18,20 @@ std::string lower_extension(const std::filesystem::path& p) {
   return ext;
 }
 
-// Text of the first DataArray whose Name (or, for points, the Points section) matches.
+// Text content of the first DataArray at or after `from` (plain search: std::regex recurses per character and
+// overflows the stack on large files).
+std::string array_text(const std::string& xml, std::size_t from, const std::string& what, const std::string& path) {
+  const std::size_t open = from == std::string::npos ? from : xml.find("<DataArray", from);
+  const std::size_t start = open == std::string::npos ? open : xml.find('>', open);
+  const std::size_t end = start == std::string::npos ? start : xml.find("</DataArray>", start);
+  if (end == std::string::npos) throw InputError(path + ": no ASCII DataArray for " + what);
+  if (xml.compare(open, start - open, "<DataArray") == 0 && xml.find("format=\"ascii\"", open) > start)
+    throw InputError(path + ": only ASCII DataArrays are supported (" + what + ")");
+  return xml.substr(start + 1, end - start - 1);
+}
 std::string data_array(const std::string& xml, const std::string& name, const std::string& path) {
-  const std::regex re("<DataArray[^>]*Name=\"" + name + "\"[^>]*>([^<]*)</DataArray>");
-  std::smatch m;
-  if (!std::regex_search(xml, m, re)) throw InputError(path + ": no ASCII DataArray named " + name);
-  return m[1].str();
+  const std::size_t at = xml.find("Name=\"" + name + "\"");
+  return array_text(xml, at == std::string::npos ? at : xml.rfind("<DataArray", at), name, path);
 }
 
 template <typename T>
@@ -46,10 +53,7 @@ QuadMesh read_vtu(const std::filesystem::path& path) {
   buf << in.rdbuf();
   const std::string xml = buf.str(), name = path.string();
   if (xml.find("<UnstructuredGrid") == std::string::npos) throw InputError(name + ": not a VTK UnstructuredGrid file");
-  std::smatch m;
-  const std::regex points_re("<Points>\\s*<DataArray[^>]*>([^<]*)</DataArray>");
-  if (!std::regex_search(xml, m, points_re)) throw InputError(name + ": no ASCII Points DataArray");
-  const auto xyz = numbers<double>(m[1].str(), name);
+  const auto xyz = numbers<double>(array_text(xml, xml.find("<Points>"), "Points", name), name);
   const auto conn = numbers<long long>(data_array(xml, "connectivity", name), name);
   const auto offs = numbers<long long>(data_array(xml, "offsets", name), name);
   const auto types = numbers<int>(data_array(xml, "types", name), name);

