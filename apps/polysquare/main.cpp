@@ -91,6 +91,9 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   cmd_mesh->add_option("--max-quads", mesh.options.max_quads, "refuse sizes that need more quads than this")
       ->capture_default_str();
+  cmd_mesh->add_option("--min-sj", mesh.options.min_scaled_jacobian,
+                       "refuse a mesh whose worst scaled Jacobian is below this (0 accepts any valid mesh)")
+      ->capture_default_str();
   cmd_mesh->add_option("--boundary-weight", mesh.options.map.deform.boundary_weight,
                        "lambda of the boundary alignment term (paper eq. 9)")->capture_default_str();
   cmd_mesh->add_option("--feature-weight", mesh.options.map.deform.feature_weight,

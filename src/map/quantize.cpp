@@ -80,8 +80,10 @@ std::vector<long long> solve_axis(const Layout& layout, const std::vector<Vec2>&
     glp_set_obj_coef(P, u, w);
     // Integer right-hand sides keep the LP vertex integral (the matrix is totally unimodular).
     const double t = std::max(std::round(s.target), 1.0);
-    // n = sg (X_b - X_a) >= 1 ; u >= n - t ; u >= t - n
-    add_row({{cb + 1, sg}, {ca + 1, -sg}}, GLP_LO, 1.0, 0.0);
+    // n = sg (X_b - X_a) in [lo, hi] ; u >= n - t ; u >= t - n
+    const double lo = std::max(1.0, std::ceil(t / options.max_side_change));
+    const double hi = std::max(lo, std::floor(t * options.max_side_change));
+    add_row({{cb + 1, sg}, {ca + 1, -sg}}, GLP_DB, lo, hi);
     add_row({{u, 1.0}, {cb + 1, -sg}, {ca + 1, sg}}, GLP_LO, -t, 0.0);
     add_row({{u, 1.0}, {cb + 1, sg}, {ca + 1, -sg}}, GLP_LO, t, 0.0);
   }
@@ -103,7 +105,8 @@ std::vector<long long> solve_axis(const Layout& layout, const std::vector<Vec2>&
   const int ret = glp_simplex(P, &parm);
   if (ret != 0 || glp_get_status(P) != GLP_OPT)
     throw MeshingError(part_name + ": quantization of the " + (axis == 0 ? std::string("x") : std::string("y")) +
-                       " sides has no integer solution (the labelled sides cannot close into a poly-square)");
+                       " sides has no integer solution with every side within a factor " + std::to_string(options.max_side_change) +
+                       " of its length (the labelled sides cannot close into a poly-square)");
   for (int c = 0; c < ncls; ++c) {
     const double v = glp_get_col_prim(P, c + 1);
     if (std::abs(v - std::round(v)) > 1e-6)

@@ -117,6 +117,18 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
 
   const InvariantReport inv = check_invariants(mesh);
   if (!inv.ok()) throw MeshingError(src + ": the assembled mesh breaks an invariant: " + inv.first_problem);
+  // A valid but badly shaped mesh is refused too: a single poly-square per part cannot serve every region.
+  std::size_t worst = 0;
+  double worst_sj = 2.0;
+  for (std::size_t q = 0; q < mesh.quads.size(); ++q)
+    if (const double sj = quad_min_corner_sj(mesh, q); sj < worst_sj) { worst_sj = sj; worst = q; }
+  if (worst_sj < options.min_scaled_jacobian) {
+    const Vec2 p = mesh.nodes[mesh.quads[worst][0]];
+    throw MeshingError(src + ": part " + std::to_string(mesh.quad_part[worst]) + ": the best quad mesh of one poly-square has a quad with scaled Jacobian " +
+                       std::to_string(worst_sj) + " at (" + std::to_string(p.x) + ", " + std::to_string(p.y) +
+                       "), below the minimum " + std::to_string(options.min_scaled_jacobian) +
+                       " (--min-sj); this region needs partitioning into several poly-squares (not implemented yet)");
+  }
 
   nlohmann::json parts_json = nlohmann::json::array();
   for (const auto& s : out.parts) parts_json.push_back(part_json(s));
@@ -126,6 +138,7 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
                  {"area", area}}},
       {"options", {{"size", options.size}, {"threads", options.threads}, {"seed", options.seed},
                    {"corner_threshold_deg", options.corner_threshold_deg}, {"max_quads", options.max_quads},
+                   {"min_scaled_jacobian", options.min_scaled_jacobian},
                    {"map", "single poly-square per part"},
                    {"amips_alpha", map.deform.amips_alpha}, {"amips_s", map.deform.amips_s},
                    {"boundary_weight", map.deform.boundary_weight}, {"feature_weight", map.deform.feature_weight},

@@ -161,11 +161,7 @@ TriMesh triangulate_part(const Region& region, const RegionPart& part, const Tri
     std::vector<VH> hs;
     hs.reserve(ring.points.size());
     for (Vec2 p : ring.points) hs.push_back(insert(p));
-    for (std::size_t i = 0; i < hs.size(); ++i) {
-      VH a = hs[i], b = hs[(i + 1) % hs.size()];
-      cdt.insert_constraint(a, b);
-      ring_edges.insert(key(a, b));
-    }
+    for (std::size_t i = 0; i < hs.size(); ++i) cdt.insert_constraint(hs[i], hs[(i + 1) % hs.size()]);
     chain_handles.push_back(std::move(hs));
     chains.push_back({TriChain::Kind::ring, r, true, {}, {}});
   }
@@ -180,6 +176,48 @@ TriMesh triangulate_part(const Region& region, const RegionPart& part, const Tri
   }
   std::vector<VH> point_handles;
   for (int f : part.feature_points) point_handles.push_back(insert(region.feature_points[static_cast<std::size_t>(f)]));
+
+  // Trace an input segment through the vertices lying on it (other constraints' end points before refinement,
+  // Steiner points after): the constrained edges collinear with it, from a to b.
+  auto trace = [&](VH a, VH b, std::vector<VH>& verts, std::vector<std::uint8_t>& is_input) {
+    const Vec2 pa{a->point().x(), a->point().y()}, pb{b->point().x(), b->point().y()};
+    const double len = distance(pa, pb);
+    VH cur = a, prev;
+    verts.push_back(a);
+    is_input.push_back(1);
+    while (cur != b) {
+      VH best;
+      double best_d = distance(Vec2{cur->point().x(), cur->point().y()}, pb);
+      auto circ = cdt.incident_edges(cur), end = circ;
+      do {
+        if (cdt.is_infinite(circ) || !cdt.is_constrained(*circ)) continue;
+        FH fh = circ->first;
+        const int i = circ->second;
+        VH w = fh->vertex(CDT::cw(i)) == cur ? fh->vertex(CDT::ccw(i)) : fh->vertex(CDT::cw(i));
+        const Vec2 pw{w->point().x(), w->point().y()};
+        if (point_segment_distance(pw, pa, pb) > 1e-9 * len) continue;
+        const double dw = distance(pw, pb);
+        if (dw < best_d) { best_d = dw; best = w; }
+      } while (++circ != end);
+      if (best == VH())
+        throw MeshingError("triangulation of part " + std::to_string(part.part) + ": lost a constrained segment");
+      cur = best;
+      if (cur != b) { verts.push_back(cur); is_input.push_back(0); }
+    }
+  };
+  auto trace_chain = [&](const std::vector<VH>& hs, bool closed, std::vector<VH>& verts, std::vector<std::uint8_t>& is_input) {
+    const std::size_t nseg = closed ? hs.size() : hs.size() - 1;
+    for (std::size_t i = 0; i < nseg; ++i) trace(hs[i], hs[(i + 1) % hs.size()], verts, is_input);
+    if (!closed) { verts.push_back(hs.back()); is_input.push_back(1); }
+  };
+  // Ring edges as they are in the triangulation: a feature ending on a ring splits that ring's segment.
+  for (std::size_t c = 0; c < chains.size(); ++c) {
+    if (chains[c].kind != TriChain::Kind::ring) continue;
+    std::vector<VH> verts;
+    std::vector<std::uint8_t> flags;
+    trace_chain(chain_handles[c], true, verts, flags);
+    for (std::size_t i = 0; i < verts.size(); ++i) ring_edges.insert(key(verts[i], verts[(i + 1) % verts.size()]));
+  }
 
   // Domain = odd nesting depth, counting ring constraints only (feature constraints do not change sides).
   for (auto f = cdt.all_faces_begin(); f != cdt.all_faces_end(); ++f) f->set_in_domain(false);
@@ -235,39 +273,10 @@ TriMesh triangulate_part(const Region& region, const RegionPart& part, const Tri
     out.triangles.push_back({f->vertex(0)->info(), f->vertex(1)->info(), f->vertex(2)->info()});
   }
 
-  // Trace each input segment through the Steiner points the mesher put on it.
-  auto trace = [&](VH a, VH b, std::vector<std::int32_t>& verts, std::vector<std::uint8_t>& is_input) {
-    const Vec2 pa{a->point().x(), a->point().y()}, pb{b->point().x(), b->point().y()};
-    const double len = distance(pa, pb);
-    VH cur = a, prev;
-    verts.push_back(a->info());
-    is_input.push_back(1);
-    while (cur != b) {
-      VH best;
-      double best_d = distance(Vec2{cur->point().x(), cur->point().y()}, pb);
-      auto circ = cdt.incident_edges(cur), end = circ;
-      do {
-        if (cdt.is_infinite(circ) || !cdt.is_constrained(*circ)) continue;
-        FH fh = circ->first;
-        const int i = circ->second;
-        VH w = fh->vertex(CDT::cw(i)) == cur ? fh->vertex(CDT::ccw(i)) : fh->vertex(CDT::cw(i));
-        const Vec2 pw{w->point().x(), w->point().y()};
-        if (point_segment_distance(pw, pa, pb) > 1e-9 * len) continue;
-        const double dw = distance(pw, pb);
-        if (dw < best_d) { best_d = dw; best = w; }
-      } while (++circ != end);
-      if (best == VH())
-        throw MeshingError("triangulation of part " + std::to_string(part.part) + ": lost a constrained segment");
-      cur = best;
-      if (cur != b) { verts.push_back(cur->info()); is_input.push_back(0); }
-    }
-  };
   for (std::size_t c = 0; c < chains.size(); ++c) {
-    const auto& hs = chain_handles[c];
-    TriChain& ch = chains[c];
-    const std::size_t nseg = ch.closed ? hs.size() : hs.size() - 1;
-    for (std::size_t i = 0; i < nseg; ++i) trace(hs[i], hs[(i + 1) % hs.size()], ch.vertices, ch.is_input);
-    if (!ch.closed) { ch.vertices.push_back(hs.back()->info()); ch.is_input.push_back(1); }
+    std::vector<VH> verts;
+    trace_chain(chain_handles[c], chains[c].closed, verts, chains[c].is_input);
+    for (VH v : verts) chains[c].vertices.push_back(v->info());
   }
   out.chains = std::move(chains);
   for (VH h : point_handles) out.feature_point_vertices.push_back(h->info());

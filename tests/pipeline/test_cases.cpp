@@ -64,8 +64,10 @@ TEST_P(SlicedCase, HoldsEveryInvariant) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Cases, SlicedCase,
+                         // Floors: Gmsh 4.8.4's SJ min (anchors.md) where we beat it; letter_M is below it (README).
                          ::testing::Values(Case{"letter_I", 2.0, 0.99}, Case{"pentagon", 3.0, 0.70},
-                                           Case{"letter_M", 2.0, 0.55}, Case{"square_feature", 3.0, 0.10}),
+                                           Case{"letter_M", 2.0, 0.60}, Case{"square_feature", 3.0, 0.34},
+                                           Case{"dam_channel", 2.0, 0.67}, Case{"rect_feature", 3.0, 0.67}),
                          [](const auto& info) { return std::string(info.param.name); });
 
 TEST(Pipeline, LetterIIsAPerfectStructuredGrid) {
@@ -87,13 +89,13 @@ TEST(Pipeline, OutputIsIndependentOfTheThreadCount) {
 TEST(Pipeline, UnservedRegionsFailCleanlyOrHoldTheInvariants) {
   // Cases that need partitioning (holes, branches, many features) either mesh validly or raise MeshingError;
   // a mesh that breaks an invariant is never returned.
-  for (const Case c : {Case{"letter_R", 2.0, 0}, Case{"triangle", 3.0, 0}, Case{"rect_feature", 3.0, 0},
-                       Case{"dam_channel", 2.0, 0}, Case{"key", 2.0, 0}}) {
+  for (const Case c : {Case{"letter_R", 2.0, 0}, Case{"triangle", 3.0, 0}, Case{"smile", 2.5, 0},
+                       Case{"turtle_shell", 2.5, 0}, Case{"mechanical_part", 3.0, 0}, Case{"key", 2.0, 0}}) {
     const Region r = load(c.name);
     try {
       const MeshResult res = mesh(r, c.size);
       EXPECT_TRUE(check_invariants(res.mesh).ok()) << c.name;
-      EXPECT_EQ(compute_quality(res.mesh).inverted, 0u) << c.name;
+      EXPECT_GE(compute_quality(res.mesh).sj.min, MeshOptions{}.min_scaled_jacobian) << c.name;
     } catch (const MeshingError& e) {
       EXPECT_NE(std::string(e.what()).find(c.name), std::string::npos) << e.what();
     }

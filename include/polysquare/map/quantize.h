@@ -10,6 +10,8 @@ namespace polysquare {
 struct QuantizeOptions {
   double position_weight = 1e-3;  ///< weak pull of each break point towards its deformed position (anchors
                                   ///< pieces, such as interior features, that no segment ties to the boundary)
+  double max_side_change = 2.5;   ///< a side of target length t gets between t / 2.5 and 2.5 t elements (and >= 1):
+                                  ///< a poly-square that only closes by collapsing a side is refused, not meshed
   int time_limit_ms = 20000;      ///< GLPK simplex time limit
 };
 

@@ -19,6 +19,7 @@ struct MeshOptions {
   std::uint64_t seed = 1;        ///< seed of every randomized stage (partitioning); the output depends only on it
   double corner_threshold_deg = 30.0;  ///< input vertices turning by more than this are mesh nodes
   std::size_t max_quads = 50'000'000;  ///< refuse sizes whose estimated quad count exceeds this
+  double min_scaled_jacobian = 0.2;    ///< refuse (MeshingError) a mesh whose worst quad is below this; 0 = accept any valid mesh
   PolysquareMapOptions map;      ///< stages 2 and 4-6 (map.size and map.layout.corner_threshold_deg are set from above)
   SmoothOptions smooth;          ///< stage 7 smoothing
 };
