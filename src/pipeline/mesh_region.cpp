@@ -112,7 +112,7 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
   }
 
   const auto t_smooth = std::chrono::steady_clock::now();
-  const SmoothStats smooth = smooth_quads(mesh, options.smooth);
+  const SmoothStats smooth = smooth_quads(mesh, options.smooth, &region);
   const double seconds_smooth = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_smooth).count();
 
   const InvariantReport inv = check_invariants(mesh);
@@ -146,7 +146,7 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
       {"counts", {{"nodes", mesh.nodes.size()}, {"quads", mesh.quads.size()},
                   {"boundary_edges", mesh.boundary_edges.size()}, {"feature_edges", mesh.feature_edges.size()}}},
       {"parts", parts_json},
-      {"smooth", {{"sweeps", smooth.sweeps}, {"moves", smooth.moves}}},
+      {"smooth", {{"sweeps", smooth.sweeps}, {"moves", smooth.moves}, {"curve_moves", smooth.curve_moves}}},
       {"seconds", {{"parts", seconds_parts}, {"smooth", seconds_smooth}}},
   };
   return out;

@@ -4,6 +4,76 @@
 #include <cmath>
 
 namespace polysquare {
+namespace {
+
+// Node -> incident quads, compressed.
+struct Incidence {
+  std::vector<std::size_t> offset;
+  std::vector<std::int32_t> quads;
+  explicit Incidence(const QuadMesh& mesh) : offset(mesh.nodes.size() + 1, 0) {
+    for (const auto& q : mesh.quads)
+      for (auto v : q) offset[static_cast<std::size_t>(v) + 1]++;
+    for (std::size_t i = 0; i + 1 < offset.size(); ++i) offset[i + 1] += offset[i];
+    quads.resize(offset.back());
+    std::vector<std::size_t> fill(offset.begin(), offset.end() - 1);
+    for (std::size_t q = 0; q < mesh.quads.size(); ++q)
+      for (auto v : mesh.quads[q]) quads[fill[v]++] = static_cast<std::int32_t>(q);
+  }
+  double worst(const QuadMesh& mesh, std::size_t v) const {
+    double m = 1.0;
+    for (std::size_t k = offset[v]; k < offset[v + 1]; ++k) m = std::min(m, quad_min_corner_sj(mesh, quads[k]));
+    return m;
+  }
+  double mean_edge(const QuadMesh& mesh, std::size_t v) const {
+    double len = 0.0;
+    int n = 0;
+    for (std::size_t k = offset[v]; k < offset[v + 1]; ++k) {
+      const auto& q = mesh.quads[quads[k]];
+      for (int c = 0; c < 4; ++c, ++n) len += distance(mesh.nodes[q[c]], mesh.nodes[q[(c + 1) % 4]]);
+    }
+    return n ? len / n : 0.0;
+  }
+};
+
+// An input polyline with cumulative arc length, for positions by arc parameter.
+struct Curve {
+  std::vector<Vec2> pts;
+  std::vector<double> cum;  // cum[i] = arc length at pts[i]; closed curves repeat pts[0] at the end
+  bool closed = false;
+  Curve(const std::vector<Vec2>& p, bool is_closed) : pts(p), closed(is_closed) {
+    if (closed) pts.push_back(p.front());
+    cum.assign(pts.size(), 0.0);
+    for (std::size_t i = 1; i < pts.size(); ++i) cum[i] = cum[i - 1] + distance(pts[i - 1], pts[i]);
+  }
+  double length() const { return cum.back(); }
+  Vec2 at(double s) const {
+    if (closed) s = s - std::floor(s / length()) * length();
+    s = std::clamp(s, 0.0, length());
+    const std::size_t i = static_cast<std::size_t>(std::upper_bound(cum.begin(), cum.end(), s) - cum.begin());
+    const std::size_t j = std::clamp<std::size_t>(i, 1, pts.size() - 1);
+    const double seg = cum[j] - cum[j - 1];
+    return seg > 0 ? lerp(pts[j - 1], pts[j], (s - cum[j - 1]) / seg) : pts[j];
+  }
+  double project(Vec2 p) const {
+    double best = INFINITY, s = 0.0;
+    for (std::size_t i = 1; i < pts.size(); ++i) {
+      const Vec2 d = pts[i] - pts[i - 1];
+      const double l2 = dot(d, d);
+      const double t = l2 > 0 ? std::clamp(dot(p - pts[i - 1], d) / l2, 0.0, 1.0) : 0.0;
+      const double dist = distance(p, pts[i - 1] + t * d);
+      if (dist < best) { best = dist; s = cum[i - 1] + t * (cum[i] - cum[i - 1]); }
+    }
+    return s;
+  }
+};
+
+// A node that slides: its curve and its two neighbours along the curve.
+struct Slider {
+  int curve = -1;
+  std::int32_t prev = -1, next = -1;
+};
+
+}  // namespace
 
 double quad_min_corner_sj(const QuadMesh& mesh, std::size_t q) {
   const auto& quad = mesh.quads[q];
@@ -17,28 +87,20 @@ double quad_min_corner_sj(const QuadMesh& mesh, std::size_t q) {
   return mn;
 }
 
-SmoothStats smooth_quads(QuadMesh& mesh, const SmoothOptions& options) {
+SmoothStats smooth_quads(QuadMesh& mesh, const SmoothOptions& options, const Region* region) {
   const std::size_t nn = mesh.nodes.size();
-  // Compressed node -> incident quads and node -> edge neighbours.
-  std::vector<std::size_t> qoff(nn + 1, 0);
-  for (const auto& q : mesh.quads)
-    for (auto v : q) qoff[v + 1]++;
-  for (std::size_t i = 0; i < nn; ++i) qoff[i + 1] += qoff[i];
-  std::vector<std::int32_t> qadj(qoff[nn]);
-  {
-    std::vector<std::size_t> fill(qoff.begin(), qoff.end() - 1);
-    for (std::size_t q = 0; q < mesh.quads.size(); ++q)
-      for (auto v : mesh.quads[q]) qadj[fill[v]++] = static_cast<std::int32_t>(q);
-  }
+  const Incidence inc(mesh);
+  const bool kinds = mesh.node_kind.size() == nn;
+  auto is_interior = [&](std::size_t v) { return kinds && mesh.node_kind[v] == NodeKind::interior; };
   SmoothStats stats;
   std::vector<std::int32_t> nbrs;
   for (int sweep = 0; sweep < options.iterations; ++sweep) {
     std::size_t moved = 0;
     for (std::size_t v = 0; v < nn; ++v) {
-      if (mesh.node_kind.empty() || mesh.node_kind[v] != NodeKind::interior) continue;
+      if (!is_interior(v)) continue;
       nbrs.clear();
-      for (std::size_t k = qoff[v]; k < qoff[v + 1]; ++k) {
-        const auto& q = mesh.quads[qadj[k]];
+      for (std::size_t k = inc.offset[v]; k < inc.offset[v + 1]; ++k) {
+        const auto& q = mesh.quads[inc.quads[k]];
         const int at = static_cast<int>(std::find(q.begin(), q.end(), static_cast<std::int32_t>(v)) - q.begin());
         nbrs.push_back(q[(at + 1) % 4]);
         nbrs.push_back(q[(at + 3) % 4]);
@@ -48,59 +110,96 @@ SmoothStats smooth_quads(QuadMesh& mesh, const SmoothOptions& options) {
       Vec2 mean{};
       for (auto w : nbrs) mean = mean + mesh.nodes[w];
       mean = (1.0 / static_cast<double>(nbrs.size())) * mean;
-      auto worst = [&] {
-        double m = 1.0;
-        for (std::size_t k = qoff[v]; k < qoff[v + 1]; ++k) m = std::min(m, quad_min_corner_sj(mesh, qadj[k]));
-        return m;
-      };
       const Vec2 old = mesh.nodes[v];
-      const double before = worst();
+      const double before = inc.worst(mesh, v);
       mesh.nodes[v] = mean;
-      if (worst() > before + options.min_gain) {
-        ++moved;
-      } else {
-        mesh.nodes[v] = old;
-      }
+      if (inc.worst(mesh, v) > before) ++moved;
+      else mesh.nodes[v] = old;
     }
     stats.sweeps = sweep + 1;
     stats.moves += moved;
     if (moved == 0) break;
   }
-  // Then a derivative-free pattern search on the worst corner around the nodes of poor quads: it untangles and
-  // lifts the minimum where the Laplacian average cannot (next to poly-square corners).
-  const Vec2 dirs[8] = {{1, 0}, {0.7071, 0.7071}, {0, 1}, {-0.7071, 0.7071}, {-1, 0}, {-0.7071, -0.7071}, {0, -1}, {0.7071, -0.7071}};
+
+  // Curves of sliding nodes: rings then feature curves of the region, each node with its curve neighbours.
+  std::vector<Curve> curves;
+  std::vector<Slider> slider(nn);
+  if (region && options.slide_on_curves && kinds) {
+    for (const Ring& r : region->rings) curves.emplace_back(r.points, true);
+    for (const FeatureCurve& f : region->features) curves.emplace_back(f.points, f.closed);
+    auto link = [&](const std::vector<std::array<std::int32_t, 2>>& edges, const std::vector<std::int32_t>& tag, int base) {
+      for (std::size_t e = 0; e < edges.size(); ++e) {
+        const int c = base + tag[e];
+        for (int side = 0; side < 2; ++side) {
+          Slider& s = slider[edges[e][side]];
+          s.curve = c;
+          (side == 0 ? s.next : s.prev) = edges[e][1 - side];
+        }
+      }
+    };
+    link(mesh.boundary_edges, mesh.boundary_edge_ring, 0);
+    link(mesh.feature_edges, mesh.feature_edge_curve, static_cast<int>(region->rings.size()));
+  }
+  auto slides = [&](std::size_t v) {
+    const NodeKind k = mesh.node_kind[v];
+    return (k == NodeKind::boundary || k == NodeKind::feature) && slider[v].curve >= 0 && slider[v].prev >= 0 &&
+           slider[v].next >= 0;
+  };
+
+  // Pattern search on the worst corner around poor nodes: lifts the minimum where averaging cannot (next to
+  // poly-square corners), and untangles.
+  const Vec2 dirs[8] = {{1, 0}, {0.7071067811865476, 0.7071067811865476}, {0, 1}, {-0.7071067811865476, 0.7071067811865476},
+                        {-1, 0}, {-0.7071067811865476, -0.7071067811865476}, {0, -1}, {0.7071067811865476, -0.7071067811865476}};
   for (int sweep = 0; sweep < options.worst_sweeps; ++sweep) {
     std::size_t moved = 0;
     for (std::size_t v = 0; v < nn; ++v) {
-      if (mesh.node_kind.empty() || mesh.node_kind[v] != NodeKind::interior) continue;
-      double before = 1.0, edge = 0.0;
-      int nedge = 0;
-      for (std::size_t k = qoff[v]; k < qoff[v + 1]; ++k) {
-        before = std::min(before, quad_min_corner_sj(mesh, qadj[k]));
-        const auto& q = mesh.quads[qadj[k]];
-        for (int c = 0; c < 4; ++c) { edge += distance(mesh.nodes[q[c]], mesh.nodes[q[(c + 1) % 4]]); ++nedge; }
-      }
+      const bool interior = is_interior(v);
+      if (!interior && !(kinds && !curves.empty() && slides(v))) continue;
+      const double before = inc.worst(mesh, v);
       if (before >= options.worst_threshold) continue;
-      auto worst = [&] {
-        double m = 1.0;
-        for (std::size_t k = qoff[v]; k < qoff[v + 1]; ++k) m = std::min(m, quad_min_corner_sj(mesh, qadj[k]));
-        return m;
-      };
-      double best = before;
-      double step = 0.25 * edge / nedge;
-      for (int level = 0; level < 12; ++level) {
-        bool improved = false;
-        const Vec2 centre = mesh.nodes[v];
-        Vec2 best_p = centre;
-        for (const Vec2& d : dirs) {
-          mesh.nodes[v] = centre + step * d;
-          const double w = worst();
-          if (w > best + 1e-12) { best = w; best_p = mesh.nodes[v]; improved = true; }
+      double best = before, step = 0.25 * inc.mean_edge(mesh, v);
+      if (interior) {
+        for (int level = 0; level < 12; ++level) {
+          const Vec2 centre = mesh.nodes[v];
+          Vec2 best_p = centre;
+          for (const Vec2& d : dirs) {
+            mesh.nodes[v] = centre + step * d;
+            const double w = inc.worst(mesh, v);
+            if (w > best + 1e-12) { best = w; best_p = mesh.nodes[v]; }
+          }
+          mesh.nodes[v] = best_p;
+          if (best_p == centre) step *= 0.5;
         }
-        mesh.nodes[v] = best_p;
-        if (!improved) step *= 0.5;
+        if (best > before) ++moved;
+        continue;
       }
-      if (best > before) ++moved;
+      // Along the curve, strictly between the curve neighbours (so the boundary order never changes).
+      const Curve& c = curves[static_cast<std::size_t>(slider[v].curve)];
+      double s = c.project(mesh.nodes[v]);
+      auto unwrap = [&](double t) {
+        if (!c.closed) return t;
+        const double L = c.length();
+        while (t - s > 0.5 * L) t -= L;
+        while (s - t > 0.5 * L) t += L;
+        return t;
+      };
+      double lo = unwrap(c.project(mesh.nodes[slider[v].prev])), hi = unwrap(c.project(mesh.nodes[slider[v].next]));
+      if (lo > hi) std::swap(lo, hi);
+      if (!(lo < s && s < hi)) continue;
+      const double margin = 0.05 * (hi - lo);
+      for (int level = 0; level < 12; ++level) {
+        const Vec2 old = mesh.nodes[v];
+        double best_s = s;
+        for (double cand : {s - step, s + step}) {
+          if (cand <= lo + margin || cand >= hi - margin) continue;
+          mesh.nodes[v] = c.at(cand);
+          const double w = inc.worst(mesh, v);
+          if (w > best + 1e-12) { best = w; best_s = cand; }
+          mesh.nodes[v] = old;
+        }
+        if (best_s != s) { s = best_s; mesh.nodes[v] = c.at(s); } else step *= 0.5;
+      }
+      if (best > before) { ++moved; ++stats.curve_moves; }
     }
     stats.moves += moved;
     if (moved == 0) break;

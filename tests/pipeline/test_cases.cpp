@@ -64,9 +64,9 @@ TEST_P(SlicedCase, HoldsEveryInvariant) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Cases, SlicedCase,
-                         // Floors: Gmsh 4.8.4's SJ min (anchors.md) where we beat it; letter_M is below it (README).
+                         // Floors: Gmsh 4.8.4 SJ min from anchors.md (rect_feature has no Gmsh figure: dam_channel.s).
                          ::testing::Values(Case{"letter_I", 2.0, 0.99}, Case{"pentagon", 3.0, 0.70},
-                                           Case{"letter_M", 2.0, 0.60}, Case{"square_feature", 3.0, 0.34},
+                                           Case{"letter_M", 2.0, 0.71}, Case{"square_feature", 3.0, 0.34},
                                            Case{"dam_channel", 2.0, 0.67}, Case{"rect_feature", 3.0, 0.67}),
                          [](const auto& info) { return std::string(info.param.name); });
 
