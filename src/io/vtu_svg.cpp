@@ -111,9 +111,20 @@ void write_vtu(const std::filesystem::path& path, const QuadMesh& mesh) {
 
 QuadMesh read_mesh(const std::filesystem::path& path) {
   const std::string ext = lower_extension(path);
-  if (ext == ".msh") return read_msh(path);
-  if (ext == ".vtu") return read_vtu(path);
-  throw InputError(path.string() + ": unsupported mesh format '" + ext + "' (supported: .msh, .vtu)");
+  QuadMesh mesh;
+  if (ext == ".msh") mesh = read_msh(path);
+  else if (ext == ".vtu") mesh = read_vtu(path);
+  else throw InputError(path.string() + ": unsupported mesh format '" + ext + "' (supported: .msh, .vtu)");
+  // Orientation by majority of signed cell areas: individual inverted cells stay inverted.
+  double area = 0.0;
+  for (const auto& q : mesh.quads)
+    area += cross(mesh.nodes[q[2]] - mesh.nodes[q[0]], mesh.nodes[q[3]] - mesh.nodes[q[1]]) > 0 ? 1.0 : -1.0;
+  for (const auto& t : mesh.triangles) area += orient2(mesh.nodes[t[0]], mesh.nodes[t[1]], mesh.nodes[t[2]]) > 0 ? 1.0 : -1.0;
+  if (area < 0) {
+    for (auto& q : mesh.quads) std::reverse(q.begin(), q.end());
+    for (auto& t : mesh.triangles) std::reverse(t.begin(), t.end());
+  }
+  return mesh;
 }
 
 void write_mesh(const std::filesystem::path& path, const QuadMesh& mesh, const MeshWriteOptions& options) {

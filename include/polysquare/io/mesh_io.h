@@ -13,7 +13,9 @@ struct MeshWriteOptions {
 };
 
 /// Reads a mesh by extension (.msh, .vtu). Quads and triangles are kept; lines of physical curves named
-/// "boundary*" / "feature*" become tagged edges. Throws InputError on malformed or truncated files.
+/// "boundary*" / "feature*" become tagged edges. A mesh whose cells are mostly clockwise (a surface with normal
+/// -z, as Gmsh makes from a clockwise outline) is reversed, so quads are counter-clockwise as QuadMesh requires.
+/// Throws InputError on malformed or truncated files.
 QuadMesh read_mesh(const std::filesystem::path& path);
 QuadMesh read_msh(const std::filesystem::path& path);
 QuadMesh read_vtu(const std::filesystem::path& path);

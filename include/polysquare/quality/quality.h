@@ -36,7 +36,8 @@ struct QualityReport {
   std::size_t interior_singularities = 0;   ///< interior vertices of valence != 4
   std::size_t boundary_singularities = 0;   ///< boundary vertices of valence != 3
 };
-/// Valence counts distinct edges of all cells (quads and triangles) at a vertex.
+/// Valence counts the distinct quad edges at a vertex; triangles (from other tools) are not counted, as in
+/// anchors.md. non_manifold_edges and boundary_edges are over the quads too.
 QualityReport compute_quality(const QuadMesh& mesh);
 
 struct DomainDistanceOptions {

@@ -1,0 +1,1 @@
+list(APPEND TEST_SOURCES quality/test_gmsh_reference.cpp)
