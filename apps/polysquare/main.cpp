@@ -94,6 +94,8 @@ int main(int argc, char** argv) {
   cmd_mesh->add_option("--min-sj", mesh.options.min_scaled_jacobian,
                        "refuse a mesh whose worst scaled Jacobian is below this (0 accepts any valid mesh)")
       ->capture_default_str();
+  cmd_mesh->add_option("--max-edge-ratio", mesh.options.max_edge_ratio,
+                       "refuse a mesh with a quad whose longest / shortest edge exceeds this")->capture_default_str();
   cmd_mesh->add_option("--boundary-weight", mesh.options.map.deform.boundary_weight,
                        "lambda of the boundary alignment term (paper eq. 9)")->capture_default_str();
   cmd_mesh->add_option("--feature-weight", mesh.options.map.deform.feature_weight,

@@ -118,10 +118,25 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
   const InvariantReport inv = check_invariants(mesh);
   if (!inv.ok()) throw MeshingError(src + ": the assembled mesh breaks an invariant: " + inv.first_problem);
   // A valid but badly shaped mesh is refused too: a single poly-square per part cannot serve every region.
-  std::size_t worst = 0;
-  double worst_sj = 2.0;
-  for (std::size_t q = 0; q < mesh.quads.size(); ++q)
+  std::size_t worst = 0, longest = 0;
+  double worst_sj = 2.0, worst_ratio = 0.0;
+  for (std::size_t q = 0; q < mesh.quads.size(); ++q) {
     if (const double sj = quad_min_corner_sj(mesh, q); sj < worst_sj) { worst_sj = sj; worst = q; }
+    double lmin = INFINITY, lmax = 0.0;
+    for (int k = 0; k < 4; ++k) {
+      const double l = distance(mesh.nodes[mesh.quads[q][k]], mesh.nodes[mesh.quads[q][(k + 1) % 4]]);
+      lmin = std::min(lmin, l);
+      lmax = std::max(lmax, l);
+    }
+    if (const double r = lmax / lmin; r > worst_ratio) { worst_ratio = r; longest = q; }
+  }
+  if (worst_ratio > options.max_edge_ratio) {
+    const Vec2 p = mesh.nodes[mesh.quads[longest][0]];
+    throw MeshingError(src + ": part " + std::to_string(mesh.quad_part[longest]) +
+                       ": the best quad mesh of one poly-square has a quad with edge ratio " + std::to_string(worst_ratio) +
+                       " at (" + std::to_string(p.x) + ", " + std::to_string(p.y) + "), above the maximum " +
+                       std::to_string(options.max_edge_ratio) + " (--max-edge-ratio); this region needs partitioning");
+  }
   if (worst_sj < options.min_scaled_jacobian) {
     const Vec2 p = mesh.nodes[mesh.quads[worst][0]];
     throw MeshingError(src + ": part " + std::to_string(mesh.quad_part[worst]) + ": the best quad mesh of one poly-square has a quad with scaled Jacobian " +
@@ -138,7 +153,7 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
                  {"area", area}}},
       {"options", {{"size", options.size}, {"threads", options.threads}, {"seed", options.seed},
                    {"corner_threshold_deg", options.corner_threshold_deg}, {"max_quads", options.max_quads},
-                   {"min_scaled_jacobian", options.min_scaled_jacobian},
+                   {"min_scaled_jacobian", options.min_scaled_jacobian}, {"max_edge_ratio", options.max_edge_ratio},
                    {"map", "single poly-square per part"},
                    {"amips_alpha", map.deform.amips_alpha}, {"amips_s", map.deform.amips_s},
                    {"boundary_weight", map.deform.boundary_weight}, {"feature_weight", map.deform.feature_weight},

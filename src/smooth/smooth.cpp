@@ -6,6 +6,20 @@
 namespace polysquare {
 namespace {
 
+// Shape measure the smoother maximizes: the worst corner scaled Jacobian, capped by 3 / edge ratio so that a
+// quad with a collapsed edge (angles fine, one edge near zero) counts as bad too. 3 leaves edge ratios up to 3
+// alone: on letter_M it gives SJ min 0.80 with edge ratio max 3.7 (2: 0.60 / 3.3; 4: 0.87 / 4.6).
+double quad_shape(const QuadMesh& mesh, std::size_t q) {
+  const auto& quad = mesh.quads[q];
+  double lmin = INFINITY, lmax = 0.0;
+  for (int k = 0; k < 4; ++k) {
+    const double l = distance(mesh.nodes[quad[k]], mesh.nodes[quad[(k + 1) % 4]]);
+    lmin = std::min(lmin, l);
+    lmax = std::max(lmax, l);
+  }
+  return std::min(quad_min_corner_sj(mesh, q), lmax > 0 ? 3.0 * lmin / lmax : -1.0);
+}
+
 // Node -> incident quads, compressed.
 struct Incidence {
   std::vector<std::size_t> offset;
@@ -21,7 +35,7 @@ struct Incidence {
   }
   double worst(const QuadMesh& mesh, std::size_t v) const {
     double m = 1.0;
-    for (std::size_t k = offset[v]; k < offset[v + 1]; ++k) m = std::min(m, quad_min_corner_sj(mesh, quads[k]));
+    for (std::size_t k = offset[v]; k < offset[v + 1]; ++k) m = std::min(m, quad_shape(mesh, quads[k]));
     return m;
   }
   double mean_edge(const QuadMesh& mesh, std::size_t v) const {

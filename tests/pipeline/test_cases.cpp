@@ -57,6 +57,7 @@ TEST_P(SlicedCase, HoldsEveryInvariant) {
   EXPECT_LT(d.feature_node_max_distance, 1e-9 * region.bounding_box().diagonal());
   if (!region.features.empty()) EXPECT_GT(m.feature_edges.size(), 0u);
   EXPECT_GT(q.sj.min, c.sj_floor) << c.name;
+  EXPECT_LT(q.edge_ratio.max, 10.0) << c.name;  // no collapsed edge hiding behind good angles
   // Element size follows the requested size: mean quad area within 40% of h^2.
   double area = 0;
   for (const auto& x : m.quads) area += 0.5 * cross(m.nodes[x[2]] - m.nodes[x[0]], m.nodes[x[3]] - m.nodes[x[1]]);

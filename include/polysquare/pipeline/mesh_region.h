@@ -20,6 +20,7 @@ struct MeshOptions {
   double corner_threshold_deg = 30.0;  ///< input vertices turning by more than this are mesh nodes
   std::size_t max_quads = 50'000'000;  ///< refuse sizes whose estimated quad count exceeds this
   double min_scaled_jacobian = 0.2;    ///< refuse (MeshingError) a mesh whose worst quad is below this; 0 = accept any valid mesh
+  double max_edge_ratio = 20.0;        ///< refuse a mesh with a quad whose longest / shortest edge exceeds this
   PolysquareMapOptions map;      ///< stages 2 and 4-6 (map.size and map.layout.corner_threshold_deg are set from above)
   SmoothOptions smooth;          ///< stage 7 smoothing
 };
