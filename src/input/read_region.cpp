@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "polysquare/core/error.h"
+#include "polysquare/io/atomic_file.h"
 #include "polysquare/io/geojson.h"
 
 namespace polysquare {
@@ -22,15 +23,6 @@ double signed_area(const std::vector<Vec2>& r) {
   double s = 0.0;
   for (std::size_t i = 0; i < r.size(); ++i) s += cross(r[i], r[(i + 1) % r.size()]);
   return 0.5 * s;
-}
-
-bool inside_ring(Vec2 p, const std::vector<Vec2>& ring) {
-  bool in = false;
-  for (std::size_t i = 0, j = ring.size() - 1; i < ring.size(); j = i++) {
-    const Vec2 a = ring[i], b = ring[j];
-    if ((a.y > p.y) != (b.y > p.y) && p.x < (b.x - a.x) * (p.y - a.y) / (b.y - a.y) + a.x) in = !in;
-  }
-  return in;
 }
 
 struct Segment {
@@ -152,15 +144,15 @@ void validate_region(Region& region, const InputOptions& options) {
   for (std::size_t r = 0; r < region.rings.size(); ++r)
     if (!region.rings[r].hole) outer[static_cast<std::size_t>(region.rings[r].part)] = static_cast<int>(r);
   auto in_domain_of_part = [&](Vec2 p, int part) {
-    if (!inside_ring(p, region.rings[static_cast<std::size_t>(outer[static_cast<std::size_t>(part)])].points)) return false;
+    if (!point_in_ring(p, region.rings[static_cast<std::size_t>(outer[static_cast<std::size_t>(part)])].points)) return false;
     for (const Ring& h : region.rings)
-      if (h.part == part && h.hole && inside_ring(p, h.points)) return false;
+      if (h.part == part && h.hole && point_in_ring(p, h.points)) return false;
     return true;
   };
   for (std::size_t r = 0; r < region.rings.size(); ++r) {
     const Ring& ring = region.rings[r];
     const Vec2 p = ring.points.front();
-    if (ring.hole && !inside_ring(p, region.rings[static_cast<std::size_t>(outer[static_cast<std::size_t>(ring.part)])].points))
+    if (ring.hole && !point_in_ring(p, region.rings[static_cast<std::size_t>(outer[static_cast<std::size_t>(ring.part)])].points))
       throw InputError(ring_name(r) + " is a hole outside its polygon, at " + pt(p));
     if (!ring.hole)
       for (int k = 0; k < region.num_parts; ++k)
@@ -214,11 +206,7 @@ Region read_region(const std::filesystem::path& path, const InputOptions& option
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   if (ext != ".geojson" && ext != ".json")
     throw InputError(name + ": unsupported input format '" + ext + "' (supported: .geojson, .json)");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(name + ": cannot open the file");
-  std::ostringstream buf;
-  buf << in.rdbuf();
-  Region region = parse_geojson(buf.str(), name);
+  Region region = parse_geojson(read_file(path), name);
   validate_region(region, options);
   return region;
 }

@@ -6,6 +6,7 @@
 #include <atomic>
 #include <cstring>
 #include <fstream>
+#include <iterator>
 #include <string>
 
 #include "polysquare/core/error.h"
@@ -52,6 +53,14 @@ void write_file_atomically(const std::filesystem::path& target, const std::funct
     throw;
   }
   release_slot(slot);
+}
+
+std::string read_file(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path.string() + ": cannot open the file");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (in.bad()) throw InputError(path.string() + ": reading failed");
+  return text;
 }
 
 void remove_pending_temporaries() noexcept {

@@ -242,11 +242,7 @@ void read_v4(Cursor& c, Builder& b, bool binary) {
 }  // namespace
 
 QuadMesh read_msh(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path.string() + ": cannot open the file");
-  std::ostringstream buf;
-  buf << in.rdbuf();
-  const std::string data = buf.str();
+  const std::string data = read_file(path);
   const std::string name = path.string();
   Cursor c{data, name};
   c.expect("$MeshFormat");

@@ -47,11 +47,7 @@ std::vector<T> numbers(const std::string& text, const std::string& path) {
 }  // namespace
 
 QuadMesh read_vtu(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path.string() + ": cannot open the file");
-  std::ostringstream buf;
-  buf << in.rdbuf();
-  const std::string xml = buf.str(), name = path.string();
+  const std::string xml = read_file(path), name = path.string();
   if (xml.find("<UnstructuredGrid") == std::string::npos) throw InputError(name + ": not a VTK UnstructuredGrid file");
   const auto xyz = numbers<double>(array_text(xml, xml.find("<Points>"), "Points", name), name);
   const auto conn = numbers<long long>(data_array(xml, "connectivity", name), name);

@@ -29,15 +29,6 @@ using Mesher = CGAL::Delaunay_mesher_2<CDT, Criteria>;
 using VH = CDT::Vertex_handle;
 using FH = CDT::Face_handle;
 
-bool point_in_ring(Vec2 p, const std::vector<Vec2>& ring) {
-  bool inside = false;
-  for (std::size_t i = 0, j = ring.size() - 1; i < ring.size(); j = i++) {
-    const Vec2 a = ring[i], b = ring[j];
-    if ((a.y > p.y) != (b.y > p.y) && p.x < (b.x - a.x) * (p.y - a.y) / (b.y - a.y) + a.x) inside = !inside;
-  }
-  return inside;
-}
-
 // A point to decide which part a feature belongs to: the midpoint of its first segment (its end points may
 // lie on the boundary, its interior never does after splitting).
 Vec2 feature_probe(const FeatureCurve& f) {

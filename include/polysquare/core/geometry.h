@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cmath>
+#include <vector>
 
 namespace polysquare {
 
@@ -33,6 +34,16 @@ inline double point_segment_distance(Vec2 p, Vec2 a, Vec2 b) {
   double t = len2 > 0.0 ? dot(p - a, d) / len2 : 0.0;
   t = t < 0.0 ? 0.0 : (t > 1.0 ? 1.0 : t);
   return distance(p, a + t * d);
+}
+
+/// Even-odd test of p against a closed ring (closing point not repeated). Points on the ring may go either way.
+inline bool point_in_ring(Vec2 p, const std::vector<Vec2>& ring) {
+  bool inside = false;
+  for (std::size_t i = 0, j = ring.size() - 1; i < ring.size(); j = i++) {
+    const Vec2 a = ring[i], b = ring[j];
+    if ((a.y > p.y) != (b.y > p.y) && p.x < (b.x - a.x) * (p.y - a.y) / (b.y - a.y) + a.x) inside = !inside;
+  }
+  return inside;
 }
 
 /// Axis-aligned bounding box.

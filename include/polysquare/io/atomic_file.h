@@ -1,9 +1,10 @@
-// Writing outputs so that a target path never holds a partial file.
+// Reading whole files, and writing outputs so that a target path never holds a partial file.
 #pragma once
 
 #include <filesystem>
 #include <functional>
 #include <ostream>
+#include <string>
 
 namespace polysquare {
 
@@ -11,6 +12,9 @@ namespace polysquare {
 /// `target`. On any failure the temporary is removed and the exception propagates; `target` is untouched.
 void write_file_atomically(const std::filesystem::path& target, const std::function<void(std::ostream&)>& write,
                            bool binary);
+
+/// The whole content of a file; throws InputError naming the path when it cannot be read.
+std::string read_file(const std::filesystem::path& path);
 
 /// Removes the temporaries of writes in flight (for SIGINT/SIGTERM handlers). Uses only unlink() on paths
 /// prepared before the write started, so it is safe to call from a signal handler.
