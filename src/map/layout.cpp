@@ -14,48 +14,73 @@ const Vec2 kLabelDir[4] = {{1, 0}, {0, 1}, {-1, 0}, {0, -1}};
 // Labels of one chain by dynamic programming: each edge pays its length times (1 - cos) of the angle between
 // its deformed direction and the label's axis direction; each label change pays `change_cost` (nothing at a
 // sharp input vertex, where a corner is natural); U-turns are forbidden. This removes the staircases that the
-// L1 term alone favours and the short runs that would become spurious corners. Closed chains are solved once
-// per label of their first edge.
+// L1 term alone favours and the short runs that would become spurious corners. A closed chain is solved once
+// per label of its first edge, with the running number of quarter turns in the state, so that it closes with
+// exactly `required_turns` (+4 counter-clockwise, -4 clockwise): every loop becomes a valid orthogonal polygon.
 std::vector<int> label_chain(const std::vector<Vec2>& edge_vec, const std::vector<std::uint8_t>& free_change,
-                             bool closed, double change_cost) {
+                             bool closed, double change_cost, int required_turns) {
   const int m = static_cast<int>(edge_vec.size());
   constexpr double kBig = 1e300;
+  constexpr int kMaxTurns = 12;  // |running turns| bound; more would never pay off against change_cost
+  constexpr int kT = 2 * kMaxTurns + 1;
   auto edge_cost = [&](int i, int l) {
     return norm(edge_vec[i]) - dot(edge_vec[i], kLabelDir[l]);  // = length * (1 - cos)
   };
-  auto change = [&](int i, int from, int to) {  // transition into edge i
+  auto turn = [](int from, int to) { const int d = (to - from + 4) % 4; return d == 0 ? 0 : (d == 1 ? 1 : (d == 3 ? -1 : 99)); };
+  auto change = [&](int i, int from, int to) {  // cost of the transition into edge i
     if (from == to) return 0.0;
-    if ((from + 2) % 4 == to) return kBig;
     return free_change[i] ? 0.0 : change_cost;
   };
+  const int turn_states = closed ? kT : 1;
   std::vector<int> best_labels;
   double best_total = kBig;
   const int first_options = closed ? 4 : 1;
+  // cost[i][l][t], back[i][l][t] = previous (label, turns) packed as label * kT + t.
+  std::vector<double> cost(static_cast<std::size_t>(m) * 4 * turn_states);
+  std::vector<int> back(cost.size());
+  auto at = [&](int i, int l, int t) { return (static_cast<std::size_t>(i) * 4 + l) * turn_states + t; };
   for (int f = 0; f < first_options; ++f) {
-    std::vector<std::array<double, 4>> cost(m);
-    std::vector<std::array<int, 4>> from(m);
-    for (int l = 0; l < 4; ++l) cost[0][l] = (closed && l != f) ? kBig : edge_cost(0, l);
+    std::fill(cost.begin(), cost.end(), kBig);
+    const int t0 = closed ? kMaxTurns : 0;
+    for (int l = 0; l < 4; ++l)
+      if (!closed || l == f) cost[at(0, l, t0)] = edge_cost(0, l);
     for (int i = 1; i < m; ++i)
-      for (int l = 0; l < 4; ++l) {
-        cost[i][l] = kBig;
-        for (int k = 0; k < 4; ++k) {
-          const double c = cost[0 + i - 1][k] + change(i, k, l);
-          if (c < cost[i][l]) { cost[i][l] = c; from[i][l] = k; }
+      for (int k = 0; k < 4; ++k)
+        for (int t = 0; t < turn_states; ++t) {
+          const double base = cost[at(i - 1, k, t)];
+          if (base >= kBig) continue;
+          for (int l = 0; l < 4; ++l) {
+            const int dt = turn(k, l);
+            if (dt == 99) continue;  // U-turn
+            const int nt = closed ? t + dt : 0;
+            if (nt < 0 || nt >= turn_states) continue;
+            const double c = base + change(i, k, l) + edge_cost(i, l);
+            if (c < cost[at(i, l, nt)]) { cost[at(i, l, nt)] = c; back[at(i, l, nt)] = k * kT + t; }
+          }
         }
-        cost[i][l] += edge_cost(i, l);
-      }
-    int last = 0;
+    int last = -1, last_t = 0;
     double total = kBig;
-    for (int l = 0; l < 4; ++l) {
-      const double c = cost[m - 1][l] + (closed ? change(0, l, f) : 0.0);
-      if (c < total) { total = c; last = l; }
-    }
-    if (total >= best_total) continue;
+    for (int l = 0; l < 4; ++l)
+      for (int t = 0; t < turn_states; ++t) {
+        double c = cost[at(m - 1, l, t)];
+        if (c >= kBig) continue;
+        if (closed) {
+          const int dt = turn(l, f);
+          if (dt == 99 || t - kMaxTurns + dt != required_turns) continue;
+          c += change(0, l, f);
+        }
+        if (c < total) { total = c; last = l; last_t = t; }
+      }
+    if (last < 0 || total >= best_total) continue;
     best_total = total;
     best_labels.assign(m, 0);
     for (int i = m - 1; i >= 0; --i) {
       best_labels[i] = last;
-      if (i > 0) last = from[i][last];
+      if (i > 0) {
+        const int packed = back[at(i, last, last_t)];
+        last = packed / kT;
+        last_t = packed % kT;
+      }
     }
   }
   return best_labels;
@@ -102,7 +127,15 @@ Layout build_layout(const TriMesh& mesh, const std::vector<Vec2>& original, cons
       free_change[i] = corner[ch.vertices[i]];
     }
     std::vector<int>& labels = layout.chain_labels[c];
-    labels = label_chain(edge_vec, free_change, ch.closed, options.label_change_cost);
+    // Closed chains turn by +4 quarter turns when counter-clockwise in the deformed plane (outer rings, and
+    // feature loops drawn that way), -4 when clockwise (holes).
+    double area = 0.0;
+    for (int i = 0; i < n; ++i) area += cross(deformed[ch.vertices[i]], deformed[ch.vertices[(i + 1) % n]]);
+    labels = label_chain(edge_vec, free_change, ch.closed, options.label_change_cost, area >= 0 ? 4 : -4);
+    if (labels.empty())
+      throw MeshingError(part_name + ": no axis labelling of " +
+                         std::string(ch.kind == TriChain::Kind::ring ? "ring " : "feature loop ") + std::to_string(ch.index) +
+                         " closes into an orthogonal polygon");
     int turning = 0;
     for (int i = 0; i < m; ++i) {
       if (!ch.closed && i == 0) continue;
