@@ -52,7 +52,11 @@ TEST_P(SlicedCase, HoldsEveryInvariant) {
   const DomainDistance d = domain_distance(m, region);
   EXPECT_LT(d.boundary_max_relative, 1e-9);
   EXPECT_EQ(d.sharp_vertices_missing, 0u);
-  EXPECT_LT(std::abs(d.area_relative_change), 1e-9);
+  // Where every input vertex is a node the mesh covers the region exactly; on curved rings the chords between
+  // boundary nodes cut the curve, and the report gives the change.
+  std::size_t ring_vertices = 0;
+  for (const Ring& ring : region.rings) ring_vertices += ring.points.size();
+  EXPECT_LT(std::abs(d.area_relative_change), d.sharp_vertices_total == ring_vertices ? 1e-9 : 1e-2);
   // 5: feature nodes on the curves.
   EXPECT_LT(d.feature_node_max_distance, 1e-9 * region.bounding_box().diagonal());
   if (!region.features.empty()) EXPECT_GT(m.feature_edges.size(), 0u);
