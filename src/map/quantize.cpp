@@ -8,6 +8,7 @@
 #include <cmath>
 #include <numeric>
 #include <memory>
+#include <array>
 
 #include "polysquare/core/error.h"
 
@@ -21,21 +22,35 @@ struct UnionFind {
   void unite(int a, int b) { parent[find(a)] = find(b); }
 };
 
-// Solves one axis. Returns lattice coordinates of every break point along `axis`.
-std::vector<long long> solve_axis(const Layout& layout, const std::vector<Vec2>& deformed, int axis,
-                                  const QuantizeOptions& options, const std::string& part_name, QuantizeStats& stats) {
+// Break points that share a coordinate along `axis` (joined by sides of the other axis) form one class.
+std::vector<int> axis_classes(const Layout& layout, int axis, int& ncls) {
   const int nb = static_cast<int>(layout.break_vertex.size());
   UnionFind uf(nb);
   for (const LayoutSegment& s : layout.segments)
     if (label_axis(s.label) != axis) uf.unite(s.break_a, s.break_b);
-  std::vector<int> cls(nb, -1);
-  int ncls = 0;
-  std::vector<int> root_cls(nb, -1);
+  std::vector<int> cls(nb, -1), root_cls(nb, -1);
+  ncls = 0;
   for (int b = 0; b < nb; ++b) {
     const int r = uf.find(b);
     if (root_cls[r] < 0) root_cls[r] = ncls++;
     cls[b] = root_cls[r];
   }
+  return cls;
+}
+
+// coordinate(hi) - coordinate(lo) >= 1 along `axis`: keeps apart two pieces of the layout that overlapped.
+struct Separation {
+  int axis, lo, hi;
+  bool operator==(const Separation&) const = default;
+};
+
+// Solves one axis. Returns lattice coordinates of every break point along `axis`.
+std::vector<long long> solve_axis(const Layout& layout, const std::vector<Vec2>& deformed, int axis,
+                                  const std::vector<Separation>& separations, const QuantizeOptions& options,
+                                  const std::string& part_name, QuantizeStats& stats) {
+  const int nb = static_cast<int>(layout.break_vertex.size());
+  int ncls = 0;
+  const std::vector<int> cls = axis_classes(layout, axis, ncls);
   // Mean deformed coordinate of each class: the anchor of the weak position term.
   std::vector<double> anchor(ncls, 0.0);
   std::vector<int> members(ncls, 0);
@@ -87,6 +102,8 @@ std::vector<long long> solve_axis(const Layout& layout, const std::vector<Vec2>&
     add_row({{u, 1.0}, {cb + 1, -sg}, {ca + 1, sg}}, GLP_LO, -t, 0.0);
     add_row({{u, 1.0}, {cb + 1, sg}, {ca + 1, -sg}}, GLP_LO, t, 0.0);
   }
+  for (const Separation& sep : separations)
+    if (sep.axis == axis) add_row({{cls[sep.hi] + 1, 1.0}, {cls[sep.lo] + 1, -1.0}}, GLP_LO, 1.0, 0.0);
   for (int c = 0; c < ncls; ++c) {
     const int v = v0 + c;
     glp_set_col_bnds(P, v, GLP_LO, 0.0, 0.0);
@@ -124,26 +141,85 @@ std::vector<long long> solve_axis(const Layout& layout, const std::vector<Vec2>&
   return out;
 }
 
+
+// The separation that holds with the largest margin in the deformed plane, between two sets of break points
+// (the ends of two overlapping sides, or two break points on one lattice point). Returns false if none is
+// possible (the sets share a break point on every candidate axis).
+bool best_separation(const Layout& layout, const std::vector<Vec2>& deformed, const std::vector<int>& A,
+                     const std::vector<int>& B, const std::array<std::vector<int>, 2>& cls, Separation& out) {
+  double best = -INFINITY;
+  for (int axis = 0; axis < 2; ++axis) {
+    auto coord = [&](int b) { const Vec2 p = deformed[layout.break_vertex[b]]; return axis == 0 ? p.x : p.y; };
+    auto extreme = [&](const std::vector<int>& S, bool want_max) {
+      int e = S.front();
+      for (int b : S)
+        if (want_max ? coord(b) > coord(e) : coord(b) < coord(e)) e = b;
+      return e;
+    };
+    // A before B along the axis, or B before A.
+    for (int order = 0; order < 2; ++order) {
+      const std::vector<int>& first = order == 0 ? A : B;
+      const std::vector<int>& second = order == 0 ? B : A;
+      const int lo = extreme(first, true), hi = extreme(second, false);
+      if (cls[axis][lo] == cls[axis][hi]) continue;
+      const double margin = coord(hi) - coord(lo);
+      if (margin > best) { best = margin; out = {axis, lo, hi}; }
+    }
+  }
+  return best > -INFINITY;
+}
+
 }  // namespace
 
 QuantizeStats quantize_layout(Layout& layout, const std::vector<Vec2>& deformed, const QuantizeOptions& options,
                               const std::string& part_name) {
-  QuantizeStats stats;
   glp_term_out(GLP_OFF);
-  const auto xs = solve_axis(layout, deformed, 0, options, part_name, stats);
-  const auto ys = solve_axis(layout, deformed, 1, options, part_name, stats);
-  layout.lattice.resize(layout.break_vertex.size());
-  for (std::size_t b = 0; b < xs.size(); ++b) layout.lattice[b] = {xs[b], ys[b]};
+  std::array<std::vector<int>, 2> cls;
+  int ncls = 0;
+  cls[0] = axis_classes(layout, 0, ncls);
+  cls[1] = axis_classes(layout, 1, ncls);
+  // Solve; where sides overlap or corners coincide, add the separation the deformed layout shows and solve
+  // again (a few rounds settle it: each round only adds constraints the deformed plane satisfies).
+  std::vector<Separation> separations;
+  QuantizeStats stats;
+  for (int round = 0;; ++round) {
+    stats = QuantizeStats{};
+    const auto xs = solve_axis(layout, deformed, 0, separations, options, part_name, stats);
+    const auto ys = solve_axis(layout, deformed, 1, separations, options, part_name, stats);
+    layout.lattice.resize(layout.break_vertex.size());
+    for (std::size_t b = 0; b < xs.size(); ++b) layout.lattice[b] = {xs[b], ys[b]};
+    if (round >= options.max_separation_rounds) break;
+    const auto conflicts = find_conflicts(layout, 64);
+    std::size_t added = 0;
+    for (const LayoutConflict& c : conflicts) {
+      std::vector<int> A, B;
+      if (c.seg_a >= 0) {
+        A = {layout.segments[c.seg_a].break_a, layout.segments[c.seg_a].break_b};
+        B = {layout.segments[c.seg_b].break_a, layout.segments[c.seg_b].break_b};
+      } else {
+        A = {c.break_a};
+        B = {c.break_b};
+      }
+      Separation sep{};
+      if (best_separation(layout, deformed, A, B, cls, sep) &&
+          std::find(separations.begin(), separations.end(), sep) == separations.end()) {
+        separations.push_back(sep);
+        ++added;
+      }
+    }
+    if (added == 0) break;
+  }
+  stats.separations = separations.size();
   return stats;
 }
 
-std::string check_layout(const Layout& layout) {
+std::vector<LayoutConflict> find_conflicts(const Layout& layout, std::size_t max_conflicts) {
+  std::vector<LayoutConflict> out;
   struct Seg { long long x0, y0, x1, y1; int a, b, index; };
   std::vector<Seg> segs;
   for (std::size_t k = 0; k < layout.segments.size(); ++k) {
     const auto& s = layout.segments[k];
     const auto pa = layout.lattice[s.break_a], pb = layout.lattice[s.break_b];
-    if (pa == pb) return "segment " + std::to_string(k) + " has zero length";
     segs.push_back({std::min(pa[0], pb[0]), std::min(pa[1], pb[1]), std::max(pa[0], pb[0]), std::max(pa[1], pb[1]),
                     s.break_a, s.break_b, static_cast<int>(k)});
   }
@@ -151,30 +227,39 @@ std::string check_layout(const Layout& layout) {
   std::vector<std::pair<std::array<long long, 2>, int>> pts;
   for (std::size_t b = 0; b < layout.lattice.size(); ++b) pts.push_back({layout.lattice[b], static_cast<int>(b)});
   std::sort(pts.begin(), pts.end());
-  for (std::size_t i = 1; i < pts.size(); ++i)
-    if (pts[i].first == pts[i - 1].first)
-      return "break points " + std::to_string(pts[i - 1].second) + " and " + std::to_string(pts[i].second) +
-             " land on the same lattice point";
+  for (std::size_t i = 1; i < pts.size() && out.size() < max_conflicts; ++i)
+    if (pts[i].first == pts[i - 1].first) out.push_back({-1, -1, pts[i - 1].second, pts[i].second, pts[i].first});
   // Axis-aligned boxes overlap test; segments may only share an end point that is a common break point.
   std::sort(segs.begin(), segs.end(), [](const Seg& a, const Seg& b) { return a.x0 < b.x0; });
-  for (std::size_t i = 0; i < segs.size(); ++i) {
-    for (std::size_t j = i + 1; j < segs.size() && segs[j].x0 <= segs[i].x1; ++j) {
+  for (std::size_t i = 0; i < segs.size() && out.size() < max_conflicts; ++i) {
+    for (std::size_t j = i + 1; j < segs.size() && segs[j].x0 <= segs[i].x1 && out.size() < max_conflicts; ++j) {
       const Seg &s = segs[i], &t = segs[j];
       const long long ox0 = std::max(s.x0, t.x0), ox1 = std::min(s.x1, t.x1);
       const long long oy0 = std::max(s.y0, t.y0), oy1 = std::min(s.y1, t.y1);
       if (ox0 > ox1 || oy0 > oy1) continue;
-      // They touch: allowed only at a single point that is a shared break point.
-      if (ox0 == ox1 && oy0 == oy1) {
-        const bool shared = (s.a == t.a || s.a == t.b || s.b == t.a || s.b == t.b);
-        const auto at = std::array<long long, 2>{ox0, oy0};
+      const auto at = std::array<long long, 2>{ox0, oy0};
+      if (ox0 == ox1 && oy0 == oy1) {  // touching at one point: fine if it is a break point both end at
         auto is_end = [&](const Seg& q) { return layout.lattice[q.a] == at || layout.lattice[q.b] == at; };
+        const bool shared = s.a == t.a || s.a == t.b || s.b == t.a || s.b == t.b;
         if (shared && is_end(s) && is_end(t)) continue;
       }
-      return "sides " + std::to_string(s.index) + " and " + std::to_string(t.index) + " of the poly-square overlap at (" +
-             std::to_string(ox0) + ", " + std::to_string(oy0) + ")";
+      out.push_back({std::min(s.index, t.index), std::max(s.index, t.index), -1, -1, at});
     }
   }
-  return {};
+  return out;
+}
+
+std::string check_layout(const Layout& layout) {
+  for (std::size_t k = 0; k < layout.segments.size(); ++k)
+    if (layout.lattice[layout.segments[k].break_a] == layout.lattice[layout.segments[k].break_b])
+      return "side " + std::to_string(k) + " has zero length";
+  const auto conflicts = find_conflicts(layout, 1);
+  if (conflicts.empty()) return {};
+  const LayoutConflict& c = conflicts.front();
+  const std::string where = " at (" + std::to_string(c.at[0]) + ", " + std::to_string(c.at[1]) + ")";
+  if (c.seg_a < 0)
+    return "corners " + std::to_string(c.break_a) + " and " + std::to_string(c.break_b) + " land on the same lattice point" + where;
+  return "sides " + std::to_string(c.seg_a) + " and " + std::to_string(c.seg_b) + " of the poly-square overlap" + where;
 }
 
 }  // namespace polysquare

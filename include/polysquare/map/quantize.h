@@ -12,6 +12,7 @@ struct QuantizeOptions {
                                   ///< pieces, such as interior features, that no segment ties to the boundary)
   double max_side_change = 2.5;   ///< a side of target length t gets between t / 2.5 and 2.5 t elements (and >= 1):
                                   ///< a poly-square that only closes by collapsing a side is refused, not meshed
+  int max_separation_rounds = 20; ///< rounds of re-solving with separations between overlapping sides
   int time_limit_ms = 20000;      ///< GLPK simplex time limit
 };
 
@@ -19,13 +20,25 @@ struct QuantizeStats {
   double max_relative_deviation = 0.0;  ///< max over segments of |n - target| / max(target, 1)
   int segments = 0;
   int variables = 0;
+  std::size_t separations = 0;  ///< separation constraints added to undo overlaps
 };
+
+/// Two sides of the quantized layout that overlap (seg_a, seg_b), or two break points on one lattice point
+/// (break_a, break_b; seg_a = seg_b = -1), at lattice point `at`.
+struct LayoutConflict {
+  int seg_a = -1, seg_b = -1, break_a = -1, break_b = -1;
+  std::array<long long, 2> at{};
+};
+
+/// At most max_conflicts conflicts of the quantized layout.
+std::vector<LayoutConflict> find_conflicts(const Layout& layout, std::size_t max_conflicts);
 
 /// Chooses integer lattice positions for every break point so that each segment of label +-X (+-Y) keeps y (x)
 /// constant and advances by an integer n >= 1 in its direction, with n close to its target, minimizing
 /// sum |n - target| / max(target, 1). X and Y are independent integer programs solved with GLPK; the constraint
-/// matrices are network matrices, so the LP optimum is already integral and branch-and-bound is a formality.
-/// Fills layout.lattice. Throws MeshingError naming `part_name` when the layout has no integer solution.
+/// matrices are network matrices, so the LP optimum is already integral. When the solution makes sides overlap,
+/// the separation the deformed layout shows (one side left of / below the other) is added and the programs are
+/// solved again. Fills layout.lattice. Throws MeshingError naming `part_name` when there is no solution.
 QuantizeStats quantize_layout(Layout& layout, const std::vector<Vec2>& deformed, const QuantizeOptions& options,
                               const std::string& part_name);
 
