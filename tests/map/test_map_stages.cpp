@@ -110,13 +110,23 @@ TEST(Quantization, ContradictoryLabelsAreInfeasible) {
   EXPECT_THROW(quantize_layout(L, deformed, QuantizeOptions{}, "test"), MeshingError);
 }
 
-TEST(Quantization, SelfOverlappingSolutionIsRejectedByTheCheck) {
+TEST(Quantization, SeparationRoundsUndoOverlaps) {
   std::vector<Vec2> deformed;
   Layout L = l_shape(deformed);
-  // +Y notch side relabelled +X: the integer program is feasible but the polygon folds over itself.
+  // +Y notch side relabelled +X: the plain integer program folds the polygon over itself ...
   L.segments[3].label = 0;
-  quantize_layout(L, deformed, QuantizeOptions{}, "test");
+  QuantizeOptions plain;
+  plain.max_separation_rounds = 0;
+  quantize_layout(L, deformed, plain, "test");
   EXPECT_NE(check_layout(L), "");
+  // ... and the separations taken from the deformed layout either make it simple or prove it impossible.
+  try {
+    const QuantizeStats st = quantize_layout(L, deformed, QuantizeOptions{}, "test");
+    EXPECT_EQ(check_layout(L), "");
+    EXPECT_GT(st.separations, 0u);
+  } catch (const MeshingError&) {
+    SUCCEED();
+  }
 }
 
 TEST(Quantization, OverlappingSidesAreReported) {
