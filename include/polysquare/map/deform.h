@@ -18,7 +18,8 @@ struct DeformOptions {
   /// differentiable at axis-aligned edges.
   std::vector<double> eps_schedule{0.2, 0.08, 0.03, 0.01};
   int max_iterations = 1500;     ///< L-BFGS iterations per eps stage
-  double relative_tolerance = 1e-8;  ///< stop when the energy decrease per iteration is below this fraction
+  double relative_tolerance = 1e-6;  ///< stop when the energy decrease per iteration stays below this fraction
+                                     ///< (letter_M: 784 iterations, SJ min 0.86; 1e-8: 2567 iterations, 0.80)
   int lbfgs_memory = 8;          ///< L-BFGS history length
 };
 
