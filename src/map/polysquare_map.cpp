@@ -40,7 +40,12 @@ PartMapResult map_part(const Region& region, const RegionPart& part, const Polys
 
   auto t0 = std::chrono::steady_clock::now();
   TriangulationOptions topt;
-  topt.max_edge = options.parameterization_ratio * h;
+  topt.boundary_edge = options.parameterization_ratio * h;
+  // The deformation is smooth away from the curves: interior triangles grow to a fraction of the part's size.
+  Box2 part_box;
+  for (int r : part.rings)
+    for (Vec2 p : region.rings[static_cast<std::size_t>(r)].points) part_box.add(p);
+  topt.max_edge = std::max(options.interior_ratio * h, part_box.diagonal() / options.interior_divisions);
   topt.shape_bound = options.triangle_shape_bound;
   topt.max_triangles = options.max_triangles;
   const TriMesh tri = triangulate_part(region, part, topt);

@@ -41,7 +41,9 @@ struct SegmentGrid {
     for (const auto& e : segs) { box.add(e[0]); box.add(e[1]); }
     double len = 0;
     for (const auto& e : segs) len += distance(e[0], e[1]);
-    cell = std::max(box.diagonal() * 1e-6, 2.0 * len / std::max<std::size_t>(1, segs.size()));
+    // About one cell per segment: cells no smaller than the mean segment, nor than area / count.
+    const double n = static_cast<double>(std::max<std::size_t>(1, segs.size()));
+    cell = std::max({box.diagonal() * 1e-6, 2.0 * len / n, std::sqrt((box.hi.x - box.lo.x) * (box.hi.y - box.lo.y) / n)});
     nx = std::min(4096LL, static_cast<long long>((box.hi.x - box.lo.x) / cell) + 1);
     ny = std::min(4096LL, static_cast<long long>((box.hi.y - box.lo.y) / cell) + 1);
     cell = std::max((box.hi.x - box.lo.x) / static_cast<double>(nx), (box.hi.y - box.lo.y) / static_cast<double>(ny)) * 1.000001 + 1e-300;

@@ -110,6 +110,7 @@ SmoothStats smooth_quads(QuadMesh& mesh, const SmoothOptions& options, const Reg
   std::vector<std::int32_t> nbrs;
   for (int sweep = 0; sweep < options.iterations; ++sweep) {
     std::size_t moved = 0;
+    double largest_move = 0.0, edge_sum = 0.0;
     for (std::size_t v = 0; v < nn; ++v) {
       if (!is_interior(v)) continue;
       nbrs.clear();
@@ -127,12 +128,18 @@ SmoothStats smooth_quads(QuadMesh& mesh, const SmoothOptions& options, const Reg
       const Vec2 old = mesh.nodes[v];
       const double before = inc.worst(mesh, v);
       mesh.nodes[v] = mean;
-      if (inc.worst(mesh, v) > before) ++moved;
-      else mesh.nodes[v] = old;
+      for (auto w : nbrs) edge_sum += distance(old, mesh.nodes[w]) / static_cast<double>(nbrs.size());
+      if (inc.worst(mesh, v) > before) {
+        ++moved;
+        largest_move = std::max(largest_move, distance(old, mean));
+      } else {
+        mesh.nodes[v] = old;
+      }
     }
     stats.sweeps = sweep + 1;
     stats.moves += moved;
-    if (moved == 0) break;
+    // Converged when no node moved by more than a small fraction of the mean edge.
+    if (moved == 0 || largest_move < options.converged_fraction * edge_sum / static_cast<double>(nn)) break;
   }
 
   // Curves of sliding nodes: rings then feature curves of the region, each node with its curve neighbours.

@@ -147,22 +147,36 @@ TriMesh triangulate_part(const Region& region, const RegionPart& part, const Tri
     const void* pb = &*b;
     return pa < pb ? std::make_pair(pa, pb) : std::make_pair(pb, pa);
   };
-  for (int r : part.rings) {
-    const Ring& ring = region.rings[static_cast<std::size_t>(r)];
+  // Each polyline is inserted with its segments pre-split to options.boundary_edge, so curves are resolved at
+  // the element size while the mesher may grade the interior up to options.max_edge.
+  std::vector<std::vector<std::uint8_t>> handle_is_input;
+  auto insert_polyline = [&](const std::vector<Vec2>& pts, bool closed) {
     std::vector<VH> hs;
-    hs.reserve(ring.points.size());
-    for (Vec2 p : ring.points) hs.push_back(insert(p));
-    for (std::size_t i = 0; i < hs.size(); ++i) cdt.insert_constraint(hs[i], hs[(i + 1) % hs.size()]);
+    std::vector<std::uint8_t> flags;
+    const std::size_t nseg = closed ? pts.size() : pts.size() - 1;
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      hs.push_back(insert(pts[i]));
+      flags.push_back(1);
+      if (i >= nseg) continue;
+      const Vec2 a = pts[i], b = pts[(i + 1) % pts.size()];
+      const auto pieces = static_cast<std::size_t>(std::ceil(distance(a, b) / options.boundary_edge));
+      for (std::size_t k = 1; k < pieces; ++k) {
+        hs.push_back(insert(lerp(a, b, static_cast<double>(k) / static_cast<double>(pieces))));
+        flags.push_back(0);
+      }
+    }
+    const std::size_t n = closed ? hs.size() : hs.size() - 1;
+    for (std::size_t i = 0; i < n; ++i) cdt.insert_constraint(hs[i], hs[(i + 1) % hs.size()]);
     chain_handles.push_back(std::move(hs));
+    handle_is_input.push_back(std::move(flags));
+  };
+  for (int r : part.rings) {
+    insert_polyline(region.rings[static_cast<std::size_t>(r)].points, true);
     chains.push_back({TriChain::Kind::ring, r, true, {}, {}});
   }
   for (int f : part.features) {
     const FeatureCurve& curve = region.features[static_cast<std::size_t>(f)];
-    std::vector<VH> hs;
-    for (Vec2 p : curve.points) hs.push_back(insert(p));
-    const std::size_t nseg = curve.closed ? hs.size() : hs.size() - 1;
-    for (std::size_t i = 0; i < nseg; ++i) cdt.insert_constraint(hs[i], hs[(i + 1) % hs.size()]);
-    chain_handles.push_back(std::move(hs));
+    insert_polyline(curve.points, curve.closed);
     chains.push_back({TriChain::Kind::feature, f, curve.closed, {}, {}});
   }
   std::vector<VH> point_handles;
@@ -170,12 +184,12 @@ TriMesh triangulate_part(const Region& region, const RegionPart& part, const Tri
 
   // Trace an input segment through the vertices lying on it (other constraints' end points before refinement,
   // Steiner points after): the constrained edges collinear with it, from a to b.
-  auto trace = [&](VH a, VH b, std::vector<VH>& verts, std::vector<std::uint8_t>& is_input) {
+  auto trace = [&](VH a, VH b, std::uint8_t a_is_input, std::vector<VH>& verts, std::vector<std::uint8_t>& is_input) {
     const Vec2 pa{a->point().x(), a->point().y()}, pb{b->point().x(), b->point().y()};
     const double len = distance(pa, pb);
     VH cur = a, prev;
     verts.push_back(a);
-    is_input.push_back(1);
+    is_input.push_back(a_is_input);
     while (cur != b) {
       VH best;
       double best_d = distance(Vec2{cur->point().x(), cur->point().y()}, pb);
@@ -196,9 +210,10 @@ TriMesh triangulate_part(const Region& region, const RegionPart& part, const Tri
       if (cur != b) { verts.push_back(cur); is_input.push_back(0); }
     }
   };
-  auto trace_chain = [&](const std::vector<VH>& hs, bool closed, std::vector<VH>& verts, std::vector<std::uint8_t>& is_input) {
+  auto trace_chain = [&](std::size_t c, bool closed, std::vector<VH>& verts, std::vector<std::uint8_t>& is_input) {
+    const auto& hs = chain_handles[c];
     const std::size_t nseg = closed ? hs.size() : hs.size() - 1;
-    for (std::size_t i = 0; i < nseg; ++i) trace(hs[i], hs[(i + 1) % hs.size()], verts, is_input);
+    for (std::size_t i = 0; i < nseg; ++i) trace(hs[i], hs[(i + 1) % hs.size()], handle_is_input[c][i], verts, is_input);
     if (!closed) { verts.push_back(hs.back()); is_input.push_back(1); }
   };
   // Ring edges as they are in the triangulation: a feature ending on a ring splits that ring's segment.
@@ -206,7 +221,7 @@ TriMesh triangulate_part(const Region& region, const RegionPart& part, const Tri
     if (chains[c].kind != TriChain::Kind::ring) continue;
     std::vector<VH> verts;
     std::vector<std::uint8_t> flags;
-    trace_chain(chain_handles[c], true, verts, flags);
+    trace_chain(c, true, verts, flags);
     for (std::size_t i = 0; i < verts.size(); ++i) ring_edges.insert(key(verts[i], verts[(i + 1) % verts.size()]));
   }
 
@@ -243,7 +258,7 @@ TriMesh triangulate_part(const Region& region, const RegionPart& part, const Tri
     }
     return std::abs(a);
   }();
-  const double expected = area_guess / (0.35 * options.max_edge * options.max_edge);
+  const double expected = area_guess / (0.35 * options.boundary_edge * options.boundary_edge);
   if (expected > static_cast<double>(options.max_triangles))
     throw MeshingError("triangulation of part " + std::to_string(part.part) + " would need about " +
                        std::to_string(static_cast<long long>(expected)) + " triangles (limit " +
@@ -266,7 +281,7 @@ TriMesh triangulate_part(const Region& region, const RegionPart& part, const Tri
 
   for (std::size_t c = 0; c < chains.size(); ++c) {
     std::vector<VH> verts;
-    trace_chain(chain_handles[c], chains[c].closed, verts, chains[c].is_input);
+    trace_chain(c, chains[c].closed, verts, chains[c].is_input);
     for (VH v : verts) chains[c].vertices.push_back(v->info());
   }
   out.chains = std::move(chains);

@@ -15,7 +15,10 @@ namespace polysquare {
 
 struct PolysquareMapOptions {
   double size = 1.0;               ///< target quad edge length h (region units); must be set by the caller
-  double parameterization_ratio = 1.0;  ///< background triangle edge length / h
+  double parameterization_ratio = 1.0;  ///< background triangle edge length on rings and features / h
+  double interior_ratio = 4.0;          ///< interior background triangles grow to max(interior_ratio * h,
+  double interior_divisions = 40.0;     ///< part diagonal / interior_divisions): the map is smooth inside, and
+                                        ///< grading keeps the triangle count near perimeter / h
   double triangle_shape_bound = 0.125;  ///< CGAL shape bound (0.125 = 20.7 degree minimum angle)
   std::size_t max_triangles = 20'000'000;  ///< refuse larger background triangulations
   bool preorient = true;           ///< rotate by the eq. 11 optimum before deforming

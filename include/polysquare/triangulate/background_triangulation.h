@@ -11,7 +11,8 @@
 namespace polysquare {
 
 struct TriangulationOptions {
-  double max_edge = 1.0;      ///< target longest edge of a triangle (region units); set from the mesh size
+  double boundary_edge = 1.0; ///< rings and feature curves are split into pieces no longer than this (region units)
+  double max_edge = 1.0;      ///< longest edge of an interior triangle; the mesher grades from boundary_edge up
   double shape_bound = 0.125; ///< CGAL bound B on circumradius / shortest edge squared / 4: 0.125 = 20.7 degrees
   std::size_t max_triangles = 20'000'000;  ///< refuse to refine beyond this (memory guard)
   bool split_constrained_edges = true;  ///< split interior edges joining two constrained vertices (corner ears)
