@@ -1,1 +1,2 @@
 list(APPEND TEST_SOURCES input/test_bad_input.cpp)
+list(APPEND TEST_SOURCES input/test_split_features.cpp)

@@ -8,6 +8,7 @@
 #include "polysquare/core/error.h"
 #include "polysquare/io/atomic_file.h"
 #include "polysquare/io/geojson.h"
+#include "polysquare/input/split_features.h"
 
 namespace polysquare {
 namespace {
@@ -159,19 +160,15 @@ void validate_region(Region& region, const InputOptions& options) {
         if (k != ring.part && in_domain_of_part(p, k))
           throw InputError(ring_name(r) + " lies inside polygon part " + std::to_string(k) + " (overlapping parts), at " + pt(p));
   }
-  auto in_domain = [&](Vec2 p) {
-    for (int k = 0; k < region.num_parts; ++k)
-      if (in_domain_of_part(p, k)) return true;
-    return false;
-  };
-  // Features: inside (or on) the domain, crossing neither the boundary's interior nor each other.
-  for (std::size_t f = 0; f < region.features.size(); ++f) {
-    const auto& p = region.features[f].points;
-    const Vec2 probe = lerp(p[0], p[1], 0.5);
-    if (!in_domain(probe))
-      throw InputError(feature_name(f) + " lies outside the domain, at " + pt(probe));
+  // Features: cut at crossings and clipped to the domain; then no curve may cross the boundary or another
+  // curve except at end points (this catches self-crossing curves, which are not split).
+  split_features(region);
+  std::vector<Segment> all;
+  for (std::size_t r = 0; r < region.rings.size(); ++r) {
+    const auto& p = region.rings[r].points;
+    for (std::size_t i = 0; i < p.size(); ++i)
+      all.push_back({p[i], p[(i + 1) % p.size()], static_cast<int>(r), static_cast<int>(i), static_cast<int>(p.size()), true});
   }
-  std::vector<Segment> all = segs;
   for (std::size_t f = 0; f < region.features.size(); ++f) {
     const auto& p = region.features[f].points;
     const bool closed = region.features[f].closed;
@@ -195,8 +192,8 @@ void validate_region(Region& region, const InputOptions& options) {
     const auto& q = region.features[g].points;
     const bool other_end = !region.features[g].closed && (at == q.front() || at == q.back());
     if (at_end && other_end) return false;  // curves meeting at their end points
-    throw InputError(feature_name(f) + " crosses feature curve " + std::to_string(g) + " at " + pt(at) +
-                     "; split crossing features at their intersection (automatic splitting is not implemented yet)");
+    throw InputError(feature_name(f) + (f == g ? " crosses itself" : " crosses feature curve " + std::to_string(g)) +
+                     " at " + pt(at));
   });
 }
 

@@ -1,3 +1,4 @@
 # Sources of the input module (relative to this folder).
 list(APPEND MODULE_SOURCES)
 list(APPEND MODULE_SOURCES read_region.cpp)
+list(APPEND MODULE_SOURCES split_features.cpp)

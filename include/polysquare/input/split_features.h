@@ -1,0 +1,26 @@
+// Stage 1 (input): feature curves cut at their crossings with each other and with the boundary, and clipped to
+// the domain, so that afterwards curves meet each other and the boundary only at their end points.
+#pragma once
+
+#include "polysquare/core/region.h"
+
+namespace polysquare {
+
+struct FeatureSplitOptions {
+  double snap_relative = 1e-9;  ///< crossings closer than this (times the bounding-box diagonal) to an existing
+                                ///< vertex use that vertex, so near-touching curves share one node
+};
+
+struct FeatureSplitStats {
+  std::size_t crossings = 0;       ///< feature-feature and feature-boundary meeting points found
+  std::size_t ring_vertices_added = 0;
+  std::size_t pieces_dropped = 0;  ///< pieces outside the domain, inside a hole, or lying along the boundary
+};
+
+/// Splits every feature curve at its crossings (the crossing point is computed once and inserted into both
+/// curves, and into the ring when the other curve is a ring), drops pieces outside the domain, inside holes or
+/// along the boundary, and keeps source_feature on every piece. Rings must already be valid (validate_region).
+/// Throws InputError naming the file, the feature and a coordinate when a feature has no piece in the domain.
+FeatureSplitStats split_features(Region& region, const FeatureSplitOptions& options = {});
+
+}  // namespace polysquare
