@@ -1,1 +1,2 @@
 list(APPEND TEST_SOURCES pipeline/test_cases.cpp)
+list(APPEND TEST_SOURCES pipeline/test_hard_geometry.cpp)

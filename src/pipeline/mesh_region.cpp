@@ -116,7 +116,9 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
   const double seconds_smooth = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_smooth).count();
 
   const InvariantReport inv = check_invariants(mesh);
-  if (!inv.ok()) throw MeshingError(src + ": the assembled mesh breaks an invariant: " + inv.first_problem);
+  if (!inv.ok())
+    throw MeshingError(src + ": the mesh of one poly-square per part breaks an invariant (" + inv.first_problem +
+                       "); nothing was written");
   // A valid but badly shaped mesh is refused too: a single poly-square per part cannot serve every region.
   std::size_t worst = 0, longest = 0;
   double worst_sj = 2.0, worst_ratio = 0.0;
