@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <csignal>
 #include <sys/wait.h>
 
 namespace fs = std::filesystem;
@@ -61,4 +62,29 @@ TEST(Cli, BadInputGivesExitTwoOneErrorLineAndNoFile) {
   const CliRun r = run("mesh " + data("cases/letter_I.geojson") + " --size 2 -o " + out.string() + ".stl");
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_FALSE(fs::exists(out.string() + ".stl"));
+}
+
+TEST(Cli, InterruptLeavesNoPartialFile) {
+  const fs::path dir = fs::temp_directory_path() / ("polysquare_cli_int_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const fs::path out = dir / "m.msh";
+  // A run of a few seconds, interrupted at several moments (meshing, and possibly writing).
+  for (const char* delay : {"0.3", "1.0", "2.0"}) {
+    const std::string cmd = std::string(POLYSQUARE_CLI) + " mesh " + data("cases/rect_feature.geojson") + " --size 0.25 -o " +
+                            out.string() + " > /dev/null 2>&1 & pid=$!; sleep " + delay + "; kill -INT $pid; wait $pid; echo $? > " +
+                            (dir / "rc").string();
+    ASSERT_EQ(std::system(("bash -c '" + cmd + "'").c_str()), 0);
+    std::ifstream rc(dir / "rc");
+    int code = 0;
+    rc >> code;
+    if (code == 0) {  // finished before the signal: the file must then be complete
+      EXPECT_GT(fs::file_size(out), 1000u);
+      fs::remove(out);
+      continue;
+    }
+    EXPECT_EQ(code, 128 + SIGINT) << delay;
+    EXPECT_FALSE(fs::exists(out)) << delay;
+    for (const auto& e : fs::directory_iterator(dir)) EXPECT_EQ(e.path().filename().string().find(".tmp"), std::string::npos);
+  }
+  fs::remove_all(dir);
 }
