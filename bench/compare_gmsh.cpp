@@ -82,6 +82,7 @@ int main(int argc, char** argv) {
                   q.eta.min, q.skew.max, q.edge_ratio.max, q.interior_singularities, t);
     };
     if (gmsh_ok) { row("gmsh", theirs, median(gmsh_t)); std::printf("  (%zu triangles left)\n", theirs.triangles); }
+    else std::printf("%-16s %4.1f | gmsh failed on this input (e.g. Blossom found no perfect matching)\n", name.c_str(), h);
     if (!ours_error.empty()) {
       std::printf("%-16s %4.1f | polysquare refused: %.150s\n", name.c_str(), h, ours_error.c_str());
       continue;

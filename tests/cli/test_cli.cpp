@@ -59,6 +59,12 @@ TEST(Cli, BadInputGivesExitTwoOneErrorLineAndNoFile) {
     EXPECT_EQ(r.code, 2) << size << ": " << r.err;
     EXPECT_FALSE(fs::exists(out));
   }
+  {  // too many quads: refused from an estimate before any work, with the limit in the message
+    const CliRun r = run("mesh " + data("cases/letter_I.geojson") + " --size 0.001 --max-quads 100000 -o " + out.string());
+    EXPECT_EQ(r.code, 2) << r.err;
+    EXPECT_NE(r.err.find("--max-quads"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out));
+  }
   const CliRun r = run("mesh " + data("cases/letter_I.geojson") + " --size 2 -o " + out.string() + ".stl");
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_FALSE(fs::exists(out.string() + ".stl"));
