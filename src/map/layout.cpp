@@ -21,7 +21,7 @@ std::vector<int> label_chain(const std::vector<Vec2>& edge_vec, const std::vecto
                              bool closed, double change_cost, int required_turns) {
   const int m = static_cast<int>(edge_vec.size());
   constexpr double kBig = 1e300;
-  constexpr int kMaxTurns = 12;  // |running turns| bound; more would never pay off against change_cost
+  constexpr int kMaxTurns = 48;  // |running turns| bound: coastlines with many bays wind far before closing
   constexpr int kT = 2 * kMaxTurns + 1;
   auto edge_cost = [&](int i, int l) {
     return norm(edge_vec[i]) - dot(edge_vec[i], kLabelDir[l]);  // = length * (1 - cos)
