@@ -1,2 +1,3 @@
 list(APPEND TEST_SOURCES input/test_bad_input.cpp)
 list(APPEND TEST_SOURCES input/test_split_features.cpp)
+list(APPEND TEST_SOURCES input/test_simplify.cpp)

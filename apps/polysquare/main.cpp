@@ -89,6 +89,9 @@ int main(int argc, char** argv) {
   cmd_mesh->add_option("--corner-angle", mesh.options.corner_threshold_deg,
                        "input vertices turning by more than this (degrees) become mesh nodes")
       ->capture_default_str();
+  cmd_mesh->add_option("--simplify", mesh.options.simplify,
+                       "first simplify curves finer than the size: drop vertices whose triangle area < (F*size)^2 (0 = off)")
+      ->capture_default_str();
   cmd_mesh->add_option("--max-quads", mesh.options.max_quads, "refuse sizes that need more quads than this")
       ->capture_default_str();
   cmd_mesh->add_option("--min-sj", mesh.options.min_scaled_jacobian,

@@ -2,3 +2,4 @@
 list(APPEND MODULE_SOURCES)
 list(APPEND MODULE_SOURCES read_region.cpp)
 list(APPEND MODULE_SOURCES split_features.cpp)
+list(APPEND MODULE_SOURCES simplify.cpp)

@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "polysquare/core/error.h"
+#include "polysquare/input/simplify.h"
 #include "polysquare/pipeline/invariants.h"
 #include "polysquare/triangulate/background_triangulation.h"
 
@@ -64,10 +65,22 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
                      std::to_string(options.max_quads) + " (raise --max-quads)");
 
   const auto t_start = std::chrono::steady_clock::now();
+  // Curves far finer than h (coastlines) are simplified first; the mesh then follows the simplified curves and
+  // the quality report measures the distance to the original ones.
+  Region simplified;
+  const Region* work = &region;
+  SimplifyStats simplify_stats;
+  if (options.simplify > 0.0) {
+    simplified = region;
+    SimplifyOptions so;
+    so.min_area = (options.simplify * options.size) * (options.simplify * options.size);
+    simplify_stats = simplify_region(simplified, so);
+    work = &simplified;
+  }
   PolysquareMapOptions map = options.map;
   map.size = options.size;
   map.layout.corner_threshold_deg = options.corner_threshold_deg;
-  const std::vector<RegionPart> parts = split_into_parts(region);
+  const std::vector<RegionPart> parts = split_into_parts(*work);
 
   // Parts are independent: mesh them in parallel; results land in part order, so the output does not depend
   // on the thread count. A failure in one part is recorded and reported with all the others, never dropped.
@@ -78,7 +91,7 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
     oneapi::tbb::global_control limit(oneapi::tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
     oneapi::tbb::parallel_for(std::size_t{0}, parts.size(), [&](std::size_t k) {
       try {
-        results[k] = map_part(region, parts[k], map);
+        results[k] = map_part(*work, parts[k], map);
       } catch (const std::exception& e) {
         errors[k] = e.what();
       }
@@ -112,7 +125,7 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
   }
 
   const auto t_smooth = std::chrono::steady_clock::now();
-  const SmoothStats smooth = smooth_quads(mesh, options.smooth, &region);
+  const SmoothStats smooth = smooth_quads(mesh, options.smooth, work);
   const double seconds_smooth = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_smooth).count();
 
   const InvariantReport inv = check_invariants(mesh);
@@ -163,6 +176,8 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
       {"counts", {{"nodes", mesh.nodes.size()}, {"quads", mesh.quads.size()},
                   {"boundary_edges", mesh.boundary_edges.size()}, {"feature_edges", mesh.feature_edges.size()}}},
       {"parts", parts_json},
+      {"simplify", {{"fraction_of_size", options.simplify}, {"vertices_before", simplify_stats.vertices_before},
+                    {"vertices_after", simplify_stats.vertices_after}, {"refused", simplify_stats.refused}}},
       {"smooth", {{"sweeps", smooth.sweeps}, {"moves", smooth.moves}, {"curve_moves", smooth.curve_moves}}},
       {"seconds", {{"parts", seconds_parts}, {"smooth", seconds_smooth}}},
   };

@@ -18,6 +18,8 @@ struct MeshOptions {
   int threads = 0;               ///< worker threads; 0 = all cores. The mesh does not depend on it.
   std::uint64_t seed = 1;        ///< seed of every randomized stage (partitioning); the output depends only on it
   double corner_threshold_deg = 30.0;  ///< input vertices turning by more than this are mesh nodes
+  double simplify = 0.0;         ///< simplify curves first: remove vertices whose triangle area is below
+                                 ///< (simplify * size)^2, keeping topology (coastlines: 0.5); 0 = off
   std::size_t max_quads = 50'000'000;  ///< refuse sizes whose estimated quad count exceeds this
   double min_scaled_jacobian = 0.2;    ///< refuse (MeshingError) a mesh whose worst quad is below this; 0 = accept any valid mesh
   double max_edge_ratio = 20.0;        ///< refuse a mesh with a quad whose longest / shortest edge exceeds this

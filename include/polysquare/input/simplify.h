@@ -1,0 +1,26 @@
+// Stage 1 (input, optional): simplification of curves far finer than the target size (coastlines), keeping the
+// topology: no ring or curve may come to cross or touch another, and shared vertices are kept.
+#pragma once
+
+#include <cstddef>
+
+#include "polysquare/core/region.h"
+
+namespace polysquare {
+
+struct SimplifyOptions {
+  double min_area = 0.0;  ///< Visvalingam-Whyatt: vertices whose triangle with their neighbours has an area below
+                          ///< this are removed, smallest first (region units squared); 0 disables
+};
+
+struct SimplifyStats {
+  std::size_t vertices_before = 0, vertices_after = 0;
+  std::size_t refused = 0;  ///< removals refused because the shortcut would cross or cover other geometry
+};
+
+/// Simplifies every ring and feature curve in place. Ring vertices where a feature ends, feature end points,
+/// and enough vertices to keep each ring a triangle are never removed. A removal is refused when the new
+/// segment would cross or touch another segment, or when the removed triangle would cover another vertex.
+SimplifyStats simplify_region(Region& region, const SimplifyOptions& options);
+
+}  // namespace polysquare
