@@ -1,2 +1,2 @@
 # Sources of the partition module (relative to this folder).
-list(APPEND MODULE_SOURCES)
+list(APPEND MODULE_SOURCES partition.cpp)

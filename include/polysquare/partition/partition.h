@@ -1,0 +1,60 @@
+// Stage 3: feature-aware graph partitioning of a background triangulation (FPPM Sec. 3).
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <vector>
+
+#include "polysquare/triangulate/background_triangulation.h"
+
+namespace polysquare {
+
+struct PartitionOptions {
+  int parts = 0;                                ///< k; 0 = from target_triangles_per_part
+  std::size_t target_triangles_per_part = 2000; ///< used when parts = 0
+  double lambda_angle = 1.0;                    ///< lambda1 of E = L_S + lambda1 D_theta - lambda2 D_f
+  double lambda_feature = 1.0;                  ///< lambda2
+  double lambda_mh = 0.01;                      ///< Metropolis-Hastings inverse temperature (Sec. 3.4)
+  double balance = 0.1;                         ///< c1 = c2: every part's area within (1 +- balance) * mean (eq. 1)
+  int mh_sweeps = 50;                           ///< sweeps over the triangles on part boundaries
+  double mh_anneal = 100.0;                     ///< the inverse temperature grows from lambda_mh to this multiple
+  std::uint64_t seed = 1;                       ///< METIS seed and the MH random stream
+};
+
+/// The terms of E (eqs. 2, 4, 6), with lengths in hundredths of the mean triangle edge length, so that the
+/// paper's lambda_MH = 0.01 rejects a move that lengthens the separators by one edge with probability 1 - 1/e.
+struct PartitionEnergy {
+  double separator_length = 0;     ///< L_S: total length of edges between different parts
+  double angle_deviation = 0;      ///< D_theta (radians, times 100): at every vertex, for every pair of incident
+                                   ///< separator edges, and of a separator edge with a boundary edge, the angle
+                                   ///< between them minus the nearest multiple of 90 degrees (eq. 3)
+  double feature_on_separators = 0;///< D_f: total length of feature edges that are separator edges
+  double energy = 0;               ///< L_S + lambda1 D_theta - lambda2 D_f
+};
+
+struct PartitionResult {
+  std::vector<std::int32_t> triangle_part;  ///< #T part of each triangle, 0 .. parts-1
+  int parts = 0;
+  PartitionEnergy metis, final;             ///< energies of METIS's partition and after MH and repair
+  double feature_fraction_metis = 0;        ///< feature length on separators / feature length, METIS alone
+  double feature_fraction_final = 0;
+  double balance_max_over_avg = 0;          ///< largest part area / mean part area
+  std::size_t mh_proposed = 0, mh_accepted = 0;
+  std::size_t repaired_triangles = 0;       ///< triangles moved to make every part connected
+};
+
+/// Dual graph (node weight = triangle area, arc weight = shared edge length), METIS k-way partition, then
+/// Metropolis-Hastings moves of boundary triangles on E under the balance constraint, never disconnecting a
+/// part; the lowest-energy state seen is kept; finally every part is made connected. Deterministic given
+/// options.seed, single-threaded.
+PartitionResult partition_triangles(const TriMesh& mesh, const PartitionOptions& options);
+
+/// The full energy of a partition (the MH moves use local differences of the same terms).
+PartitionEnergy partition_energy(const TriMesh& mesh, const std::vector<std::int32_t>& triangle_part,
+                                 const PartitionOptions& options);
+
+/// A picture of the partition: triangles coloured by part, separators black, feature edges red.
+void write_partition_svg(const std::filesystem::path& path, const TriMesh& mesh, const PartitionResult& result,
+                         int width_px = 1000);
+
+}  // namespace polysquare

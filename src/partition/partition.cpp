@@ -1,0 +1,348 @@
+#include "polysquare/partition/partition.h"
+
+#include <metis.h>
+
+#include <algorithm>
+#include <cmath>
+#include <deque>
+#include <fstream>
+#include <numbers>
+#include <random>
+#include <unordered_map>
+
+#include "polysquare/core/error.h"
+#include "polysquare/io/atomic_file.h"
+
+namespace polysquare {
+namespace {
+
+// Edges of the triangulation with their one or two triangles, and the incidences the energy needs.
+struct Topology {
+  struct Edge {
+    std::int32_t a, b;
+    std::int32_t t0, t1;  // t1 = -1 on the boundary
+    double length;        // in hundredths of the mean edge length
+    bool feature;
+  };
+  std::vector<Edge> edges;
+  std::vector<std::array<std::int32_t, 3>> tri_edges;
+  std::vector<std::size_t> vert_off;
+  std::vector<std::int32_t> vert_edges;
+  std::vector<double> area;
+  double feature_length = 0;
+
+  explicit Topology(const TriMesh& m) {
+    std::unordered_map<std::uint64_t, std::int32_t> index;
+    auto key = [](std::int32_t a, std::int32_t b) {
+      if (a > b) std::swap(a, b);
+      return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) | static_cast<std::uint32_t>(b);
+    };
+    tri_edges.resize(m.triangles.size());
+    double total_len = 0;
+    for (std::size_t t = 0; t < m.triangles.size(); ++t) {
+      const auto& tri = m.triangles[t];
+      area.push_back(0.5 * orient2(m.vertices[tri[0]], m.vertices[tri[1]], m.vertices[tri[2]]));
+      for (int k = 0; k < 3; ++k) {
+        const std::int32_t a = tri[k], b = tri[(k + 1) % 3];
+        auto [it, inserted] = index.try_emplace(key(a, b), static_cast<std::int32_t>(edges.size()));
+        if (inserted) {
+          edges.push_back({a, b, static_cast<std::int32_t>(t), -1, distance(m.vertices[a], m.vertices[b]), false});
+          total_len += edges.back().length;
+        } else {
+          edges[it->second].t1 = static_cast<std::int32_t>(t);
+        }
+        tri_edges[t][k] = it->second;
+      }
+    }
+    const double unit = edges.empty() ? 1.0 : total_len / static_cast<double>(edges.size()) / 100.0;
+    for (auto& e : edges) e.length /= unit;
+    for (const TriChain& ch : m.chains) {
+      if (ch.kind != TriChain::Kind::feature) continue;
+      const std::size_t n = ch.vertices.size(), segs = ch.closed ? n : n - 1;
+      for (std::size_t i = 0; i < segs; ++i) {
+        auto it = index.find(key(ch.vertices[i], ch.vertices[(i + 1) % n]));
+        if (it == index.end() || edges[it->second].feature) continue;
+        edges[it->second].feature = true;
+        feature_length += edges[it->second].length;
+      }
+    }
+    vert_off.assign(m.vertices.size() + 1, 0);
+    for (const auto& e : edges) { vert_off[e.a + 1]++; vert_off[e.b + 1]++; }
+    for (std::size_t v = 0; v < m.vertices.size(); ++v) vert_off[v + 1] += vert_off[v];
+    vert_edges.resize(vert_off.back());
+    std::vector<std::size_t> fill(vert_off.begin(), vert_off.end() - 1);
+    for (std::size_t e = 0; e < edges.size(); ++e) {
+      vert_edges[fill[edges[e].a]++] = static_cast<std::int32_t>(e);
+      vert_edges[fill[edges[e].b]++] = static_cast<std::int32_t>(e);
+    }
+  }
+  bool separator(std::size_t e, const std::vector<std::int32_t>& part) const {
+    return edges[e].t1 >= 0 && part[edges[e].t0] != part[edges[e].t1];
+  }
+  std::int32_t neighbour(std::size_t t, int k) const {
+    const Edge& e = edges[tri_edges[t][k]];
+    return e.t0 == static_cast<std::int32_t>(t) ? e.t1 : e.t0;
+  }
+};
+
+// Angle term at one vertex (eq. 3, times 100): pairs of incident separator edges, and separator-boundary pairs.
+double vertex_angle_term(const TriMesh& m, const Topology& topo, std::int32_t v, const std::vector<std::int32_t>& part) {
+  double sum = 0;
+  const std::size_t b0 = topo.vert_off[v], b1 = topo.vert_off[v + 1];
+  for (std::size_t i = b0; i < b1; ++i) {
+    const auto& ei = topo.edges[topo.vert_edges[i]];
+    const bool si = topo.separator(topo.vert_edges[i], part), bi = ei.t1 < 0;
+    if (!si && !bi) continue;
+    for (std::size_t j = i + 1; j < b1; ++j) {
+      const auto& ej = topo.edges[topo.vert_edges[j]];
+      const bool sj = topo.separator(topo.vert_edges[j], part), bj = ej.t1 < 0;
+      if (!(si && (sj || bj)) && !(sj && bi)) continue;
+      const Vec2 di = m.vertices[ei.a == v ? ei.b : ei.a] - m.vertices[v];
+      const Vec2 dj = m.vertices[ej.a == v ? ej.b : ej.a] - m.vertices[v];
+      const double theta = std::abs(std::atan2(cross(di, dj), dot(di, dj)));  // in [0, pi]
+      const double q = std::numbers::pi / 2;
+      sum += 100.0 * std::min(std::abs(theta - q), std::abs(theta - 2 * q));
+    }
+  }
+  return sum;
+}
+
+PartitionEnergy energy_of(const TriMesh& m, const Topology& topo, const std::vector<std::int32_t>& part,
+                          const PartitionOptions& o) {
+  PartitionEnergy en;
+  for (std::size_t e = 0; e < topo.edges.size(); ++e) {
+    if (!topo.separator(e, part)) continue;
+    en.separator_length += topo.edges[e].length;
+    if (topo.edges[e].feature) en.feature_on_separators += topo.edges[e].length;
+  }
+  for (std::size_t v = 0; v + 1 < topo.vert_off.size(); ++v)
+    en.angle_deviation += vertex_angle_term(m, topo, static_cast<std::int32_t>(v), part);
+  en.energy = en.separator_length + o.lambda_angle * en.angle_deviation - o.lambda_feature * en.feature_on_separators;
+  return en;
+}
+
+// Is part `p` still connected after removing triangle t? Bounded search between t's same-part neighbours.
+bool stays_connected(const Topology& topo, const std::vector<std::int32_t>& part, std::int32_t t, int limit) {
+  const std::int32_t p = part[t];
+  std::vector<std::int32_t> nb;
+  for (int k = 0; k < 3; ++k) {
+    const std::int32_t n = topo.neighbour(static_cast<std::size_t>(t), k);
+    if (n >= 0 && part[n] == p) nb.push_back(n);
+  }
+  if (nb.size() <= 1) return true;
+  std::vector<std::int32_t> seen{t, nb[0]}, queue{nb[0]};
+  std::size_t found = 1;
+  for (std::size_t qi = 0; qi < queue.size() && static_cast<int>(queue.size()) < limit; ++qi) {
+    for (int k = 0; k < 3; ++k) {
+      const std::int32_t n = topo.neighbour(static_cast<std::size_t>(queue[qi]), k);
+      if (n < 0 || part[n] != p || std::find(seen.begin(), seen.end(), n) != seen.end()) continue;
+      seen.push_back(n);
+      queue.push_back(n);
+      if (std::find(nb.begin() + 1, nb.end(), n) != nb.end() && ++found == nb.size()) return true;
+    }
+  }
+  return false;
+}
+
+// Moves every triangle outside its part's largest component to the neighbouring part it shares most edge with.
+std::size_t make_parts_connected(const Topology& topo, std::vector<std::int32_t>& part, int k) {
+  std::size_t moved = 0;
+  for (int round = 0; round < 100; ++round) {
+    const std::size_t nt = part.size();
+    std::vector<std::int32_t> comp(nt, -1);
+    std::vector<double> comp_area;
+    std::vector<std::int32_t> comp_part;
+    for (std::size_t s = 0; s < nt; ++s) {
+      if (comp[s] >= 0) continue;
+      const auto c = static_cast<std::int32_t>(comp_area.size());
+      comp_area.push_back(0);
+      comp_part.push_back(part[s]);
+      std::deque<std::int32_t> q{static_cast<std::int32_t>(s)};
+      comp[s] = c;
+      while (!q.empty()) {
+        const std::int32_t t = q.front();
+        q.pop_front();
+        comp_area[c] += topo.area[t];
+        for (int e = 0; e < 3; ++e) {
+          const std::int32_t n = topo.neighbour(static_cast<std::size_t>(t), e);
+          if (n >= 0 && comp[n] < 0 && part[n] == part[t]) { comp[n] = c; q.push_back(n); }
+        }
+      }
+    }
+    std::vector<std::int32_t> largest(static_cast<std::size_t>(k), -1);
+    for (std::size_t c = 0; c < comp_area.size(); ++c) {
+      auto& best = largest[static_cast<std::size_t>(comp_part[c])];
+      if (best < 0 || comp_area[c] > comp_area[static_cast<std::size_t>(best)]) best = static_cast<std::int32_t>(c);
+    }
+    bool changed = false;
+    for (std::size_t c = 0; c < comp_area.size(); ++c) {
+      if (largest[static_cast<std::size_t>(comp_part[c])] == static_cast<std::int32_t>(c)) continue;
+      std::unordered_map<std::int32_t, double> shared;
+      for (std::size_t t = 0; t < nt; ++t) {
+        if (comp[t] != static_cast<std::int32_t>(c)) continue;
+        for (int e = 0; e < 3; ++e) {
+          const std::int32_t n = topo.neighbour(t, e);
+          if (n >= 0 && comp[n] != static_cast<std::int32_t>(c)) shared[part[n]] += topo.edges[topo.tri_edges[t][e]].length;
+        }
+      }
+      std::int32_t target = -1;
+      double best = -1;
+      for (const auto& [p, len] : shared)
+        if (len > best || (len == best && p < target)) { best = len; target = p; }
+      if (target < 0) continue;
+      for (std::size_t t = 0; t < nt; ++t)
+        if (comp[t] == static_cast<std::int32_t>(c)) { part[t] = target; ++moved; }
+      changed = true;
+    }
+    if (!changed) break;
+  }
+  return moved;
+}
+
+}  // namespace
+
+PartitionEnergy partition_energy(const TriMesh& mesh, const std::vector<std::int32_t>& triangle_part,
+                                 const PartitionOptions& options) {
+  return energy_of(mesh, Topology(mesh), triangle_part, options);
+}
+
+PartitionResult partition_triangles(const TriMesh& mesh, const PartitionOptions& options) {
+  const Topology topo(mesh);
+  const std::size_t nt = mesh.triangles.size();
+  PartitionResult res;
+  int k = options.parts > 0 ? options.parts
+                            : static_cast<int>(std::max<std::size_t>(1, (nt + options.target_triangles_per_part / 2) /
+                                                                           std::max<std::size_t>(1, options.target_triangles_per_part)));
+  k = std::max(1, std::min<int>(k, static_cast<int>(nt)));
+  res.parts = k;
+  res.triangle_part.assign(nt, 0);
+  if (k > 1) {
+    // METIS wants integer weights: areas and lengths relative to their means, in hundredths.
+    double mean_area = 0;
+    for (double a : topo.area) mean_area += a;
+    mean_area /= static_cast<double>(nt);
+    std::vector<idx_t> xadj{0}, adjncy, vwgt, adjwgt;
+    for (std::size_t t = 0; t < nt; ++t) {
+      vwgt.push_back(std::max<idx_t>(1, static_cast<idx_t>(std::lround(100.0 * topo.area[t] / mean_area))));
+      for (int e = 0; e < 3; ++e) {
+        const std::int32_t n = topo.neighbour(t, e);
+        if (n < 0) continue;
+        adjncy.push_back(n);
+        adjwgt.push_back(std::max<idx_t>(1, static_cast<idx_t>(std::lround(topo.edges[topo.tri_edges[t][e]].length))));
+      }
+      xadj.push_back(static_cast<idx_t>(adjncy.size()));
+    }
+    idx_t nv = static_cast<idx_t>(nt), ncon = 1, nparts = k, objval = 0;
+    idx_t opts[METIS_NOPTIONS];
+    METIS_SetDefaultOptions(opts);
+    opts[METIS_OPTION_SEED] = static_cast<idx_t>(options.seed % 1000003);
+    opts[METIS_OPTION_CONTIG] = 1;
+    std::vector<idx_t> part(nt, 0);
+    const int status = METIS_PartGraphKway(&nv, &ncon, xadj.data(), adjncy.data(), vwgt.data(), nullptr, adjwgt.data(),
+                                           &nparts, nullptr, nullptr, opts, &objval, part.data());
+    if (status != METIS_OK) throw MeshingError("partitioning: METIS failed with status " + std::to_string(status));
+    for (std::size_t t = 0; t < nt; ++t) res.triangle_part[t] = part[t];
+    make_parts_connected(topo, res.triangle_part, k);
+  }
+  res.metis = energy_of(mesh, topo, res.triangle_part, options);
+
+  // Metropolis-Hastings on E under the balance constraint (eq. 1), keeping the best state.
+  std::vector<double> part_area(static_cast<std::size_t>(k), 0.0);
+  double total_area = 0;
+  for (std::size_t t = 0; t < nt; ++t) { part_area[res.triangle_part[t]] += topo.area[t]; total_area += topo.area[t]; }
+  const double mean = total_area / k, lo = (1 - options.balance) * mean, hi = (1 + options.balance) * mean;
+  std::vector<std::int32_t>& part = res.triangle_part;
+  std::vector<std::int32_t> best = part;
+  double energy = res.metis.energy, best_energy = energy;
+  std::mt19937_64 rng(options.seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::vector<std::int32_t> order(nt);
+  for (std::size_t t = 0; t < nt; ++t) order[t] = static_cast<std::int32_t>(t);
+  auto local = [&](std::int32_t t) {  // energy terms that a move of t can change
+    double e = 0;
+    for (int j = 0; j < 3; ++j) {
+      const std::size_t ed = static_cast<std::size_t>(topo.tri_edges[t][j]);
+      if (topo.separator(ed, part))
+        e += topo.edges[ed].length - (topo.edges[ed].feature ? options.lambda_feature * topo.edges[ed].length : 0.0);
+      e += options.lambda_angle * vertex_angle_term(mesh, topo, mesh.triangles[t][j], part);
+    }
+    return e;
+  };
+  for (int sweep = 0; sweep < options.mh_sweeps && k > 1; ++sweep) {
+    // Annealing: the inverse temperature grows from lambda_mh by mh_anneal over the sweeps, so the walk explores
+    // first and settles into a low-energy state at the end.
+    const double beta = options.lambda_mh *
+                        std::pow(options.mh_anneal, options.mh_sweeps > 1 ? double(sweep) / (options.mh_sweeps - 1) : 1.0);
+    std::shuffle(order.begin(), order.end(), rng);
+    for (std::int32_t t : order) {
+      const std::int32_t a = part[t];
+      std::int32_t cand[3];
+      int nc = 0;
+      for (int j = 0; j < 3; ++j) {
+        const std::int32_t n = topo.neighbour(static_cast<std::size_t>(t), j);
+        if (n >= 0 && part[n] != a && std::find(cand, cand + nc, part[n]) == cand + nc) cand[nc++] = part[n];
+      }
+      if (nc == 0) continue;
+      const std::int32_t b = cand[std::min(nc - 1, static_cast<int>(unit(rng) * nc))];
+      ++res.mh_proposed;
+      // Balance: never create or worsen a violation of eq. 1.
+      const double na = part_area[a] - topo.area[t], nb = part_area[b] + topo.area[t];
+      if (na < std::min(lo, part_area[a]) || nb > std::max(hi, part_area[b])) continue;
+      if (!stays_connected(topo, part, t, 256)) continue;
+      const double before = local(t);
+      part[t] = b;
+      const double delta = local(t) - before;
+      if (delta <= 0 || unit(rng) < std::exp(-beta * delta)) {
+        part_area[a] = na;
+        part_area[b] = nb;
+        energy += delta;
+        ++res.mh_accepted;
+      } else {
+        part[t] = a;
+      }
+    }
+    if (energy < best_energy) { best_energy = energy; best = part; }
+  }
+  part = best;
+  res.repaired_triangles = k > 1 ? make_parts_connected(topo, part, k) : 0;
+  res.final = energy_of(mesh, topo, part, options);
+  std::fill(part_area.begin(), part_area.end(), 0.0);
+  for (std::size_t t = 0; t < nt; ++t) part_area[part[t]] += topo.area[t];
+  res.balance_max_over_avg = *std::max_element(part_area.begin(), part_area.end()) / mean;
+  if (topo.feature_length > 0) {
+    res.feature_fraction_metis = res.metis.feature_on_separators / topo.feature_length;
+    res.feature_fraction_final = res.final.feature_on_separators / topo.feature_length;
+  }
+  return res;
+}
+
+void write_partition_svg(const std::filesystem::path& path, const TriMesh& mesh, const PartitionResult& result, int width_px) {
+  const Topology topo(mesh);
+  Box2 box;
+  for (Vec2 p : mesh.vertices) box.add(p);
+  const double scale = (width_px - 20) / std::max(box.hi.x - box.lo.x, 1e-300);
+  const int height = static_cast<int>((box.hi.y - box.lo.y) * scale) + 20;
+  auto X = [&](Vec2 p) { return 10 + (p.x - box.lo.x) * scale; };
+  auto Y = [&](Vec2 p) { return 10 + (box.hi.y - p.y) * scale; };
+  static const char* palette[] = {"#8dd3c7", "#ffffb3", "#bebada", "#fb8072", "#80b1d3", "#fdb462",
+                                  "#b3de69", "#fccde5", "#d9d9d9", "#bc80bd", "#ccebc5", "#ffed6f"};
+  write_file_atomically(path, [&](std::ostream& os) {
+    os << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << width_px << "\" height=\"" << height << "\">\n";
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+      os << "<polygon points=\"";
+      for (auto v : mesh.triangles[t]) os << X(mesh.vertices[v]) << "," << Y(mesh.vertices[v]) << " ";
+      os << "\" fill=\"" << palette[result.triangle_part[t] % 12] << "\" stroke=\"" << palette[result.triangle_part[t] % 12] << "\"/>\n";
+    }
+    for (std::size_t e = 0; e < topo.edges.size(); ++e) {
+      const auto& ed = topo.edges[e];
+      const bool sep = topo.separator(e, result.triangle_part), border = ed.t1 < 0;
+      if (!sep && !border && !ed.feature) continue;
+      const char* colour = ed.feature ? "red" : "black";
+      os << "<line x1=\"" << X(mesh.vertices[ed.a]) << "\" y1=\"" << Y(mesh.vertices[ed.a]) << "\" x2=\"" << X(mesh.vertices[ed.b])
+         << "\" y2=\"" << Y(mesh.vertices[ed.b]) << "\" stroke=\"" << colour << "\" stroke-width=\"" << (sep ? 2.5 : 1.2) << "\"/>\n";
+    }
+    os << "</svg>\n";
+  }, false);
+}
+
+}  // namespace polysquare
