@@ -1,2 +1,3 @@
 list(APPEND TEST_SOURCES pipeline/test_cases.cpp)
 list(APPEND TEST_SOURCES pipeline/test_hard_geometry.cpp)
+list(APPEND TEST_SOURCES pipeline/test_gpm.cpp)

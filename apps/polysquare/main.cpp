@@ -13,6 +13,7 @@
 #include "polysquare/io/atomic_file.h"
 #include "polysquare/io/mesh_io.h"
 #include "polysquare/io/svg.h"
+#include "polysquare/partition/partition.h"
 #include "polysquare/pipeline/mesh_region.h"
 #include "polysquare/quality/quality.h"
 
@@ -28,14 +29,16 @@ void on_signal(int sig) {
 }
 
 struct MeshArgs {
-  std::string input, output, report, picture;
+  std::string input, output, report, picture, partition_picture, map = "gpm";
   bool binary = false;
   MeshOptions options;
 };
 
 int run_mesh(const MeshArgs& args) {
   const Region region = read_region(args.input);
-  MeshResult result = mesh_region(region, args.options);
+  MeshOptions options = args.options;
+  options.keep_partition = !args.partition_picture.empty();
+  MeshResult result = mesh_region(region, options);
   const QualityReport quality = compute_quality(result.mesh);
   const DomainDistance domain = domain_distance(result.mesh, region, {args.options.corner_threshold_deg});
   result.report["quality"] = to_json(quality);
@@ -45,6 +48,11 @@ int run_mesh(const MeshArgs& args) {
   if (!args.report.empty())
     write_file_atomically(args.report, [&](std::ostream& os) { os << result.report.dump(2) << "\n"; }, false);
   if (!args.picture.empty()) write_svg(args.picture, result.mesh, &region);
+  if (!args.partition_picture.empty()) {
+    PartitionResult partition;
+    partition.triangle_part = result.background_part;
+    write_partition_svg(args.partition_picture, result.background, partition);
+  }
   std::cout << "polysquare: " << result.mesh.quads.size() << " quads, " << result.mesh.nodes.size() << " nodes -> "
             << args.output << "\n"
             << format_quality_text(quality, &domain);
@@ -83,6 +91,13 @@ int main(int argc, char** argv) {
   cmd_mesh->add_option("-o,--output", mesh.output, "output mesh (.msh Gmsh 4.1, .vtu VTK)")->required();
   cmd_mesh->add_option("--report", mesh.report, "write a JSON report (options, timings, counts, quality)");
   cmd_mesh->add_option("--picture", mesh.picture, "write an SVG picture of the mesh coloured by scaled Jacobian");
+  cmd_mesh->add_option("--parts", mesh.options.parts,
+                       "subregions per polygon part, meshed as one global poly-square map (1 = no partition, 0 = auto)")
+      ->capture_default_str()->check(CLI::NonNegativeNumber);
+  cmd_mesh->add_option("--map", mesh.map, "composition of the subregions' maps (gpm; ppm is not implemented yet)")
+      ->check(CLI::IsMember({"gpm"}))->capture_default_str();
+  cmd_mesh->add_option("--partition-picture", mesh.partition_picture,
+                       "write an SVG of the background triangulation coloured by subregion, separators and features");
   cmd_mesh->add_option("--threads", mesh.options.threads, "worker threads (0 = all cores); output does not depend on it")
       ->check(CLI::NonNegativeNumber);
   cmd_mesh->add_option("--seed", mesh.options.seed, "seed of randomized stages");

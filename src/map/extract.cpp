@@ -98,7 +98,8 @@ void polysquare_targets(const TriMesh& mesh, const std::vector<Vec2>& deformed, 
 }
 
 QuadMesh extract_quads(const TriMesh& mesh, const std::vector<Vec2>& original, const std::vector<Vec2>& snapped,
-                       const Layout& layout, const std::string& part_name) {
+                       const Layout& layout, const std::string& part_name,
+                       const std::vector<std::int32_t>* triangle_part) {
   QuadMesh out;
   std::unordered_map<long long, std::int32_t> node_of;
   auto add_node = [&](long long i, long long j, Vec2 p, NodeKind kind) {
@@ -120,8 +121,9 @@ QuadMesh extract_quads(const TriMesh& mesh, const std::vector<Vec2>& original, c
     const auto la = layout.lattice[s.break_a], lb = layout.lattice[s.break_b];
     const long long len = std::llabs(lb[0] - la[0]) + std::llabs(lb[1] - la[1]);
     const long long di = (lb[0] > la[0]) - (lb[0] < la[0]), dj = (lb[1] > la[1]) - (lb[1] < la[1]);
-    const bool ring = ch.kind == TriChain::Kind::ring;
-    const NodeKind line_kind = ring ? NodeKind::boundary : NodeKind::feature;
+    const bool ring = ch.kind == TriChain::Kind::ring, separator = ch.kind == TriChain::Kind::separator;
+    // Separators are inside the mesh: their nodes are interior (smoothing moves them), and no edge is tagged.
+    const NodeKind line_kind = ring ? NodeKind::boundary : (separator ? NodeKind::interior : NodeKind::feature);
     std::int32_t prev = -1;
     std::size_t e = 0;
     for (long long k = 0; k <= len; ++k) {
@@ -130,7 +132,7 @@ QuadMesh extract_quads(const TriMesh& mesh, const std::vector<Vec2>& original, c
       if (k == 0 || k == len) {
         const int b = k == 0 ? s.break_a : s.break_b;
         p = original[layout.break_vertex[b]];
-        if (layout.break_is_corner[b]) kind = NodeKind::corner;
+        if (layout.break_is_corner[b] && !separator) kind = NodeKind::corner;
       } else {
         const double t = static_cast<double>(k) * cum.back() / static_cast<double>(len);
         while (e + 1 < cum.size() - 1 && cum[e + 1] < t) ++e;
@@ -139,7 +141,7 @@ QuadMesh extract_quads(const TriMesh& mesh, const std::vector<Vec2>& original, c
                  original[ch.vertices[(s.first + static_cast<int>(e) + 1) % n]], tau);
       }
       const std::int32_t id = add_node(la[0] + k * di, la[1] + k * dj, p, kind);
-      if (prev >= 0) {
+      if (prev >= 0 && !separator) {
         if (ring) { out.boundary_edges.push_back({prev, id}); out.boundary_edge_ring.push_back(ch.index); }
         else { out.feature_edges.push_back({prev, id}); out.feature_edge_curve.push_back(ch.index); }
       }
@@ -168,11 +170,12 @@ QuadMesh extract_quads(const TriMesh& mesh, const std::vector<Vec2>& original, c
   for (long long j = j0; j < j1; ++j) {
     for (long long i = i0; i < i1; ++i) {
       std::array<double, 3> w{};
-      if (locator.locate({i + 0.5, j + 0.5}, w, 1e-9) < 0) continue;
+      const int t = locator.locate({i + 0.5, j + 0.5}, w, 1e-9);
+      if (t < 0) continue;
       out.quads.push_back({lattice_node(i, j), lattice_node(i + 1, j), lattice_node(i + 1, j + 1), lattice_node(i, j + 1)});
+      out.quad_part.push_back(triangle_part ? (*triangle_part)[static_cast<std::size_t>(t)] : 0);
     }
   }
-  out.quad_part.assign(out.quads.size(), 0);
   return out;
 }
 

@@ -133,9 +133,7 @@ Layout build_layout(const TriMesh& mesh, const std::vector<Vec2>& original, cons
     for (int i = 0; i < n; ++i) area += cross(deformed[ch.vertices[i]], deformed[ch.vertices[(i + 1) % n]]);
     labels = label_chain(edge_vec, free_change, ch.closed, options.label_change_cost, area >= 0 ? 4 : -4);
     if (labels.empty())
-      throw MeshingError(part_name + ": no axis labelling of " +
-                         std::string(ch.kind == TriChain::Kind::ring ? "ring " : "feature loop ") + std::to_string(ch.index) +
-                         " closes into an orthogonal polygon");
+      throw MeshingError(part_name + ": no axis labelling of " + chain_name(ch) + " closes into an orthogonal polygon");
     int turning = 0;
     for (int i = 0; i < m; ++i) {
       if (!ch.closed && i == 0) continue;
@@ -144,17 +142,13 @@ Layout build_layout(const TriMesh& mesh, const std::vector<Vec2>& original, cons
       is_break[ch.vertices[i]] = 1;
       const int diff = (labels[i] - prev + 4) % 4;
       if (diff == 2)
-        throw MeshingError(part_name + ": the poly-square of " +
-                           std::string(ch.kind == TriChain::Kind::ring ? "ring " : "feature ") +
-                           std::to_string(ch.index) + " folds back on itself near (" +
+        throw MeshingError(part_name + ": the poly-square of " + chain_name(ch) + " folds back on itself near (" +
                            std::to_string(original[ch.vertices[i]].x) + ", " +
                            std::to_string(original[ch.vertices[i]].y) + ")");
       turning += diff == 1 ? 1 : -1;
     }
     if (ch.closed && std::abs(turning) != 4)
-      throw MeshingError(part_name + ": the poly-square of " +
-                         std::string(ch.kind == TriChain::Kind::ring ? "ring " : "feature loop ") +
-                         std::to_string(ch.index) + " turns by " + std::to_string(turning) +
+      throw MeshingError(part_name + ": the poly-square of " + chain_name(ch) + " turns by " + std::to_string(turning) +
                          " quarter turns instead of 4; one poly-square cannot represent this region");
   }
 
@@ -174,7 +168,7 @@ Layout build_layout(const TriMesh& mesh, const std::vector<Vec2>& original, cons
     for (int i = 0; i < n && start < 0; ++i)
       if (is_break[ch.vertices[i]]) start = i;
     if (start < 0)
-      throw MeshingError(part_name + ": chain without a corner (ring or feature " + std::to_string(ch.index) + ")");
+      throw MeshingError(part_name + ": " + chain_name(ch) + " has no corner");
     int first = start;
     for (int k = 1; k <= (ch.closed ? m : m - start); ++k) {
       const int i = ch.closed ? (start + k) % n : start + k;

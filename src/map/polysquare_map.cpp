@@ -7,6 +7,7 @@
 
 #include "polysquare/core/error.h"
 #include "polysquare/map/extract.h"
+#include "polysquare/partition/partition.h"
 
 namespace polysquare {
 namespace {
@@ -57,10 +58,27 @@ PartMapResult map_part(const Region& region, const RegionPart& part, const Polys
   topt.max_edge = std::max(options.interior_ratio * h, part_box.diagonal() / options.interior_divisions);
   topt.shape_bound = options.triangle_shape_bound;
   topt.max_triangles = options.max_triangles;
-  const TriMesh tri = triangulate_part(region, part, topt);
+  TriMesh tri = triangulate_part(region, part, topt);
+  st.seconds_triangulate = seconds_since(t0);
+
+  // GPM (paper Sec. 5.1): the subregions' separators become chains of the one global map, so shared separator
+  // vertices are identical on both sides by construction (eq. 12) and one quantization serves all subregions.
+  std::vector<std::int32_t> triangle_part;
+  if (options.partition.parts != 1) {
+    t0 = std::chrono::steady_clock::now();
+    PartitionResult pr = partition_triangles(tri, options.partition);
+    st.separators = add_separator_chains(tri, pr.triangle_part);
+    std::vector<std::int32_t> parent;
+    split_constrained_interior_edges(tri, &parent);
+    triangle_part.resize(parent.size());
+    for (std::size_t t = 0; t < parent.size(); ++t) triangle_part[t] = pr.triangle_part[static_cast<std::size_t>(parent[t])];
+    if (options.keep_partition) result.background = tri;
+    pr.triangle_part = triangle_part;
+    result.partition = std::move(pr);
+    st.seconds_partition = seconds_since(t0);
+  }
   st.triangles = tri.triangles.size();
   st.triangle_vertices = tri.vertices.size();
-  st.seconds_triangulate = seconds_since(t0);
 
   // Rest shape in lattice units (1 = one quad edge), centred and pre-oriented.
   t0 = std::chrono::steady_clock::now();
@@ -70,7 +88,8 @@ PartMapResult map_part(const Region& region, const RegionPart& part, const Polys
   for (const TriChain& ch : tri.chains) {
     const int n = static_cast<int>(ch.vertices.size());
     const int m = ch.closed ? n : n - 1;
-    const double w = ch.kind == TriChain::Kind::ring ? options.deform.boundary_weight : options.deform.feature_weight;
+    // Separators are pulled to the axes like the boundary: every subregion must become a poly-square.
+    const double w = ch.kind == TriChain::Kind::feature ? options.deform.feature_weight : options.deform.boundary_weight;
     for (int i = 0; i < m; ++i) {
       const std::int32_t a = ch.vertices[i], b = ch.vertices[(i + 1) % n];
       problem.aligned.push_back({a, b, w});
@@ -109,8 +128,7 @@ PartMapResult map_part(const Region& region, const RegionPart& part, const Polys
   st.seconds_snap = seconds_since(t0);
 
   t0 = std::chrono::steady_clock::now();
-  result.mesh = extract_quads(tri, tri.vertices, x, layout, name);
-  result.mesh.quad_part.assign(result.mesh.quads.size(), part.part);
+  result.mesh = extract_quads(tri, tri.vertices, x, layout, name, triangle_part.empty() ? nullptr : &triangle_part);
   st.quads = result.mesh.quads.size();
   st.seconds_extract = seconds_since(t0);
   return result;

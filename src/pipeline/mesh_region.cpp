@@ -80,6 +80,8 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
   PolysquareMapOptions map = options.map;
   map.size = options.size;
   map.layout.corner_threshold_deg = options.corner_threshold_deg;
+  map.keep_partition = options.keep_partition;
+  map.partition.seed = options.seed;
   const std::vector<RegionPart> parts = split_into_parts(*work);
 
   // Parts are independent: mesh them in parallel; results land in part order, so the output does not depend
@@ -91,7 +93,18 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
     oneapi::tbb::global_control limit(oneapi::tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
     oneapi::tbb::parallel_for(std::size_t{0}, parts.size(), [&](std::size_t k) {
       try {
-        results[k] = map_part(*work, parts[k], map);
+        PolysquareMapOptions part_map = map;
+        part_map.partition.parts = options.parts;
+        if (options.parts == 0) {  // from the expected number of quads of this part
+          double a = 0.0;
+          for (int r : parts[k].rings) {
+            const auto& pts = work->rings[static_cast<std::size_t>(r)].points;
+            for (std::size_t i = 0; i < pts.size(); ++i) a += 0.5 * cross(pts[i], pts[(i + 1) % pts.size()]);
+          }
+          part_map.partition.parts = std::max(1, static_cast<int>(std::lround(a / (options.size * options.size) /
+                                                                               static_cast<double>(options.target_quads_per_part))));
+        }
+        results[k] = map_part(*work, parts[k], part_map);
       } catch (const std::exception& e) {
         errors[k] = e.what();
       }
@@ -109,14 +122,41 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
   QuadMesh& mesh = out.mesh;
   mesh.crs = region.crs;
   mesh.units = region.units;
+  std::int32_t subregion_offset = 0;
+  nlohmann::json partition_json = nlohmann::json::array();
   for (auto& r : results) {
     const QuadMesh& m = r->mesh;
     const auto offset = static_cast<std::int32_t>(mesh.nodes.size());
+    if (options.keep_partition && r->partition) {
+      const auto voff = static_cast<std::int32_t>(out.background.vertices.size());
+      out.background.vertices.insert(out.background.vertices.end(), r->background.vertices.begin(), r->background.vertices.end());
+      for (auto t : r->background.triangles) out.background.triangles.push_back({t[0] + voff, t[1] + voff, t[2] + voff});
+      for (TriChain ch : r->background.chains) {
+        for (auto& v : ch.vertices) v += voff;
+        out.background.chains.push_back(std::move(ch));
+      }
+      for (auto p : r->partition->triangle_part) out.background_part.push_back(p + subregion_offset);
+    }
+    if (r->partition) {
+      const PartitionResult& pr = *r->partition;
+      auto energy = [](const PartitionEnergy& e) {
+        return nlohmann::json{{"separator_length", e.separator_length}, {"angle_deviation", e.angle_deviation},
+                              {"feature_on_separators", e.feature_on_separators}, {"energy", e.energy}};
+      };
+      partition_json.push_back({{"part", r->stats.part}, {"subregions", pr.parts}, {"separators", r->stats.separators},
+                                {"metis", energy(pr.metis)}, {"final", energy(pr.final)},
+                                {"feature_fraction_metis", pr.feature_fraction_metis},
+                                {"feature_fraction_final", pr.feature_fraction_final},
+                                {"balance_max_over_avg", pr.balance_max_over_avg},
+                                {"mh_accepted", pr.mh_accepted}, {"mh_proposed", pr.mh_proposed},
+                                {"repaired_triangles", pr.repaired_triangles}, {"seconds", r->stats.seconds_partition}});
+    }
     auto shift = [offset](auto arr) { for (auto& v : arr) v += offset; return arr; };
     mesh.nodes.insert(mesh.nodes.end(), m.nodes.begin(), m.nodes.end());
     mesh.node_kind.insert(mesh.node_kind.end(), m.node_kind.begin(), m.node_kind.end());
     for (const auto& q : m.quads) mesh.quads.push_back(shift(q));
-    mesh.quad_part.insert(mesh.quad_part.end(), m.quad_part.begin(), m.quad_part.end());
+    for (auto p : m.quad_part) mesh.quad_part.push_back(p + subregion_offset);
+    subregion_offset += r->partition ? r->partition->parts : 1;
     for (const auto& e : m.boundary_edges) mesh.boundary_edges.push_back(shift(e));
     mesh.boundary_edge_ring.insert(mesh.boundary_edge_ring.end(), m.boundary_edge_ring.begin(), m.boundary_edge_ring.end());
     for (const auto& e : m.feature_edges) mesh.feature_edges.push_back(shift(e));
@@ -169,13 +209,14 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
       {"options", {{"size", options.size}, {"threads", options.threads}, {"seed", options.seed},
                    {"corner_threshold_deg", options.corner_threshold_deg}, {"max_quads", options.max_quads},
                    {"min_scaled_jacobian", options.min_scaled_jacobian}, {"max_edge_ratio", options.max_edge_ratio},
-                   {"map", "single poly-square per part"},
+                   {"map", options.parts == 1 ? "single poly-square per part" : "gpm"}, {"subregions_per_part", options.parts},
                    {"amips_alpha", map.deform.amips_alpha}, {"amips_s", map.deform.amips_s},
                    {"boundary_weight", map.deform.boundary_weight}, {"feature_weight", map.deform.feature_weight},
                    {"parameterization_ratio", map.parameterization_ratio}}},
       {"counts", {{"nodes", mesh.nodes.size()}, {"quads", mesh.quads.size()},
                   {"boundary_edges", mesh.boundary_edges.size()}, {"feature_edges", mesh.feature_edges.size()}}},
       {"parts", parts_json},
+      {"partition", partition_json},
       {"simplify", {{"fraction_of_size", options.simplify}, {"vertices_before", simplify_stats.vertices_before},
                     {"vertices_after", simplify_stats.vertices_after}, {"refused", simplify_stats.refused}}},
       {"smooth", {{"sweeps", smooth.sweeps}, {"moves", smooth.moves}, {"curve_moves", smooth.curve_moves}}},

@@ -41,11 +41,11 @@ struct PairHash {
   }
 };
 
-// Splits every interior edge whose two end points lie on constraints (e.g. the edge cutting off a corner ear).
-// When the poly-square map straightens the constraints, such an edge would be squeezed to zero length together
-// with its triangles; its new midpoint vertex is free to move inwards. Triangles with one, two or three split
-// edges are subdivided into two, three or four, keeping counter-clockwise order.
-void split_constrained_interior_edges(TriMesh& mesh) {
+}  // namespace
+
+// Triangles with one, two or three split edges are subdivided into two, three or four, keeping
+// counter-clockwise order; the midpoint vertex of a split edge is free to move inwards.
+void split_constrained_interior_edges(TriMesh& mesh, std::vector<std::int32_t>* parent) {
   std::vector<std::uint8_t> on_chain(mesh.vertices.size(), 0);
   std::unordered_set<std::uint64_t> chain_edges;
   auto ekey = [](std::int32_t a, std::int32_t b) {
@@ -69,36 +69,40 @@ void split_constrained_interior_edges(TriMesh& mesh) {
   };
   std::vector<std::array<std::int32_t, 3>> out;
   out.reserve(mesh.triangles.size());
-  for (const auto& t : mesh.triangles) {
+  if (parent) parent->clear();
+  for (std::size_t ti = 0; ti < mesh.triangles.size(); ++ti) {
+    const auto t = mesh.triangles[ti];
     const std::array<std::int32_t, 3> m{mid(t[0], t[1]), mid(t[1], t[2]), mid(t[2], t[0])};
     const int count = (m[0] >= 0) + (m[1] >= 0) + (m[2] >= 0);
-    if (count == 0) { out.push_back(t); continue; }
-    if (count == 3) {
+    if (count == 0) {
+      out.push_back(t);
+    } else if (count == 3) {
       out.push_back({t[0], m[0], m[2]});
       out.push_back({t[1], m[1], m[0]});
       out.push_back({t[2], m[2], m[1]});
       out.push_back({m[0], m[1], m[2]});
-      continue;
-    }
-    // Rotate so that edge k = 0 (t0 t1) is split; for two splits make edge 2 unsplit.
-    int r = 0;
-    if (count == 1) r = m[0] >= 0 ? 0 : (m[1] >= 0 ? 1 : 2);
-    else r = m[2] < 0 ? 0 : (m[0] < 0 ? 1 : 2);
-    const std::int32_t a = t[r], b = t[(r + 1) % 3], c = t[(r + 2) % 3];
-    const std::int32_t mab = m[r], mbc = m[(r + 1) % 3];
-    if (count == 1) {
-      out.push_back({a, mab, c});
-      out.push_back({mab, b, c});
     } else {
+      // Rotate so that edge 0 (t0 t1) is split; with two splits, edge 2 is the unsplit one.
+      const int r = count == 1 ? (m[0] >= 0 ? 0 : (m[1] >= 0 ? 1 : 2)) : (m[2] < 0 ? 0 : (m[0] < 0 ? 1 : 2));
+      const std::int32_t a = t[r], b = t[(r + 1) % 3], c = t[(r + 2) % 3];
+      const std::int32_t mab = m[r], mbc = m[(r + 1) % 3];
       out.push_back({a, mab, c});
-      out.push_back({mab, b, mbc});
-      out.push_back({mab, mbc, c});
+      if (count == 1) {
+        out.push_back({mab, b, c});
+      } else {
+        out.push_back({mab, b, mbc});
+        out.push_back({mab, mbc, c});
+      }
     }
+    if (parent) parent->resize(out.size(), static_cast<std::int32_t>(ti));
   }
   mesh.triangles = std::move(out);
 }
 
-}  // namespace
+std::string chain_name(const TriChain& chain) {
+  const char* kind = chain.kind == TriChain::Kind::ring ? "ring " : (chain.kind == TriChain::Kind::feature ? "feature " : "separator ");
+  return kind + std::to_string(chain.index);
+}
 
 std::vector<RegionPart> split_into_parts(const Region& region) {
   std::vector<RegionPart> parts(static_cast<std::size_t>(region.num_parts));

@@ -15,9 +15,12 @@ namespace polysquare {
 /// onto the quantized poly-square (lattice units); `original` the input coordinates of the same vertices.
 /// Nodes on a side of the poly-square are interpolated along the chain, so they lie on the input polyline; break
 /// points map exactly to their input vertex. Boundary edges carry their ring index, feature edges their curve
-/// index. Throws MeshingError naming `part_name` if a lattice node cannot be located in the deformed mesh.
+/// index; separator nodes are interior and separator edges untagged. quad_part is the part (from
+/// `triangle_part`, #triangles, when given) of the triangle holding the quad's centre. Throws MeshingError
+/// naming `part_name` if a lattice node cannot be located in the deformed mesh.
 QuadMesh extract_quads(const TriMesh& mesh, const std::vector<Vec2>& original, const std::vector<Vec2>& snapped,
-                       const Layout& layout, const std::string& part_name);
+                       const Layout& layout, const std::string& part_name,
+                       const std::vector<std::int32_t>* triangle_part = nullptr);
 
 /// Target positions of every chain vertex on the quantized poly-square: break points on their lattice point,
 /// the vertices between them spread along the side in proportion to their deformed arc length.

@@ -2,6 +2,7 @@
 // layout, integer quantization, snapping and quad extraction.
 #pragma once
 
+#include <optional>
 #include <string>
 
 #include "polysquare/core/quad_mesh.h"
@@ -9,6 +10,7 @@
 #include "polysquare/map/deform.h"
 #include "polysquare/map/layout.h"
 #include "polysquare/map/quantize.h"
+#include "polysquare/partition/partition.h"
 #include "polysquare/triangulate/background_triangulation.h"
 
 namespace polysquare {
@@ -22,6 +24,8 @@ struct PolysquareMapOptions {
   double triangle_shape_bound = 0.125;  ///< CGAL shape bound (0.125 = 20.7 degree minimum angle)
   std::size_t max_triangles = 20'000'000;  ///< refuse larger background triangulations
   bool preorient = true;           ///< rotate by the eq. 11 optimum before deforming
+  PartitionOptions partition{.parts = 1};  ///< subregions of the part (GPM); parts = 1: one poly-square
+  bool keep_partition = false;     ///< keep the background triangulation in the result (for the partition picture)
   DeformOptions deform;
   LayoutOptions layout;
   QuantizeOptions quantize;
@@ -35,12 +39,16 @@ struct PartMapStats {
   std::size_t break_points = 0, segments = 0;
   QuantizeStats quantize;
   std::size_t quads = 0;
+  std::size_t separators = 0;      ///< separator chains between subregions
+  double seconds_partition = 0;
   double seconds_triangulate = 0, seconds_deform = 0, seconds_quantize = 0, seconds_snap = 0, seconds_extract = 0;
 };
 
 struct PartMapResult {
-  QuadMesh mesh;  ///< quads of this part, quad_part set to the part index
+  QuadMesh mesh;  ///< quads of this part; quad_part = subregion within the part (0 without partitioning)
   PartMapStats stats;
+  std::optional<PartitionResult> partition;  ///< when partitioned: METIS/MH figures, triangle_part of `background`
+  TriMesh background;                        ///< the background triangulation, when keep_partition is set
 };
 
 /// Pre-orientation angle (radians) minimizing sum over edges of len * nx^2 ny^2 (eq. 11). With the normal at

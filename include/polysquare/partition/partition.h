@@ -58,3 +58,12 @@ void write_partition_svg(const std::filesystem::path& path, const TriMesh& mesh,
                          int width_px = 1000);
 
 }  // namespace polysquare
+
+namespace polysquare {
+
+/// Adds the separators of a triangle partition to `mesh` as chains of kind separator: the edges between
+/// triangles of different parts, cut into open chains at junctions (vertices where separators branch or meet a
+/// ring or feature chain); separator loops without junctions become closed chains. Returns the number added.
+std::size_t add_separator_chains(TriMesh& mesh, const std::vector<std::int32_t>& triangle_part);
+
+}  // namespace polysquare

@@ -21,6 +21,10 @@ struct MeshOptions {
   double simplify = 0.0;         ///< simplify curves first: remove vertices whose triangle area is below
                                  ///< (simplify * size)^2, keeping topology (coastlines: 0.5); 0 = off
   std::size_t max_quads = 50'000'000;  ///< refuse sizes whose estimated quad count exceeds this
+  int parts = 1;                 ///< subregions per polygon part, meshed as one Global Poly-square Map (GPM);
+                                 ///< 1 = a single poly-square; 0 = from target_quads_per_part
+  std::size_t target_quads_per_part = 20000;  ///< subregion size when parts = 0
+  bool keep_partition = false;   ///< return the background triangulation and its partition (for pictures)
   double min_scaled_jacobian = 0.2;    ///< refuse (MeshingError) a mesh whose worst quad is below this; 0 = accept any valid mesh
   double max_edge_ratio = 20.0;        ///< refuse a mesh with a quad whose longest / shortest edge exceeds this
   PolysquareMapOptions map;      ///< stages 2 and 4-6 (map.size and map.layout.corner_threshold_deg are set from above)
@@ -28,7 +32,9 @@ struct MeshOptions {
 };
 
 struct MeshResult {
-  QuadMesh mesh;
+  QuadMesh mesh;                    ///< quad_part = global subregion index (parts in order, then subregions)
+  TriMesh background;               ///< all parts' background triangulations, when keep_partition is set
+  std::vector<std::int32_t> background_part;  ///< #background triangles, global subregion index
   std::vector<PartMapStats> parts;  ///< per polygon part, in part order
   nlohmann::json report;            ///< options, timings, counts (quality is added by the caller's choice)
 };

@@ -3,6 +3,7 @@
 
 #include <array>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "polysquare/core/geometry.h"
@@ -21,7 +22,7 @@ struct TriangulationOptions {
 /// A constrained chain of triangulation vertices: an input ring (closed) or a feature curve (closed or open),
 /// with the Steiner points CGAL inserted on it, in input order.
 struct TriChain {
-  enum class Kind : std::uint8_t { ring, feature };
+  enum class Kind : std::uint8_t { ring, feature, separator };  ///< separator: between two partition parts
   Kind kind = Kind::ring;
   int index = -1;            ///< ring or feature index in the Region
   bool closed = false;       ///< closed chains do not repeat their first vertex
@@ -44,6 +45,14 @@ struct RegionPart {
   std::vector<int> features;
   std::vector<int> feature_points;
 };
+
+/// Splits every interior edge whose two end points lie on chains (e.g. the edge cutting off a corner ear), so
+/// that straightening the chains never squeezes a triangle to zero area. When `parent` is given it receives,
+/// for every triangle after the split, the index of the triangle it came from.
+void split_constrained_interior_edges(TriMesh& mesh, std::vector<std::int32_t>* parent = nullptr);
+
+/// Name of a chain for messages: "ring 2", "feature 5", "separator 1".
+std::string chain_name(const TriChain& chain);
 
 /// Groups the rings, features and feature points of a validated region by polygon part.
 std::vector<RegionPart> split_into_parts(const Region& region);

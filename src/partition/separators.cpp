@@ -1,0 +1,78 @@
+#include <algorithm>
+#include <unordered_map>
+#include <unordered_set>
+
+#include "polysquare/partition/partition.h"
+
+namespace polysquare {
+
+std::size_t add_separator_chains(TriMesh& mesh, const std::vector<std::int32_t>& triangle_part) {
+  auto key = [](std::int32_t a, std::int32_t b) {
+    if (a > b) std::swap(a, b);
+    return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) | static_cast<std::uint32_t>(b);
+  };
+  std::unordered_map<std::uint64_t, std::array<std::int32_t, 2>> owners;  // edge -> its (one or two) triangles
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      auto [it, inserted] = owners.try_emplace(key(mesh.triangles[t][k], mesh.triangles[t][(k + 1) % 3]),
+                                               std::array<std::int32_t, 2>{static_cast<std::int32_t>(t), -1});
+      if (!inserted) it->second[1] = static_cast<std::int32_t>(t);
+    }
+  std::vector<std::vector<std::int32_t>> adj(mesh.vertices.size());
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      const std::int32_t a = mesh.triangles[t][k], b = mesh.triangles[t][(k + 1) % 3];
+      const auto& o = owners[key(a, b)];
+      if (o[1] < 0 || triangle_part[o[0]] == triangle_part[o[1]] || a > b) continue;
+      adj[a].push_back(b);
+      adj[b].push_back(a);
+    }
+  std::vector<std::uint8_t> on_chain(mesh.vertices.size(), 0);
+  for (const TriChain& ch : mesh.chains)
+    for (auto v : ch.vertices) on_chain[v] = 1;
+  for (auto v : mesh.feature_point_vertices) on_chain[v] = 1;
+  for (auto& list : adj) std::sort(list.begin(), list.end());  // deterministic walks
+  auto junction = [&](std::int32_t v) { return !adj[v].empty() && (adj[v].size() != 2 || on_chain[v]); };
+  std::unordered_set<std::uint64_t> used;
+  std::size_t added = 0;
+  auto add = [&](std::vector<std::int32_t> verts, bool closed) {
+    TriChain ch;
+    ch.kind = TriChain::Kind::separator;
+    ch.index = static_cast<int>(added++);
+    ch.closed = closed;
+    ch.is_input.assign(verts.size(), 0);
+    ch.vertices = std::move(verts);
+    mesh.chains.push_back(std::move(ch));
+  };
+  auto walk = [&](std::int32_t start, std::int32_t next) {
+    std::vector<std::int32_t> verts{start};
+    std::int32_t prev = start, cur = next;
+    used.insert(key(prev, cur));
+    while (true) {
+      verts.push_back(cur);
+      if (junction(cur) || cur == start) break;
+      const std::int32_t nxt = adj[cur][0] == prev ? adj[cur][1] : adj[cur][0];
+      if (used.count(key(cur, nxt))) break;
+      used.insert(key(cur, nxt));
+      prev = cur;
+      cur = nxt;
+    }
+    return verts;
+  };
+  for (std::int32_t v = 0; v < static_cast<std::int32_t>(mesh.vertices.size()); ++v) {
+    if (!junction(v)) continue;
+    for (std::int32_t w : adj[v])
+      if (!used.count(key(v, w))) add(walk(v, w), false);
+  }
+  // Loops that meet nothing (a part inside another): closed chains.
+  for (std::int32_t v = 0; v < static_cast<std::int32_t>(mesh.vertices.size()); ++v)
+    for (std::int32_t w : adj[v])
+      if (!used.count(key(v, w))) {
+        auto verts = walk(v, w);
+        if (verts.size() > 2 && verts.back() == verts.front()) verts.pop_back();
+        add(std::move(verts), true);
+      }
+  return added;
+}
+
+}  // namespace polysquare
