@@ -53,6 +53,9 @@ int run_mesh(const MeshArgs& args) {
     partition.triangle_part = result.background_part;
     write_partition_svg(args.partition_picture, result.background, partition);
   }
+  for (const auto& f : result.report["fallbacks"])
+    std::cerr << "warning: part " << f["part"].get<std::size_t>() << " meshed as one poly-square: "
+              << f["gpm_error"].get<std::string>() << "\n";
   std::cout << "polysquare: " << result.mesh.quads.size() << " quads, " << result.mesh.nodes.size() << " nodes -> "
             << args.output << "\n"
             << format_quality_text(quality, &domain);

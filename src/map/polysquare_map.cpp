@@ -68,6 +68,7 @@ PartMapResult map_part(const Region& region, const RegionPart& part, const Polys
     t0 = std::chrono::steady_clock::now();
     PartitionResult pr = partition_triangles(tri, options.partition);
     st.separators = add_separator_chains(tri, pr.triangle_part);
+    straighten_separator_chains(tri, options.separator_straightening);
     std::vector<std::int32_t> parent;
     split_constrained_interior_edges(tri, &parent);
     triangle_part.resize(parent.size());

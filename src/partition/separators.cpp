@@ -76,3 +76,51 @@ std::size_t add_separator_chains(TriMesh& mesh, const std::vector<std::int32_t>&
 }
 
 }  // namespace polysquare
+
+namespace polysquare {
+
+std::size_t straighten_separator_chains(TriMesh& mesh, int iterations) {
+  // Triangles around each vertex, to keep every move valid.
+  std::vector<std::vector<std::int32_t>> around(mesh.vertices.size());
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+    for (auto v : mesh.triangles[t]) around[v].push_back(static_cast<std::int32_t>(t));
+  std::vector<std::uint8_t> fixed(mesh.vertices.size(), 0);
+  for (const TriChain& ch : mesh.chains) {
+    if (ch.kind != TriChain::Kind::separator) {
+      for (auto v : ch.vertices) fixed[v] = 1;
+    } else if (!ch.closed) {
+      fixed[ch.vertices.front()] = fixed[ch.vertices.back()] = 1;
+    }
+  }
+  for (auto v : mesh.feature_point_vertices) fixed[v] = 1;
+  auto min_area = [&](std::int32_t v) {
+    double m = INFINITY;
+    for (auto t : around[v]) {
+      const auto& tri = mesh.triangles[t];
+      m = std::min(m, orient2(mesh.vertices[tri[0]], mesh.vertices[tri[1]], mesh.vertices[tri[2]]));
+    }
+    return m;
+  };
+  std::size_t moves = 0;
+  for (int it = 0; it < iterations; ++it) {
+    for (const TriChain& ch : mesh.chains) {
+      if (ch.kind != TriChain::Kind::separator) continue;
+      const std::size_t n = ch.vertices.size();
+      for (std::size_t i = 0; i < n; ++i) {
+        if (!ch.closed && (i == 0 || i + 1 == n)) continue;
+        const std::int32_t v = ch.vertices[i];
+        if (fixed[v]) continue;
+        const Vec2 target = lerp(mesh.vertices[ch.vertices[(i + n - 1) % n]], mesh.vertices[ch.vertices[(i + 1) % n]], 0.5);
+        const Vec2 old = mesh.vertices[v];
+        // Half a step towards the neighbours' midpoint; kept only if no incident triangle degenerates.
+        const double before = min_area(v);
+        mesh.vertices[v] = lerp(old, target, 0.5);
+        if (min_area(v) > 0.25 * std::min(before, 0.0) + 0.1 * before) ++moves;
+        else mesh.vertices[v] = old;
+      }
+    }
+  }
+  return moves;
+}
+
+}  // namespace polysquare

@@ -87,7 +87,7 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
   // Parts are independent: mesh them in parallel; results land in part order, so the output does not depend
   // on the thread count. A failure in one part is recorded and reported with all the others, never dropped.
   std::vector<std::optional<PartMapResult>> results(parts.size());
-  std::vector<std::string> errors(parts.size());
+  std::vector<std::string> errors(parts.size()), fallbacks(parts.size());
   {
     const int threads = options.threads > 0 ? options.threads : static_cast<int>(oneapi::tbb::info::default_concurrency());
     oneapi::tbb::global_control limit(oneapi::tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
@@ -104,7 +104,19 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
           part_map.partition.parts = std::max(1, static_cast<int>(std::lround(a / (options.size * options.size) /
                                                                                static_cast<double>(options.target_quads_per_part))));
         }
-        results[k] = map_part(*work, parts[k], part_map);
+        try {
+          results[k] = map_part(*work, parts[k], part_map);
+        } catch (const MeshingError& e) {
+          if (part_map.partition.parts == 1) throw;
+          // GPM over this partition failed: fall back to one poly-square for the part, and say so.
+          fallbacks[k] = e.what();
+          part_map.partition.parts = 1;
+          try {
+            results[k] = map_part(*work, parts[k], part_map);
+          } catch (const MeshingError& e2) {
+            throw MeshingError(fallbacks[k] + "; without partitioning: " + e2.what());
+          }
+        }
       } catch (const std::exception& e) {
         errors[k] = e.what();
       }
@@ -217,6 +229,12 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
                   {"boundary_edges", mesh.boundary_edges.size()}, {"feature_edges", mesh.feature_edges.size()}}},
       {"parts", parts_json},
       {"partition", partition_json},
+      {"fallbacks", [&] {
+         nlohmann::json f = nlohmann::json::array();
+         for (std::size_t k = 0; k < fallbacks.size(); ++k)
+           if (!fallbacks[k].empty()) f.push_back({{"part", k}, {"gpm_error", fallbacks[k]}, {"used", "single poly-square"}});
+         return f;
+       }()},
       {"simplify", {{"fraction_of_size", options.simplify}, {"vertices_before", simplify_stats.vertices_before},
                     {"vertices_after", simplify_stats.vertices_after}, {"refused", simplify_stats.refused}}},
       {"smooth", {{"sweeps", smooth.sweeps}, {"moves", smooth.moves}, {"curve_moves", smooth.curve_moves}}},

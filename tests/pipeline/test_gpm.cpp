@@ -51,3 +51,12 @@ TEST(Gpm, IndependentOfTheThreadCount) {
   ASSERT_EQ(a.quad_part, b.quad_part);
   for (std::size_t i = 0; i < a.nodes.size(); ++i) ASSERT_TRUE(a.nodes[i] == b.nodes[i]);
 }
+
+TEST(Gpm, FailedPartitionFallsBackToOnePolySquareAndSaysSo) {
+  // letter_M's 2-way partition leaves a subregion that cannot close as a poly-square in the global frame.
+  const MeshResult r = gpm("letter_M", 2.0, 2);
+  EXPECT_TRUE(check_invariants(r.mesh).ok());
+  ASSERT_EQ(r.report["fallbacks"].size(), 1u);
+  EXPECT_NE(r.report["fallbacks"][0]["gpm_error"].get<std::string>().find("letter_M"), std::string::npos);
+  EXPECT_EQ(std::set<std::int32_t>(r.mesh.quad_part.begin(), r.mesh.quad_part.end()).size(), 1u);
+}

@@ -66,4 +66,10 @@ namespace polysquare {
 /// ring or feature chain); separator loops without junctions become closed chains. Returns the number added.
 std::size_t add_separator_chains(TriMesh& mesh, const std::vector<std::int32_t>& triangle_part);
 
+/// Straightens the zig-zag of separator chains (paths of triangle edges): their free vertices move half-way to
+/// the midpoint of their chain neighbours, `iterations` times, each move kept only while every incident
+/// triangle keeps at least a tenth of its area. Vertices on rings, features and junctions never move.
+/// Returns the number of moves.
+std::size_t straighten_separator_chains(TriMesh& mesh, int iterations);
+
 }  // namespace polysquare
