@@ -31,17 +31,21 @@ void on_signal(int sig) {
 struct MeshArgs {
   std::string input, output, report, picture, partition_picture, map = "gpm";
   bool binary = false;
+  InputOptions input_options;
   MeshOptions options;
 };
 
 int run_mesh(const MeshArgs& args) {
-  const Region region = read_region(args.input);
+  std::vector<std::string> repairs;
+  const Region region = read_region(args.input, args.input_options, &repairs);
+  for (const std::string& r : repairs) std::cerr << "warning: repaired: " << r << "\n";
   MeshOptions options = args.options;
   options.keep_partition = !args.partition_picture.empty();
   MeshResult result = mesh_region(region, options);
   const QualityReport quality = compute_quality(result.mesh);
   const DomainDistance domain = domain_distance(result.mesh, region, {args.options.corner_threshold_deg});
   result.report["quality"] = to_json(quality);
+  result.report["input"]["repairs"] = repairs;
   result.report["domain"] = to_json(domain);
   // Outputs are written only after the whole mesh passed its checks, each atomically.
   write_mesh(args.output, result.mesh, {args.binary});
@@ -122,6 +126,8 @@ int main(int argc, char** argv) {
   cmd_mesh->add_option("--feature-weight", mesh.options.map.deform.feature_weight,
                        "weight of the feature alignment term (paper eq. 10)")->capture_default_str();
   cmd_mesh->add_flag("--binary", mesh.binary, "write binary MSH");
+  cmd_mesh->add_flag("--repair", mesh.input_options.repair,
+                     "drop repeated points and clip features crossing holes instead of refusing the input (reported)");
 
   std::string quality_mesh, quality_domain;
   bool quality_json = false;

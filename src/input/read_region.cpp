@@ -90,14 +90,22 @@ void check_points(const std::vector<Vec2>& pts, const std::string& where, const 
   }
 }
 
-void dedupe(std::vector<Vec2>& pts, bool closed) {
+// Repeated consecutive points: refused, or dropped and reported with repair.
+void dedupe(std::vector<Vec2>& pts, bool closed, const std::string& where, bool repair, std::vector<std::string>* repairs) {
+  const std::size_t before = pts.size();
+  Vec2 first_repeat{};
+  for (std::size_t i = 0; i < pts.size(); ++i)
+    if (pts[i] == pts[(i + 1) % pts.size()] && (closed || i + 1 < pts.size())) { first_repeat = pts[i]; break; }
   pts.erase(std::unique(pts.begin(), pts.end()), pts.end());
   while (closed && pts.size() > 1 && pts.front() == pts.back()) pts.pop_back();
+  if (pts.size() == before) return;
+  if (!repair) throw InputError(where + " repeats the point " + pt(first_repeat) + " (--repair drops repeated points)");
+  if (repairs) repairs->push_back(where + ": dropped " + std::to_string(before - pts.size()) + " repeated point(s), first at " + pt(first_repeat));
 }
 
 }  // namespace
 
-void validate_region(Region& region, const InputOptions& options) {
+void validate_region(Region& region, const InputOptions& options, std::vector<std::string>* repairs) {
   const std::string& src = region.source;
   auto ring_name = [&](std::size_t r) {
     return src + ": feature " + std::to_string(region.rings[r].source_feature) + ": ring " + std::to_string(r);
@@ -108,14 +116,14 @@ void validate_region(Region& region, const InputOptions& options) {
   for (std::size_t r = 0; r < region.rings.size(); ++r) {
     Ring& ring = region.rings[r];
     check_points(ring.points, ring_name(r), options);
-    dedupe(ring.points, true);
+    dedupe(ring.points, true, ring_name(r), options.repair, repairs);
     if (ring.points.size() < 3)
       throw InputError(ring_name(r) + " has fewer than 3 distinct points, at " + pt(ring.points.front()));
   }
   for (std::size_t f = 0; f < region.features.size(); ++f) {
     FeatureCurve& c = region.features[f];
     check_points(c.points, feature_name(f), options);
-    dedupe(c.points, c.closed);
+    dedupe(c.points, c.closed, feature_name(f), options.repair, repairs);
     if (c.points.size() < 2 || (c.closed && c.points.size() < 3))
       throw InputError(feature_name(f) + " has too few distinct points" +
                        (c.points.empty() ? std::string() : ", at " + pt(c.points.front())));
@@ -162,7 +170,11 @@ void validate_region(Region& region, const InputOptions& options) {
   }
   // Features: cut at crossings and clipped to the domain; then no curve may cross the boundary or another
   // curve except at end points (this catches self-crossing curves, which are not split).
-  split_features(region);
+  FeatureSplitOptions split;
+  split.clip_holes = options.repair;
+  const FeatureSplitStats split_stats = split_features(region, split);
+  if (repairs && split_stats.pieces_in_holes > 0)
+    repairs->push_back(src + ": clipped " + std::to_string(split_stats.pieces_in_holes) + " feature piece(s) inside holes");
   std::vector<Segment> all;
   for (std::size_t r = 0; r < region.rings.size(); ++r) {
     const auto& p = region.rings[r].points;
@@ -197,14 +209,14 @@ void validate_region(Region& region, const InputOptions& options) {
   });
 }
 
-Region read_region(const std::filesystem::path& path, const InputOptions& options) {
+Region read_region(const std::filesystem::path& path, const InputOptions& options, std::vector<std::string>* repairs) {
   const std::string name = path.string();
   std::string ext = path.extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   if (ext != ".geojson" && ext != ".json")
     throw InputError(name + ": unsupported input format '" + ext + "' (supported: .geojson, .json)");
   Region region = parse_geojson(read_file(path), name);
-  validate_region(region, options);
+  validate_region(region, options, repairs);
   return region;
 }
 

@@ -52,6 +52,12 @@ bool in_domain(const Region& region, Vec2 p) {
   return inside;
 }
 
+bool inside_an_outer_ring(const Region& region, Vec2 p) {
+  for (const Ring& r : region.rings)
+    if (!r.hole && point_in_ring(p, r.points)) return true;
+  return false;
+}
+
 double distance_to_rings(const Region& region, Vec2 p) {
   double d = INFINITY;
   for (const Ring& r : region.rings)
@@ -172,6 +178,12 @@ FeatureSplitStats split_features(Region& region, const FeatureSplitOptions& opti
       if (along_boundary || !in_domain(region, probe)) {
         on_boundary |= along_boundary;
         ++stats.pieces_dropped;
+        if (!along_boundary && inside_an_outer_ring(region, probe)) {  // inside a hole
+          if (!options.clip_holes)
+            throw InputError(region.source + ": feature " + std::to_string(c.source_feature) + " (curve " + std::to_string(f) +
+                             ") crosses a hole at " + pt(piece.front()) + " (--repair clips it)");
+          ++stats.pieces_in_holes;
+        }
         continue;
       }
       out.push_back({std::move(piece), closed_kept, c.source_feature});

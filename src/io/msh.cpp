@@ -241,9 +241,9 @@ void read_v4(Cursor& c, Builder& b, bool binary) {
 
 }  // namespace
 
-QuadMesh read_msh(const std::filesystem::path& path) {
-  const std::string data = read_file(path);
-  const std::string name = path.string();
+QuadMesh read_msh(const std::filesystem::path& path) { return parse_msh(read_file(path), path.string()); }
+
+QuadMesh parse_msh(const std::string& data, const std::string& name) {
   Cursor c{data, name};
   c.expect("$MeshFormat");
   const std::string version = c.token();

@@ -46,8 +46,9 @@ std::vector<T> numbers(const std::string& text, const std::string& path) {
 
 }  // namespace
 
-QuadMesh read_vtu(const std::filesystem::path& path) {
-  const std::string xml = read_file(path), name = path.string();
+QuadMesh read_vtu(const std::filesystem::path& path) { return parse_vtu(read_file(path), path.string()); }
+
+QuadMesh parse_vtu(const std::string& xml, const std::string& name) {
   if (xml.find("<UnstructuredGrid") == std::string::npos) throw InputError(name + ": not a VTK UnstructuredGrid file");
   const auto xyz = numbers<double>(array_text(xml, xml.find("<Points>"), "Points", name), name);
   const auto conn = numbers<long long>(data_array(xml, "connectivity", name), name);

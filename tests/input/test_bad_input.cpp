@@ -45,7 +45,10 @@ INSTANTIATE_TEST_SUITE_P(
                       BadCase{"overlapping_parts.geojson", "meets ring"},
                       BadCase{"binary_garbage.geojson", "not valid JSON"},
                       BadCase{"no_domain.geojson", "no domain"},
-                      BadCase{"not_numbers.geojson", "feature 0: a position must be an array of at least two numbers"}),
+                      BadCase{"not_numbers.geojson", "feature 0: a position must be an array of at least two numbers"},
+                      BadCase{"duplicate_points.geojson", "repeats the point (10, 0)"},
+                      BadCase{"feature_crossing_hole.geojson", "feature 1 (curve 0) crosses a hole at (8, 10)"},
+                      BadCase{"hole_touching_part.geojson", "meets ring"}),
     [](const auto& info) {
       std::string n = info.param.file;
       return n.substr(0, n.find('.'));
@@ -77,4 +80,20 @@ TEST(ReadRegion, HoleAndPartCounts) {
 TEST(ReadRegion, UnsupportedExtensionAndMissingFile) {
   EXPECT_THROW(read_region("region.shp"), InputError);
   EXPECT_THROW(read_region(std::string(POLYSQUARE_TEST_DATA_DIR) + "/bad/does_not_exist.geojson"), InputError);
+}
+
+TEST(Repair, DropsRepeatedPointsAndClipsFeaturesInHolesAndSaysSo) {
+  InputOptions o;
+  o.repair = true;
+  std::vector<std::string> repairs;
+  const Region a = read_region(std::string(POLYSQUARE_TEST_DATA_DIR) + "/bad/duplicate_points.geojson", o, &repairs);
+  EXPECT_EQ(a.rings[0].points.size(), 4u);
+  ASSERT_EQ(repairs.size(), 1u);
+  EXPECT_NE(repairs[0].find("(10, 0)"), std::string::npos) << repairs[0];
+  repairs.clear();
+  const Region b = read_region(std::string(POLYSQUARE_TEST_DATA_DIR) + "/bad/feature_crossing_hole.geojson", o, &repairs);
+  EXPECT_EQ(b.features.size(), 2u);  // the pieces left and right of the hole
+  ASSERT_EQ(repairs.size(), 1u);
+  // What repair cannot fix is still refused.
+  EXPECT_THROW(read_region(std::string(POLYSQUARE_TEST_DATA_DIR) + "/bad/bowtie.geojson", o), InputError);
 }

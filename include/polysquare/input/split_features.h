@@ -9,12 +9,14 @@ namespace polysquare {
 struct FeatureSplitOptions {
   double snap_relative = 1e-9;  ///< crossings closer than this (times the bounding-box diagonal) to an existing
                                 ///< vertex use that vertex, so near-touching curves share one node
+  bool clip_holes = false;      ///< drop pieces inside holes; otherwise a curve crossing a hole is an InputError
 };
 
 struct FeatureSplitStats {
   std::size_t crossings = 0;       ///< feature-feature and feature-boundary meeting points found
   std::size_t ring_vertices_added = 0;
   std::size_t pieces_dropped = 0;  ///< pieces outside the domain, inside a hole, or lying along the boundary
+  std::size_t pieces_in_holes = 0; ///< of those, pieces inside a hole (clip_holes)
 };
 
 /// Splits every feature curve at its crossings (the crossing point is computed once and inserted into both

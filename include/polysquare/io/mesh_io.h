@@ -2,6 +2,7 @@
 #pragma once
 
 #include <filesystem>
+#include <string>
 
 #include "polysquare/core/quad_mesh.h"
 #include "polysquare/core/region.h"
@@ -19,6 +20,9 @@ struct MeshWriteOptions {
 QuadMesh read_mesh(const std::filesystem::path& path);
 QuadMesh read_msh(const std::filesystem::path& path);
 QuadMesh read_vtu(const std::filesystem::path& path);
+/// The same readers on file contents already in memory; `name` is used in messages (fuzzing, pipes).
+QuadMesh parse_msh(const std::string& data, const std::string& name);
+QuadMesh parse_vtu(const std::string& xml, const std::string& name);
 
 /// Writes by extension, atomically: .msh = Gmsh MSH 4.1 with the quads as physical surface "domain" and tagged
 /// physical curves "boundary_ring_<r>" and "feature_<c>"; .vtu = VTK XML with per-cell quality fields.
