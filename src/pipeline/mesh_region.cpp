@@ -88,9 +88,10 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
   // on the thread count. A failure in one part is recorded and reported with all the others, never dropped.
   std::vector<std::optional<PartMapResult>> results(parts.size());
   std::vector<std::string> errors(parts.size()), fallbacks(parts.size());
+  // One thread limit for every parallel stage (parts here, colours in smoothing).
+  const int threads = options.threads > 0 ? options.threads : static_cast<int>(oneapi::tbb::info::default_concurrency());
+  oneapi::tbb::global_control limit(oneapi::tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
   {
-    const int threads = options.threads > 0 ? options.threads : static_cast<int>(oneapi::tbb::info::default_concurrency());
-    oneapi::tbb::global_control limit(oneapi::tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
     oneapi::tbb::parallel_for(std::size_t{0}, parts.size(), [&](std::size_t k) {
       try {
         PolysquareMapOptions part_map = map;

@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 
+#include <oneapi/tbb/blocked_range.h>
+#include <oneapi/tbb/parallel_for.h>
+
 namespace polysquare {
 namespace {
 
@@ -81,6 +84,39 @@ struct Curve {
   }
 };
 
+// Colours such that two nodes of one quad never share a colour: a colour's nodes can move in parallel, since
+// each node's move reads and changes only its own incident quads. Greedy in node order, so deterministic.
+std::vector<std::vector<std::int32_t>> colour_classes(const QuadMesh& mesh, const Incidence& inc,
+                                                      const std::vector<std::uint8_t>& movable) {
+  const std::size_t nn = mesh.nodes.size();
+  std::vector<int> colour(nn, -1);
+  std::vector<std::vector<std::int32_t>> classes;
+  std::vector<char> taken;
+  for (std::size_t v = 0; v < nn; ++v) {
+    if (!movable[v]) continue;
+    taken.assign(classes.size() + 1, 0);
+    for (std::size_t k = inc.offset[v]; k < inc.offset[v + 1]; ++k)
+      for (auto w : mesh.quads[inc.quads[k]])
+        if (colour[w] >= 0) taken[static_cast<std::size_t>(colour[w])] = 1;
+    int c = 0;
+    while (taken[static_cast<std::size_t>(c)]) ++c;
+    colour[v] = c;
+    if (static_cast<std::size_t>(c) == classes.size()) classes.emplace_back();
+    classes[static_cast<std::size_t>(c)].push_back(static_cast<std::int32_t>(v));
+  }
+  return classes;
+}
+
+// Runs `step(v)` for every node, colour by colour, the nodes of a colour in parallel.
+template <typename F>
+void for_each_by_colour(const std::vector<std::vector<std::int32_t>>& classes, F step) {
+  for (const auto& cls : classes)
+    oneapi::tbb::parallel_for(oneapi::tbb::blocked_range<std::size_t>(0, cls.size(), 256),
+                              [&](const oneapi::tbb::blocked_range<std::size_t>& r) {
+                                for (std::size_t i = r.begin(); i != r.end(); ++i) step(cls[i]);
+                              });
+}
+
 // A node that slides: its curve and its two neighbours along the curve.
 struct Slider {
   int curve = -1;
@@ -107,34 +143,49 @@ SmoothStats smooth_quads(QuadMesh& mesh, const SmoothOptions& options, const Reg
   const bool kinds = mesh.node_kind.size() == nn;
   auto is_interior = [&](std::size_t v) { return kinds && mesh.node_kind[v] == NodeKind::interior; };
   SmoothStats stats;
-  std::vector<std::int32_t> nbrs;
+  std::vector<std::uint8_t> interior(nn, 0);
+  for (std::size_t v = 0; v < nn; ++v) interior[v] = is_interior(v);
+  const auto interior_classes = colour_classes(mesh, inc, interior);
+  // Per-node results of a sweep, reduced in node order afterwards so that the stopping test is deterministic.
+  std::vector<double> moved_by(nn, 0.0), edge_of(nn, 0.0);
+  std::vector<std::uint8_t> moved_flag(nn, 0);
   for (int sweep = 0; sweep < options.iterations; ++sweep) {
+    for_each_by_colour(interior_classes, [&](std::int32_t v) {
+      std::int32_t nbrs[32];
+      int n = 0;
+      for (std::size_t k = inc.offset[v]; k < inc.offset[v + 1]; ++k) {
+        const auto& q = mesh.quads[inc.quads[k]];
+        const int at = static_cast<int>(std::find(q.begin(), q.end(), v) - q.begin());
+        for (std::int32_t w : {q[(at + 1) % 4], q[(at + 3) % 4]})
+          if (n < 32 && std::find(nbrs, nbrs + n, w) == nbrs + n) nbrs[n++] = w;
+      }
+      Vec2 mean{};
+      double edge = 0.0;
+      const Vec2 old = mesh.nodes[v];
+      for (int i = 0; i < n; ++i) {
+        mean = mean + mesh.nodes[nbrs[i]];
+        edge += distance(old, mesh.nodes[nbrs[i]]);
+      }
+      mean = (1.0 / n) * mean;
+      edge_of[v] = edge / n;
+      const double before = inc.worst(mesh, v);
+      mesh.nodes[v] = mean;
+      if (inc.worst(mesh, v) > before) {
+        moved_flag[v] = 1;
+        moved_by[v] = distance(old, mean);
+      } else {
+        mesh.nodes[v] = old;
+        moved_flag[v] = 0;
+        moved_by[v] = 0.0;
+      }
+    });
     std::size_t moved = 0;
     double largest_move = 0.0, edge_sum = 0.0;
     for (std::size_t v = 0; v < nn; ++v) {
-      if (!is_interior(v)) continue;
-      nbrs.clear();
-      for (std::size_t k = inc.offset[v]; k < inc.offset[v + 1]; ++k) {
-        const auto& q = mesh.quads[inc.quads[k]];
-        const int at = static_cast<int>(std::find(q.begin(), q.end(), static_cast<std::int32_t>(v)) - q.begin());
-        nbrs.push_back(q[(at + 1) % 4]);
-        nbrs.push_back(q[(at + 3) % 4]);
-      }
-      std::sort(nbrs.begin(), nbrs.end());
-      nbrs.erase(std::unique(nbrs.begin(), nbrs.end()), nbrs.end());
-      Vec2 mean{};
-      for (auto w : nbrs) mean = mean + mesh.nodes[w];
-      mean = (1.0 / static_cast<double>(nbrs.size())) * mean;
-      const Vec2 old = mesh.nodes[v];
-      const double before = inc.worst(mesh, v);
-      mesh.nodes[v] = mean;
-      for (auto w : nbrs) edge_sum += distance(old, mesh.nodes[w]) / static_cast<double>(nbrs.size());
-      if (inc.worst(mesh, v) > before) {
-        ++moved;
-        largest_move = std::max(largest_move, distance(old, mean));
-      } else {
-        mesh.nodes[v] = old;
-      }
+      if (!interior[v]) continue;
+      moved += moved_flag[v];
+      largest_move = std::max(largest_move, moved_by[v]);
+      edge_sum += edge_of[v];
     }
     stats.sweeps = sweep + 1;
     stats.moves += moved;
@@ -171,15 +222,19 @@ SmoothStats smooth_quads(QuadMesh& mesh, const SmoothOptions& options, const Reg
   // poly-square corners), and untangles.
   const Vec2 dirs[8] = {{1, 0}, {0.7071067811865476, 0.7071067811865476}, {0, 1}, {-0.7071067811865476, 0.7071067811865476},
                         {-1, 0}, {-0.7071067811865476, -0.7071067811865476}, {0, -1}, {0.7071067811865476, -0.7071067811865476}};
+  std::vector<std::uint8_t> searchable(nn, 0);
+  for (std::size_t v = 0; v < nn; ++v) searchable[v] = interior[v] || (kinds && !curves.empty() && slides(v));
+  const auto search_classes = colour_classes(mesh, inc, searchable);
+  std::vector<std::uint8_t> curve_moved(nn, 0);
   for (int sweep = 0; sweep < options.worst_sweeps; ++sweep) {
-    std::size_t moved = 0;
-    for (std::size_t v = 0; v < nn; ++v) {
-      const bool interior = is_interior(v);
-      if (!interior && !(kinds && !curves.empty() && slides(v))) continue;
+    std::fill(moved_flag.begin(), moved_flag.end(), 0);
+    std::fill(curve_moved.begin(), curve_moved.end(), 0);
+    for_each_by_colour(search_classes, [&](std::int32_t v) {
+      const bool is_inner = interior[v] != 0;
       const double before = inc.worst(mesh, v);
-      if (before >= options.worst_threshold) continue;
+      if (before >= options.worst_threshold) return;
       double best = before, step = 0.25 * inc.mean_edge(mesh, v);
-      if (interior) {
+      if (is_inner) {
         for (int level = 0; level < 12; ++level) {
           const Vec2 centre = mesh.nodes[v];
           Vec2 best_p = centre;
@@ -191,8 +246,8 @@ SmoothStats smooth_quads(QuadMesh& mesh, const SmoothOptions& options, const Reg
           mesh.nodes[v] = best_p;
           if (best_p == centre) step *= 0.5;
         }
-        if (best > before) ++moved;
-        continue;
+        moved_flag[v] = best > before;
+        return;
       }
       // Along the curve, strictly between the curve neighbours (so the boundary order never changes).
       const Curve& c = curves[static_cast<std::size_t>(slider[v].curve)];
@@ -206,7 +261,7 @@ SmoothStats smooth_quads(QuadMesh& mesh, const SmoothOptions& options, const Reg
       };
       double lo = unwrap(c.project(mesh.nodes[slider[v].prev])), hi = unwrap(c.project(mesh.nodes[slider[v].next]));
       if (lo > hi) std::swap(lo, hi);
-      if (!(lo < s && s < hi)) continue;
+      if (!(lo < s && s < hi)) return;
       const double margin = 0.05 * (hi - lo);
       for (int level = 0; level < 12; ++level) {
         const Vec2 old = mesh.nodes[v];
@@ -220,7 +275,12 @@ SmoothStats smooth_quads(QuadMesh& mesh, const SmoothOptions& options, const Reg
         }
         if (best_s != s) { s = best_s; mesh.nodes[v] = c.at(s); } else step *= 0.5;
       }
-      if (best > before) { ++moved; ++stats.curve_moves; }
+      if (best > before) moved_flag[v] = curve_moved[v] = 1;
+    });
+    std::size_t moved = 0;
+    for (std::size_t v = 0; v < nn; ++v) {
+      moved += moved_flag[v];
+      stats.curve_moves += curve_moved[v];
     }
     stats.moves += moved;
     if (moved == 0) break;
