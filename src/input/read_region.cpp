@@ -8,6 +8,7 @@
 #include "polysquare/core/error.h"
 #include "polysquare/io/atomic_file.h"
 #include "polysquare/io/geojson.h"
+#include "polysquare/input/make_valid.h"
 #include "polysquare/input/split_features.h"
 
 namespace polysquare {
@@ -107,6 +108,12 @@ void dedupe(std::vector<Vec2>& pts, bool closed, const std::string& where, bool 
 
 void validate_region(Region& region, const InputOptions& options, std::vector<std::string>* repairs) {
   const std::string& src = region.source;
+  if (options.repair) {
+    // Finite coordinates first: GEOS must not see NaN.
+    for (const Ring& ring : region.rings)
+      check_points(ring.points, src + ": feature " + std::to_string(ring.source_feature), options);
+    make_parts_valid(region, repairs);
+  }
   auto ring_name = [&](std::size_t r) {
     return src + ": feature " + std::to_string(region.rings[r].source_feature) + ": ring " + std::to_string(r);
   };

@@ -48,7 +48,8 @@ INSTANTIATE_TEST_SUITE_P(
                       BadCase{"not_numbers.geojson", "feature 0: a position must be an array of at least two numbers"},
                       BadCase{"duplicate_points.geojson", "repeats the point (10, 0)"},
                       BadCase{"feature_crossing_hole.geojson", "feature 1 (curve 0) crosses a hole at (8, 10)"},
-                      BadCase{"hole_touching_part.geojson", "meets ring"}),
+                      BadCase{"hole_touching_part.geojson", "meets ring"},
+                      BadCase{"hole_crossing_part.geojson", "meets ring 0 at (20, 10)"}),
     [](const auto& info) {
       std::string n = info.param.file;
       return n.substr(0, n.find('.'));
@@ -94,6 +95,17 @@ TEST(Repair, DropsRepeatedPointsAndClipsFeaturesInHolesAndSaysSo) {
   const Region b = read_region(std::string(POLYSQUARE_TEST_DATA_DIR) + "/bad/feature_crossing_hole.geojson", o, &repairs);
   EXPECT_EQ(b.features.size(), 2u);  // the pieces left and right of the hole
   ASSERT_EQ(repairs.size(), 1u);
-  // What repair cannot fix is still refused.
+  // A hole crossing its outer ring is made valid (GEOS): one polygon whose outer ring has a notch.
+  repairs.clear();
+  const Region c = read_region(std::string(POLYSQUARE_TEST_DATA_DIR) + "/bad/hole_crossing_part.geojson", o, &repairs);
+  EXPECT_EQ(c.num_parts, 1);
+  EXPECT_EQ(c.rings.size(), 1u);
+  double area = 0;
+  for (std::size_t i = 0; i < c.rings[0].points.size(); ++i)
+    area += 0.5 * cross(c.rings[0].points[i], c.rings[0].points[(i + 1) % c.rings[0].points.size()]);
+  EXPECT_NEAR(area, 400.0 - 25.0, 1e-9);
+  ASSERT_EQ(repairs.size(), 1u);
+  // What repair cannot fix is still refused: a bow-tie becomes two triangles that touch at one point, and NaN.
   EXPECT_THROW(read_region(std::string(POLYSQUARE_TEST_DATA_DIR) + "/bad/bowtie.geojson", o), InputError);
+  EXPECT_THROW(read_region(std::string(POLYSQUARE_TEST_DATA_DIR) + "/bad/nan.geojson", o), InputError);
 }

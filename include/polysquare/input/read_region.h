@@ -11,8 +11,9 @@ namespace polysquare {
 
 struct InputOptions {
   double max_abs_coordinate = 1e15;  ///< larger coordinates are rejected (precision of the geometry would be lost)
-  bool repair = false;  ///< fix what a user would want fixed instead of refusing: drop repeated consecutive
-                        ///< points, clip feature curves that cross a hole (each repair is reported)
+  bool repair = false;  ///< fix what a user would want fixed instead of refusing: make invalid polygons valid
+                        ///< (GEOS through GDAL), drop repeated consecutive points, clip feature curves that
+                        ///< cross a hole (each repair is reported)
 };
 
 /// Checks and normalizes a parsed region: finite coordinates below max_abs_coordinate; duplicate consecutive
