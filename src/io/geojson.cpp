@@ -2,7 +2,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include <regex>
+#include <cctype>
 
 #include "polysquare/core/error.h"
 
@@ -10,6 +10,8 @@ namespace polysquare {
 namespace {
 
 using json = nlohmann::json;
+
+constexpr int kMaxNesting = 32;
 
 struct Context {
   const std::string& source;
@@ -62,15 +64,43 @@ std::string crs_of(const json& doc) {
   if (c.contains("properties") && c["properties"].is_object() && c["properties"].contains("name") &&
       c["properties"]["name"].is_string())
     name = c["properties"]["name"].get<std::string>();
-  std::smatch m;
-  static const std::regex epsg(R"(EPSG:{1,2}(\d+))", std::regex::icase);
-  if (std::regex_search(name, m, epsg)) return "EPSG:" + m[1].str();
-  return name;
+  // "EPSG:32616", "urn:ogc:def:crs:EPSG::32616": a plain scan (std::regex recurses per character and a fuzzed
+  // name of thousands of digits overflows the stack). Codes have at most 6 digits; longer runs are not codes.
+  for (std::size_t at = 0; at + 4 < name.size(); ++at) {
+    if ((name.compare(at, 4, "EPSG") != 0 && name.compare(at, 4, "epsg") != 0)) continue;
+    std::size_t i = at + 4, colons = 0;
+    while (i < name.size() && name[i] == ':' && colons < 2) { ++i; ++colons; }
+    std::size_t digits = 0;
+    while (i + digits < name.size() && std::isdigit(static_cast<unsigned char>(name[i + digits]))) ++digits;
+    if (colons > 0 && digits > 0 && digits <= 6) return "EPSG:" + name.substr(i, digits);
+  }
+  return name.size() <= 200 ? name : std::string();
 }
 
 }  // namespace
 
 Region parse_geojson(std::string_view text, const std::string& source_name) {
+  // GeoJSON needs about six levels of nesting; a bound keeps the recursive JSON parser's stack small whatever
+  // the input (brackets inside strings are skipped).
+  {
+    int depth = 0;
+    bool in_string = false;
+    for (std::size_t i = 0; i < text.size(); ++i) {
+      const char ch = text[i];
+      if (in_string) {
+        if (ch == '\\') ++i;
+        else if (ch == '"') in_string = false;
+      } else if (ch == '"') {
+        in_string = true;
+      } else if (ch == '[' || ch == '{') {
+        if (++depth > kMaxNesting)
+          throw InputError(source_name + ": JSON nested deeper than " + std::to_string(kMaxNesting) + " levels at byte " +
+                           std::to_string(i));
+      } else if (ch == ']' || ch == '}') {
+        --depth;
+      }
+    }
+  }
   json doc;
   try {
     doc = json::parse(text.begin(), text.end());

@@ -109,3 +109,11 @@ TEST(Repair, DropsRepeatedPointsAndClipsFeaturesInHolesAndSaysSo) {
   EXPECT_THROW(read_region(std::string(POLYSQUARE_TEST_DATA_DIR) + "/bad/bowtie.geojson", o), InputError);
   EXPECT_THROW(read_region(std::string(POLYSQUARE_TEST_DATA_DIR) + "/bad/nan.geojson", o), InputError);
 }
+
+TEST(FuzzRegressions, ReadWithoutCrashing) {
+  // Found by fuzzing: each must read cleanly or be refused with InputError, fast.
+  const std::string dir = std::string(POLYSQUARE_TEST_DATA_DIR) + "/fuzz-regressions/";
+  const Region r = read_region(dir + "crs_long_digit_run.geojson");
+  EXPECT_TRUE(r.crs.empty() || r.crs.size() <= 200);
+  EXPECT_THROW(read_region(dir + "json_nested_66_levels.geojson"), InputError);
+}
