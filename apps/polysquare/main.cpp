@@ -29,7 +29,7 @@ void on_signal(int sig) {
 }
 
 struct MeshArgs {
-  std::string input, output, report, picture, partition_picture, map = "gpm";
+  std::string input, output, report, picture, partition_picture, map = "ppm";
   bool binary = false;
   InputOptions input_options;
   MeshOptions options;
@@ -41,6 +41,7 @@ int run_mesh(const MeshArgs& args) {
   for (const std::string& r : repairs) std::cerr << "warning: repaired: " << r << "\n";
   MeshOptions options = args.options;
   options.keep_partition = !args.partition_picture.empty();
+  options.map.composition = args.map == "gpm" ? MapComposition::gpm : MapComposition::ppm;
   MeshResult result = mesh_region(region, options);
   const QualityReport quality = compute_quality(result.mesh);
   const DomainDistance domain = domain_distance(result.mesh, region, {args.options.corner_threshold_deg});
@@ -99,10 +100,12 @@ int main(int argc, char** argv) {
   cmd_mesh->add_option("--report", mesh.report, "write a JSON report (options, timings, counts, quality)");
   cmd_mesh->add_option("--picture", mesh.picture, "write an SVG picture of the mesh coloured by scaled Jacobian");
   cmd_mesh->add_option("--parts", mesh.options.parts,
-                       "subregions per polygon part, meshed as one global poly-square map (1 = no partition, 0 = auto)")
+                       "subregions per polygon part (1 = one poly-square per part, 0 = auto)")
       ->capture_default_str()->check(CLI::NonNegativeNumber);
-  cmd_mesh->add_option("--map", mesh.map, "composition of the subregions' maps (gpm; ppm is not implemented yet)")
-      ->check(CLI::IsMember({"gpm"}))->capture_default_str();
+  cmd_mesh->add_option("--map", mesh.map,
+                       "how subregions are mapped: ppm (a poly-square per subregion, singularities where they meet) or "
+                       "gpm (one global poly-square, separators as its sides)")
+      ->check(CLI::IsMember({"ppm", "gpm"}))->capture_default_str();
   cmd_mesh->add_option("--partition-picture", mesh.partition_picture,
                        "write an SVG of the background triangulation coloured by subregion, separators and features");
   cmd_mesh->add_option("--threads", mesh.options.threads, "worker threads (0 = all cores); output does not depend on it")

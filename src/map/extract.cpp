@@ -71,14 +71,15 @@ struct TriangleLocator {
 
 }  // namespace
 
-void polysquare_targets(const TriMesh& mesh, const std::vector<Vec2>& deformed, const Layout& layout,
-                        std::vector<Vec2>& targets, std::vector<std::uint8_t>& mask) {
+void polysquare_targets(const TriMesh& mesh, const std::vector<Vec2>& original, const std::vector<Vec2>& deformed,
+                        const Layout& layout, std::vector<Vec2>& targets, std::vector<std::uint8_t>& mask) {
   targets = deformed;
   mask.assign(deformed.size(), 0);
   for (const LayoutSegment& s : layout.segments) {
     const TriChain& ch = mesh.chains[s.chain];
     const int n = static_cast<int>(ch.vertices.size());
-    const auto cum = cumulative(ch, s, deformed);
+    // Interfaces are spread by input arc length, so that the two subregions sharing one place the same nodes.
+    const auto cum = cumulative(ch, s, ch.interface >= 0 ? original : deformed);
     const auto la = layout.lattice[s.break_a], lb = layout.lattice[s.break_b];
     const Vec2 pa{static_cast<double>(la[0]), static_cast<double>(la[1])};
     const Vec2 pb{static_cast<double>(lb[0]), static_cast<double>(lb[1])};
@@ -99,7 +100,7 @@ void polysquare_targets(const TriMesh& mesh, const std::vector<Vec2>& deformed, 
 
 QuadMesh extract_quads(const TriMesh& mesh, const std::vector<Vec2>& original, const std::vector<Vec2>& snapped,
                        const Layout& layout, const std::string& part_name,
-                       const std::vector<std::int32_t>* triangle_part) {
+                       const std::vector<std::int32_t>* triangle_part, std::size_t* side_nodes) {
   QuadMesh out;
   std::unordered_map<long long, std::int32_t> node_of;
   auto add_node = [&](long long i, long long j, Vec2 p, NodeKind kind) {
@@ -117,7 +118,7 @@ QuadMesh extract_quads(const TriMesh& mesh, const std::vector<Vec2>& original, c
   for (const LayoutSegment& s : layout.segments) {
     const TriChain& ch = mesh.chains[s.chain];
     const int n = static_cast<int>(ch.vertices.size());
-    const auto cum = cumulative(ch, s, snapped);
+    const auto cum = cumulative(ch, s, ch.interface >= 0 ? original : snapped);
     const auto la = layout.lattice[s.break_a], lb = layout.lattice[s.break_b];
     const long long len = std::llabs(lb[0] - la[0]) + std::llabs(lb[1] - la[1]);
     const long long di = (lb[0] > la[0]) - (lb[0] < la[0]), dj = (lb[1] > la[1]) - (lb[1] < la[1]);
@@ -149,6 +150,7 @@ QuadMesh extract_quads(const TriMesh& mesh, const std::vector<Vec2>& original, c
     }
   }
 
+  if (side_nodes) *side_nodes = out.nodes.size();
   // Interior lattice nodes through the inverse of the deformation, cells kept when their centre is inside.
   TriangleLocator locator(mesh.triangles, snapped);
   const long long i0 = static_cast<long long>(std::floor(locator.box.lo.x)) - 1;

@@ -18,7 +18,8 @@ const Vec2 kLabelDir[4] = {{1, 0}, {0, 1}, {-1, 0}, {0, -1}};
 // per label of its first edge, with the running number of quarter turns in the state, so that it closes with
 // exactly `required_turns` (+4 counter-clockwise, -4 clockwise): every loop becomes a valid orthogonal polygon.
 std::vector<int> label_chain(const std::vector<Vec2>& edge_vec, const std::vector<std::uint8_t>& free_change,
-                             bool closed, double change_cost, int required_turns) {
+                             const std::vector<std::uint8_t>& locked, bool closed, double change_cost,
+                             int required_turns) {
   const int m = static_cast<int>(edge_vec.size());
   constexpr double kBig = 1e300;
   constexpr int kMaxTurns = 48;  // |running turns| bound: coastlines with many bays wind far before closing
@@ -29,6 +30,7 @@ std::vector<int> label_chain(const std::vector<Vec2>& edge_vec, const std::vecto
   auto turn = [](int from, int to) { const int d = (to - from + 4) % 4; return d == 0 ? 0 : (d == 1 ? 1 : (d == 3 ? -1 : 99)); };
   auto change = [&](int i, int from, int to) {  // cost of the transition into edge i
     if (from == to) return 0.0;
+    if (locked[i]) return kBig;
     return free_change[i] ? 0.0 : change_cost;
   };
   const int turn_states = closed ? kT : 1;
@@ -55,6 +57,7 @@ std::vector<int> label_chain(const std::vector<Vec2>& edge_vec, const std::vecto
             const int nt = closed ? t + dt : 0;
             if (nt < 0 || nt >= turn_states) continue;
             const double c = base + change(i, k, l) + edge_cost(i, l);
+            if (c >= kBig) continue;
             if (c < cost[at(i, l, nt)]) { cost[at(i, l, nt)] = c; back[at(i, l, nt)] = k * kT + t; }
           }
         }
@@ -68,6 +71,7 @@ std::vector<int> label_chain(const std::vector<Vec2>& edge_vec, const std::vecto
           const int dt = turn(l, f);
           if (dt == 99 || t - kMaxTurns + dt != required_turns) continue;
           c += change(0, l, f);
+          if (c >= kBig) continue;
         }
         if (c < total) { total = c; last = l; last_t = t; }
       }
@@ -115,41 +119,69 @@ Layout build_layout(const TriMesh& mesh, const std::vector<Vec2>& original, cons
     if (appearances[v] > 1) corner[v] = 1;  // chains meet: a crossing or a feature ending on the boundary
   for (std::size_t v = 0; v < nv; ++v) is_break[v] = corner[v];
 
+  // Sequences labelled together: the chains of each loop (a PPM subregion's boundary made of ring pieces and
+  // interfaces), so that the loop closes with +-4 quarter turns, and every other chain alone.
+  std::vector<std::vector<int>> sequences = mesh.loops;
+  std::vector<std::uint8_t> in_loop(mesh.chains.size(), 0);
+  for (const auto& loop : mesh.loops)
+    for (int c : loop) in_loop[static_cast<std::size_t>(c)] = 1;
+  for (std::size_t c = 0; c < mesh.chains.size(); ++c)
+    if (!in_loop[c]) sequences.push_back({static_cast<int>(c)});
+
   layout.chain_labels.resize(mesh.chains.size());
-  for (std::size_t c = 0; c < mesh.chains.size(); ++c) {
-    const TriChain& ch = mesh.chains[c];
-    const int n = static_cast<int>(ch.vertices.size());
-    const int m = ch.closed ? n : n - 1;
-    std::vector<Vec2> edge_vec(m);
-    std::vector<std::uint8_t> free_change(m, 0);
-    for (int i = 0; i < m; ++i) {
-      edge_vec[i] = deformed[ch.vertices[(i + 1) % n]] - deformed[ch.vertices[i]];
-      free_change[i] = corner[ch.vertices[i]];
+  for (const auto& seq : sequences) {
+    const bool closed = seq.size() > 1 || mesh.chains[static_cast<std::size_t>(seq.front())].closed;
+    std::vector<std::int32_t> verts;  // edge i runs from verts[i] to verts[i + 1] (cyclic when closed)
+    std::vector<Vec2> edge_vec;
+    std::vector<std::uint8_t> free_change, locked;
+    for (int c : seq) {
+      const TriChain& ch = mesh.chains[static_cast<std::size_t>(c)];
+      const int n = static_cast<int>(ch.vertices.size());
+      const int m = ch.closed ? n : n - 1;
+      for (int i = 0; i < m; ++i) {
+        const std::int32_t v = ch.vertices[i];
+        verts.push_back(v);
+        edge_vec.push_back(deformed[ch.vertices[(i + 1) % n]] - deformed[v]);
+        free_change.push_back(corner[v]);
+        // An interface is one straight side on both of its subregions, so both get the same nodes.
+        locked.push_back(ch.interface >= 0 && !corner[v]);
+      }
+      if (!closed) verts.push_back(ch.vertices.back());
     }
-    std::vector<int>& labels = layout.chain_labels[c];
-    // Closed chains turn by +4 quarter turns when counter-clockwise in the deformed plane (outer rings, and
+    const int m = static_cast<int>(edge_vec.size());
+    const int nverts = static_cast<int>(verts.size());
+    const std::string what = seq.size() > 1 ? "the boundary loop through " + chain_name(mesh.chains[static_cast<std::size_t>(seq.front())])
+                                            : chain_name(mesh.chains[static_cast<std::size_t>(seq.front())]);
+    // Closed sequences turn by +4 quarter turns when counter-clockwise in the deformed plane (outer rings, and
     // feature loops drawn that way), -4 when clockwise (holes).
     double area = 0.0;
-    for (int i = 0; i < n; ++i) area += cross(deformed[ch.vertices[i]], deformed[ch.vertices[(i + 1) % n]]);
-    labels = label_chain(edge_vec, free_change, ch.closed, options.label_change_cost, area >= 0 ? 4 : -4);
+    for (int i = 0; i < nverts; ++i) area += cross(deformed[verts[i]], deformed[verts[(i + 1) % nverts]]);
+    const std::vector<int> labels =
+        label_chain(edge_vec, free_change, locked, closed, options.label_change_cost, area >= 0 ? 4 : -4);
     if (labels.empty())
-      throw MeshingError(part_name + ": no axis labelling of " + chain_name(ch) + " closes into an orthogonal polygon");
+      throw MeshingError(part_name + ": no axis labelling of " + what + " closes into an orthogonal polygon");
     int turning = 0;
     for (int i = 0; i < m; ++i) {
-      if (!ch.closed && i == 0) continue;
+      if (!closed && i == 0) continue;
       const int prev = labels[(i + m - 1) % m];
       if (prev == labels[i]) continue;
-      is_break[ch.vertices[i]] = 1;
+      is_break[verts[i]] = 1;
       const int diff = (labels[i] - prev + 4) % 4;
       if (diff == 2)
-        throw MeshingError(part_name + ": the poly-square of " + chain_name(ch) + " folds back on itself near (" +
-                           std::to_string(original[ch.vertices[i]].x) + ", " +
-                           std::to_string(original[ch.vertices[i]].y) + ")");
+        throw MeshingError(part_name + ": the poly-square of " + what + " folds back on itself near (" +
+                           std::to_string(original[verts[i]].x) + ", " + std::to_string(original[verts[i]].y) + ")");
       turning += diff == 1 ? 1 : -1;
     }
-    if (ch.closed && std::abs(turning) != 4)
-      throw MeshingError(part_name + ": the poly-square of " + chain_name(ch) + " turns by " + std::to_string(turning) +
+    if (closed && std::abs(turning) != 4)
+      throw MeshingError(part_name + ": the poly-square of " + what + " turns by " + std::to_string(turning) +
                          " quarter turns instead of 4; one poly-square cannot represent this region");
+    int offset = 0;
+    for (int c : seq) {
+      const TriChain& ch = mesh.chains[static_cast<std::size_t>(c)];
+      const int cm = ch.closed ? static_cast<int>(ch.vertices.size()) : static_cast<int>(ch.vertices.size()) - 1;
+      layout.chain_labels[static_cast<std::size_t>(c)].assign(labels.begin() + offset, labels.begin() + offset + cm);
+      offset += cm;
+    }
   }
 
   for (std::size_t v = 0; v < nv; ++v) {

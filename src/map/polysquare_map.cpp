@@ -7,6 +7,7 @@
 
 #include "polysquare/core/error.h"
 #include "polysquare/map/extract.h"
+#include "polysquare/map/piecewise_map.h"
 #include "polysquare/partition/partition.h"
 
 namespace polysquare {
@@ -29,6 +30,49 @@ double preorientation_angle(const std::vector<Vec2>& points, const std::vector<s
   }
   if (std::abs(sum) < 1e-12) return 0.0;
   return -std::arg(sum) / 4.0;
+}
+
+MappedMesh deform_mesh(const TriMesh& tri, const PolysquareMapOptions& options, bool orient_all_chains) {
+  MappedMesh mm;
+  DeformProblem& problem = mm.problem;
+  problem.triangles = tri.triangles;
+  std::vector<std::array<std::int32_t, 2>> orient_edges;
+  for (const TriChain& ch : tri.chains) {
+    const int n = static_cast<int>(ch.vertices.size());
+    const int m = ch.closed ? n : n - 1;
+    // Separators are pulled to the axes like the boundary: every subregion must become a poly-square.
+    const double w = ch.kind == TriChain::Kind::feature ? options.deform.feature_weight : options.deform.boundary_weight;
+    const bool orient = orient_all_chains ? ch.kind != TriChain::Kind::feature || ch.interface >= 0
+                                          : ch.kind == TriChain::Kind::ring;
+    for (int i = 0; i < m; ++i) {
+      const std::int32_t a = ch.vertices[i], b = ch.vertices[(i + 1) % n];
+      problem.aligned.push_back({a, b, w});
+      if (orient) orient_edges.push_back({a, b});
+    }
+  }
+  // Rest shape in lattice units (1 = one quad edge), centred and pre-oriented.
+  const Box2 box = [&] { Box2 b; for (Vec2 p : tri.vertices) b.add(p); return b; }();
+  const Vec2 centre = 0.5 * (box.lo + box.hi);
+  const double theta = options.preorient ? preorientation_angle(tri.vertices, orient_edges) : 0.0;
+  mm.rotation_deg = theta * 180.0 / std::numbers::pi;
+  const double c = std::cos(theta), s = std::sin(theta), h = options.size;
+  problem.rest.reserve(tri.vertices.size());
+  for (Vec2 p : tri.vertices) {
+    const Vec2 q = p - centre;
+    problem.rest.push_back({(c * q.x - s * q.y) / h, (s * q.x + c * q.y) / h});
+  }
+  mm.x = problem.rest;
+  mm.stats = deform_to_polysquare(problem, options.deform, mm.x);
+  return mm;
+}
+
+void snap_to_layout(const TriMesh& tri, MappedMesh& mm, const Layout& layout, const PolysquareMapOptions& options,
+                    const std::string& name) {
+  std::vector<Vec2> targets;
+  std::vector<std::uint8_t> mask;
+  polysquare_targets(tri, tri.vertices, mm.x, layout, targets, mask);
+  if (!move_constrained_vertices(mm.problem, options.deform, mask, targets, mm.x))
+    throw MeshingError(name + ": the deformation cannot reach the quantized poly-square without inverting triangles");
 }
 
 PartMapResult map_part(const Region& region, const RegionPart& part, const PolysquareMapOptions& options) {
@@ -63,73 +107,59 @@ PartMapResult map_part(const Region& region, const RegionPart& part, const Polys
 
   // GPM (paper Sec. 5.1): the subregions' separators become chains of the one global map, so shared separator
   // vertices are identical on both sides by construction (eq. 12) and one quantization serves all subregions.
+  // PPM (Sec. 5.2): the subregions are cut apart and mapped in their own frames (map_piecewise).
   std::vector<std::int32_t> triangle_part;
   if (options.partition.parts != 1) {
     t0 = std::chrono::steady_clock::now();
     PartitionResult pr = partition_triangles(tri, options.partition);
-    st.separators = add_separator_chains(tri, pr.triangle_part);
-    straighten_separator_chains(tri, options.separator_straightening);
-    std::vector<std::int32_t> parent;
-    split_constrained_interior_edges(tri, &parent);
-    triangle_part.resize(parent.size());
-    for (std::size_t t = 0; t < parent.size(); ++t) triangle_part[t] = pr.triangle_part[static_cast<std::size_t>(parent[t])];
-    if (options.keep_partition) result.background = tri;
-    pr.triangle_part = triangle_part;
+    if (options.composition == MapComposition::gpm) {
+      st.separators = add_separator_chains(tri, pr.triangle_part);
+      straighten_separator_chains(tri, options.separator_straightening);
+      std::vector<std::int32_t> parent;
+      split_constrained_interior_edges(tri, &parent);
+      triangle_part.resize(parent.size());
+      for (std::size_t t = 0; t < parent.size(); ++t) triangle_part[t] = pr.triangle_part[static_cast<std::size_t>(parent[t])];
+      pr.triangle_part = triangle_part;
+      if (options.keep_partition) result.background = tri;
+    } else {
+      triangle_part = pr.triangle_part;
+      if (options.keep_partition) {
+        result.background = tri;
+        st.separators = add_separator_chains(result.background, triangle_part);
+      }
+    }
     result.partition = std::move(pr);
     st.seconds_partition = seconds_since(t0);
   }
   st.triangles = tri.triangles.size();
   st.triangle_vertices = tri.vertices.size();
 
-  // Rest shape in lattice units (1 = one quad edge), centred and pre-oriented.
   t0 = std::chrono::steady_clock::now();
-  DeformProblem problem;
-  problem.triangles = tri.triangles;
-  std::vector<std::array<std::int32_t, 2>> ring_edges;
-  for (const TriChain& ch : tri.chains) {
-    const int n = static_cast<int>(ch.vertices.size());
-    const int m = ch.closed ? n : n - 1;
-    // Separators are pulled to the axes like the boundary: every subregion must become a poly-square.
-    const double w = ch.kind == TriChain::Kind::feature ? options.deform.feature_weight : options.deform.boundary_weight;
-    for (int i = 0; i < m; ++i) {
-      const std::int32_t a = ch.vertices[i], b = ch.vertices[(i + 1) % n];
-      problem.aligned.push_back({a, b, w});
-      if (ch.kind == TriChain::Kind::ring) ring_edges.push_back({a, b});
-    }
+  if (options.composition == MapComposition::ppm && result.partition) {
+    result.mesh = map_piecewise(tri, triangle_part, result.partition->parts, options, name, st);
+    st.quads = result.mesh.quads.size();
+    return result;
   }
-  const Box2 box = [&] { Box2 b; for (Vec2 p : tri.vertices) b.add(p); return b; }();
-  const Vec2 centre = 0.5 * (box.lo + box.hi);
-  const double theta = options.preorient ? preorientation_angle(tri.vertices, ring_edges) : 0.0;
-  st.rotation_deg = theta * 180.0 / std::numbers::pi;
-  const double c = std::cos(theta), s = std::sin(theta);
-  problem.rest.reserve(tri.vertices.size());
-  for (Vec2 p : tri.vertices) {
-    const Vec2 q = p - centre;
-    problem.rest.push_back({(c * q.x - s * q.y) / h, (s * q.x + c * q.y) / h});
-  }
-  std::vector<Vec2> x = problem.rest;
-  st.deform = deform_to_polysquare(problem, options.deform, x);
+  MappedMesh mm = deform_mesh(tri, options, false);
+  st.rotation_deg = mm.rotation_deg;
+  st.deform = mm.stats;
   st.seconds_deform = seconds_since(t0);
 
   t0 = std::chrono::steady_clock::now();
-  Layout layout = build_layout(tri, tri.vertices, x, options.layout, name);
+  Layout layout = build_layout(tri, tri.vertices, mm.x, options.layout, name);
   st.break_points = layout.break_vertex.size();
   st.segments = layout.segments.size();
-  st.quantize = quantize_layout(layout, x, options.quantize, name);
+  st.quantize = quantize_layout(layout, mm.x, options.quantize, name);
   if (const std::string problem_text = check_layout(layout); !problem_text.empty())
     throw MeshingError(name + ": the quantized poly-square is not valid: " + problem_text);
   st.seconds_quantize = seconds_since(t0);
 
   t0 = std::chrono::steady_clock::now();
-  std::vector<Vec2> targets;
-  std::vector<std::uint8_t> mask;
-  polysquare_targets(tri, x, layout, targets, mask);
-  if (!move_constrained_vertices(problem, options.deform, mask, targets, x))
-    throw MeshingError(name + ": the deformation cannot reach the quantized poly-square without inverting triangles");
+  snap_to_layout(tri, mm, layout, options, name);
   st.seconds_snap = seconds_since(t0);
 
   t0 = std::chrono::steady_clock::now();
-  result.mesh = extract_quads(tri, tri.vertices, x, layout, name, triangle_part.empty() ? nullptr : &triangle_part);
+  result.mesh = extract_quads(tri, tri.vertices, mm.x, layout, name, triangle_part.empty() ? nullptr : &triangle_part);
   st.quads = result.mesh.quads.size();
   st.seconds_extract = seconds_since(t0);
   return result;

@@ -38,43 +38,31 @@ std::vector<int> axis_classes(const Layout& layout, int axis, int& ncls) {
   return cls;
 }
 
-// coordinate(hi) - coordinate(lo) >= 1 along `axis`: keeps apart two pieces of the layout that overlapped.
+// coordinate(hi) - coordinate(lo) >= 1 along `axis` in one layout: keeps apart two pieces that overlapped.
 struct Separation {
-  int axis, lo, hi;
+  int layout, axis, lo, hi;
   bool operator==(const Separation&) const = default;
 };
 
-// Solves one axis. Returns lattice coordinates of every break point along `axis`.
-std::vector<long long> solve_axis(const Layout& layout, const std::vector<Vec2>& deformed, int axis,
-                                  const std::vector<Separation>& separations, const QuantizeOptions& options,
-                                  const std::string& part_name, QuantizeStats& stats) {
-  const int nb = static_cast<int>(layout.break_vertex.size());
-  int ncls = 0;
-  const std::vector<int> cls = axis_classes(layout, axis, ncls);
-  // Mean deformed coordinate of each class: the anchor of the weak position term.
-  std::vector<double> anchor(ncls, 0.0);
-  std::vector<int> members(ncls, 0);
-  for (int b = 0; b < nb; ++b) {
-    const Vec2 p = deformed[layout.break_vertex[b]];
-    anchor[cls[b]] += axis == 0 ? p.x : p.y;
-    members[cls[b]]++;
-  }
-  for (int c = 0; c < ncls; ++c) anchor[c] = std::round(anchor[c] / members[c]);
+// The joint integer program over several layouts (PPM subregions, each in its own frame): one integer
+// coordinate per class of break points per axis per layout; every segment's length n = sign * (end - start)
+// within [t / c, c t] and near t (deviation columns); coupled segments (the two sides of an interface) get the
+// same n. Without couplings the matrix is totally unimodular and the simplex optimum is integral; with them,
+// GLPK's branch-and-cut finishes from the simplex optimum.
+struct JointProblem {
+  std::vector<Layout*> layouts;
+  std::vector<const std::vector<Vec2>*> deformed;
+  std::vector<std::array<std::vector<int>, 2>> cls;  // per layout, per axis: class of each break point
+  std::vector<std::array<int, 2>> ncls, col0;        // class counts and first column per layout and axis
+};
 
+void solve_joint(JointProblem& jp, const std::vector<SegmentCoupling>& couplings,
+                 const std::vector<Separation>& separations, const QuantizeOptions& options,
+                 const std::string& part_name, QuantizeStats& stats) {
   std::unique_ptr<glp_prob, void (*)(glp_prob*)> lp(glp_create_prob(), glp_delete_prob);
   glp_prob* P = lp.get();
   glp_set_obj_dir(P, GLP_MIN);
-  // Columns: class coordinates X_c (integer), deviation u_s per segment, deviation v_c per class.
-  glp_add_cols(P, ncls);
-  for (int c = 0; c < ncls; ++c) {
-    glp_set_col_bnds(P, c + 1, GLP_DB, -1e8, 1e8);
-  }
-  std::vector<int> seg_idx;
-  for (std::size_t k = 0; k < layout.segments.size(); ++k)
-    if (label_axis(layout.segments[k].label) == axis) seg_idx.push_back(static_cast<int>(k));
-  const int nseg = static_cast<int>(seg_idx.size());
-  const int u0 = glp_add_cols(P, nseg);
-  const int v0 = glp_add_cols(P, ncls);
+  const bool integer = !couplings.empty();
   std::vector<int> ia{0}, ja{0};
   std::vector<double> ar{0.0};
   auto add_row = [&](std::initializer_list<std::pair<int, double>> terms, int type, double lo, double hi) {
@@ -82,65 +70,104 @@ std::vector<long long> solve_axis(const Layout& layout, const std::vector<Vec2>&
     glp_set_row_bnds(P, row, type, lo, hi);
     for (auto [col, val] : terms) { ia.push_back(row); ja.push_back(col); ar.push_back(val); }
   };
-  for (int k = 0; k < nseg; ++k) {
-    const LayoutSegment& s = layout.segments[seg_idx[k]];
-    const int ca = cls[s.break_a], cb = cls[s.break_b];
-    if (ca == cb)
-      throw MeshingError(part_name + ": quantization is infeasible: a side of the poly-square (chain " +
-                         std::to_string(s.chain) + ") would have zero length");
-    const double sg = label_sign(s.label);
-    const int u = u0 + k;
-    glp_set_col_bnds(P, u, GLP_LO, 0.0, 0.0);
-    const double w = 1.0 / std::max(s.target, 1.0);
-    glp_set_obj_coef(P, u, w);
-    // Integer right-hand sides keep the LP vertex integral (the matrix is totally unimodular).
-    const double t = std::max(std::round(s.target), 1.0);
-    // n = sg (X_b - X_a) in [lo, hi] ; u >= n - t ; u >= t - n
-    const double lo = std::max(1.0, std::ceil(t / options.max_side_change));
-    const double hi = std::max(lo, std::floor(t * options.max_side_change));
-    add_row({{cb + 1, sg}, {ca + 1, -sg}}, GLP_DB, lo, hi);
-    add_row({{u, 1.0}, {cb + 1, -sg}, {ca + 1, sg}}, GLP_LO, -t, 0.0);
-    add_row({{u, 1.0}, {cb + 1, sg}, {ca + 1, -sg}}, GLP_LO, t, 0.0);
+  auto col = [&](std::size_t l, int axis, int b) { return jp.col0[l][axis] + jp.cls[l][axis][b]; };
+  // Class coordinate columns with the weak pull of each class towards its mean deformed coordinate (anchors
+  // pieces, such as interior features, that no segment ties to the boundary).
+  for (std::size_t l = 0; l < jp.layouts.size(); ++l) {
+    const Layout& layout = *jp.layouts[l];
+    const int nb = static_cast<int>(layout.break_vertex.size());
+    for (int axis = 0; axis < 2; ++axis) {
+      const int ncls = jp.ncls[l][axis];
+      jp.col0[l][axis] = glp_add_cols(P, ncls);
+      std::vector<double> anchor(ncls, 0.0);
+      std::vector<int> members(ncls, 0);
+      for (int b = 0; b < nb; ++b) {
+        const Vec2 p = (*jp.deformed[l])[layout.break_vertex[b]];
+        anchor[jp.cls[l][axis][b]] += axis == 0 ? p.x : p.y;
+        members[jp.cls[l][axis][b]]++;
+      }
+      const int v0 = glp_add_cols(P, ncls);
+      for (int c = 0; c < ncls; ++c) {
+        const int xc = jp.col0[l][axis] + c;
+        glp_set_col_bnds(P, xc, GLP_DB, -1e8, 1e8);
+        if (integer) glp_set_col_kind(P, xc, GLP_IV);
+        const double a = std::round(anchor[c] / members[c]);
+        glp_set_col_bnds(P, v0 + c, GLP_LO, 0.0, 0.0);
+        glp_set_obj_coef(P, v0 + c, options.position_weight);
+        add_row({{v0 + c, 1.0}, {xc, -1.0}}, GLP_LO, -a, 0.0);
+        add_row({{v0 + c, 1.0}, {xc, 1.0}}, GLP_LO, a, 0.0);
+      }
+    }
+    for (std::size_t k = 0; k < layout.segments.size(); ++k) {
+      const LayoutSegment& s = layout.segments[k];
+      const int axis = label_axis(s.label);
+      const int xa = col(l, axis, s.break_a), xb = col(l, axis, s.break_b);
+      if (xa == xb)
+        throw MeshingError(part_name + ": quantization is infeasible: a side of the poly-square (chain " +
+                           std::to_string(s.chain) + ") would have zero length");
+      const double sg = label_sign(s.label);
+      const int u = glp_add_cols(P, 1);
+      glp_set_col_bnds(P, u, GLP_LO, 0.0, 0.0);
+      glp_set_obj_coef(P, u, 1.0 / std::max(s.target, 1.0));
+      // Integer right-hand sides keep the LP vertex integral (the matrix is totally unimodular).
+      const double t = std::max(std::round(s.target), 1.0);
+      // n = sg (X_b - X_a) in [lo, hi] ; u >= n - t ; u >= t - n
+      const double lo = std::max(1.0, std::ceil(t / options.max_side_change));
+      const double hi = std::max(lo, std::floor(t * options.max_side_change));
+      add_row({{xb, sg}, {xa, -sg}}, GLP_DB, lo, hi);
+      add_row({{u, 1.0}, {xb, -sg}, {xa, sg}}, GLP_LO, -t, 0.0);
+      add_row({{u, 1.0}, {xb, sg}, {xa, -sg}}, GLP_LO, t, 0.0);
+    }
+  }
+  for (const SegmentCoupling& c : couplings) {
+    const LayoutSegment& s = jp.layouts[c.layout_a]->segments[c.segment_a];
+    const LayoutSegment& t = jp.layouts[c.layout_b]->segments[c.segment_b];
+    const double ss = label_sign(s.label), st = label_sign(t.label);
+    const int sa = col(c.layout_a, label_axis(s.label), s.break_a), sb = col(c.layout_a, label_axis(s.label), s.break_b);
+    const int ta = col(c.layout_b, label_axis(t.label), t.break_a), tb = col(c.layout_b, label_axis(t.label), t.break_b);
+    add_row({{sb, ss}, {sa, -ss}, {tb, -st}, {ta, st}}, GLP_FX, 0.0, 0.0);
   }
   for (const Separation& sep : separations)
-    if (sep.axis == axis) add_row({{cls[sep.hi] + 1, 1.0}, {cls[sep.lo] + 1, -1.0}}, GLP_LO, 1.0, 0.0);
-  for (int c = 0; c < ncls; ++c) {
-    const int v = v0 + c;
-    glp_set_col_bnds(P, v, GLP_LO, 0.0, 0.0);
-    glp_set_obj_coef(P, v, options.position_weight);
-    add_row({{v, 1.0}, {c + 1, -1.0}}, GLP_LO, -anchor[c], 0.0);
-    add_row({{v, 1.0}, {c + 1, 1.0}}, GLP_LO, anchor[c], 0.0);
-  }
+    add_row({{col(sep.layout, sep.axis, sep.hi), 1.0}, {col(sep.layout, sep.axis, sep.lo), -1.0}}, GLP_LO, 1.0, 0.0);
   glp_load_matrix(P, static_cast<int>(ia.size()) - 1, ia.data(), ja.data(), ar.data());
-  // The constraint matrix is a network matrix plus unit columns, hence totally unimodular: with integer
-  // right-hand sides the simplex optimum is integral, so no branch-and-bound is needed.
   glp_smcp parm;
   glp_init_smcp(&parm);
   parm.presolve = GLP_ON;
   parm.msg_lev = GLP_MSG_OFF;
   parm.tm_lim = options.time_limit_ms;
-  const int ret = glp_simplex(P, &parm);
-  if (ret != 0 || glp_get_status(P) != GLP_OPT)
-    throw MeshingError(part_name + ": quantization of the " + (axis == 0 ? std::string("x") : std::string("y")) +
-                       " sides has no integer solution with every side within a factor " + std::to_string(options.max_side_change) +
-                       " of its length (the labelled sides cannot close into a poly-square)");
-  for (int c = 0; c < ncls; ++c) {
-    const double v = glp_get_col_prim(P, c + 1);
-    if (std::abs(v - std::round(v)) > 1e-6)
-      throw MeshingError(part_name + ": quantization returned a fractional coordinate " + std::to_string(v));
+  const std::string infeasible = part_name + ": quantization has no integer solution with every side within a factor " +
+                                 std::to_string(options.max_side_change) +
+                                 " of its length (the labelled sides cannot close into poly-squares)";
+  if (glp_simplex(P, &parm) != 0 || glp_get_status(P) != GLP_OPT) throw MeshingError(infeasible);
+  auto value = [&](int c) { return integer ? glp_mip_col_val(P, c) : glp_get_col_prim(P, c); };
+  if (integer) {
+    glp_iocp iparm;
+    glp_init_iocp(&iparm);
+    iparm.msg_lev = GLP_MSG_OFF;
+    iparm.tm_lim = options.time_limit_ms;
+    if (glp_intopt(P, &iparm) != 0 || (glp_mip_status(P) != GLP_OPT && glp_mip_status(P) != GLP_FEAS))
+      throw MeshingError(infeasible);
   }
-  std::vector<long long> out(nb);
-  for (int b = 0; b < nb; ++b) out[b] = std::llround(glp_get_col_prim(P, cls[b] + 1));
-  for (int k = 0; k < nseg; ++k) {
-    const LayoutSegment& s = layout.segments[seg_idx[k]];
-    const double n = std::abs(static_cast<double>(out[s.break_b] - out[s.break_a]));
-    stats.max_relative_deviation = std::max(stats.max_relative_deviation, std::abs(n - s.target) / std::max(s.target, 1.0));
+  for (std::size_t l = 0; l < jp.layouts.size(); ++l) {
+    Layout& layout = *jp.layouts[l];
+    const std::size_t nb = layout.break_vertex.size();
+    layout.lattice.resize(nb);
+    for (std::size_t b = 0; b < nb; ++b)
+      for (int axis = 0; axis < 2; ++axis) {
+        const double v = value(col(l, axis, static_cast<int>(b)));
+        if (std::abs(v - std::round(v)) > 1e-6)
+          throw MeshingError(part_name + ": quantization returned a fractional coordinate " + std::to_string(v));
+        layout.lattice[b][static_cast<std::size_t>(axis)] = std::llround(v);
+      }
+    for (const LayoutSegment& s : layout.segments) {
+      const auto pa = layout.lattice[s.break_a], pb = layout.lattice[s.break_b];
+      const double n = static_cast<double>(std::llabs(pb[0] - pa[0]) + std::llabs(pb[1] - pa[1]));
+      stats.max_relative_deviation = std::max(stats.max_relative_deviation, std::abs(n - s.target) / std::max(s.target, 1.0));
+    }
+    stats.segments += static_cast<int>(layout.segments.size());
+    stats.variables += jp.ncls[l][0] + jp.ncls[l][1];
   }
-  stats.segments += nseg;
-  stats.variables += ncls;
-  return out;
 }
-
 
 // The separation that holds with the largest margin in the deformed plane, between two sets of break points
 // (the ends of two overlapping sides, or two break points on one lattice point). Returns false if none is
@@ -163,7 +190,7 @@ bool best_separation(const Layout& layout, const std::vector<Vec2>& deformed, co
       const int lo = extreme(first, true), hi = extreme(second, false);
       if (cls[axis][lo] == cls[axis][hi]) continue;
       const double margin = coord(hi) - coord(lo);
-      if (margin > best) { best = margin; out = {axis, lo, hi}; }
+      if (margin > best) { best = margin; out = {out.layout, axis, lo, hi}; }
     }
   }
   return best > -INFINITY;
@@ -171,46 +198,55 @@ bool best_separation(const Layout& layout, const std::vector<Vec2>& deformed, co
 
 }  // namespace
 
-QuantizeStats quantize_layout(Layout& layout, const std::vector<Vec2>& deformed, const QuantizeOptions& options,
-                              const std::string& part_name) {
+QuantizeStats quantize_layouts(const std::vector<Layout*>& layouts, const std::vector<const std::vector<Vec2>*>& deformed,
+                               const std::vector<SegmentCoupling>& couplings, const QuantizeOptions& options,
+                               const std::string& part_name) {
   glp_term_out(GLP_OFF);
-  std::array<std::vector<int>, 2> cls;
-  int ncls = 0;
-  cls[0] = axis_classes(layout, 0, ncls);
-  cls[1] = axis_classes(layout, 1, ncls);
+  JointProblem jp;
+  jp.layouts = layouts;
+  jp.deformed = deformed;
+  jp.cls.resize(layouts.size());
+  jp.ncls.resize(layouts.size());
+  jp.col0.resize(layouts.size());
+  for (std::size_t l = 0; l < layouts.size(); ++l)
+    for (int axis = 0; axis < 2; ++axis) jp.cls[l][axis] = axis_classes(*layouts[l], axis, jp.ncls[l][axis]);
   // Solve; where sides overlap or corners coincide, add the separation the deformed layout shows and solve
   // again (a few rounds settle it: each round only adds constraints the deformed plane satisfies).
   std::vector<Separation> separations;
   QuantizeStats stats;
   for (int round = 0;; ++round) {
     stats = QuantizeStats{};
-    const auto xs = solve_axis(layout, deformed, 0, separations, options, part_name, stats);
-    const auto ys = solve_axis(layout, deformed, 1, separations, options, part_name, stats);
-    layout.lattice.resize(layout.break_vertex.size());
-    for (std::size_t b = 0; b < xs.size(); ++b) layout.lattice[b] = {xs[b], ys[b]};
+    solve_joint(jp, couplings, separations, options, part_name, stats);
     if (round >= options.max_separation_rounds) break;
-    const auto conflicts = find_conflicts(layout, 64);
     std::size_t added = 0;
-    for (const LayoutConflict& c : conflicts) {
-      std::vector<int> A, B;
-      if (c.seg_a >= 0) {
-        A = {layout.segments[c.seg_a].break_a, layout.segments[c.seg_a].break_b};
-        B = {layout.segments[c.seg_b].break_a, layout.segments[c.seg_b].break_b};
-      } else {
-        A = {c.break_a};
-        B = {c.break_b};
-      }
-      Separation sep{};
-      if (best_separation(layout, deformed, A, B, cls, sep) &&
-          std::find(separations.begin(), separations.end(), sep) == separations.end()) {
-        separations.push_back(sep);
-        ++added;
+    for (std::size_t l = 0; l < layouts.size(); ++l) {
+      const Layout& layout = *layouts[l];
+      for (const LayoutConflict& c : find_conflicts(layout, 64)) {
+        std::vector<int> A, B;
+        if (c.seg_a >= 0) {
+          A = {layout.segments[c.seg_a].break_a, layout.segments[c.seg_a].break_b};
+          B = {layout.segments[c.seg_b].break_a, layout.segments[c.seg_b].break_b};
+        } else {
+          A = {c.break_a};
+          B = {c.break_b};
+        }
+        Separation sep{static_cast<int>(l), 0, 0, 0};
+        if (best_separation(layout, *deformed[l], A, B, jp.cls[l], sep) &&
+            std::find(separations.begin(), separations.end(), sep) == separations.end()) {
+          separations.push_back(sep);
+          ++added;
+        }
       }
     }
     if (added == 0) break;
   }
   stats.separations = separations.size();
   return stats;
+}
+
+QuantizeStats quantize_layout(Layout& layout, const std::vector<Vec2>& deformed, const QuantizeOptions& options,
+                              const std::string& part_name) {
+  return quantize_layouts({&layout}, {&deformed}, {}, options, part_name);
 }
 
 std::vector<LayoutConflict> find_conflicts(const Layout& layout, std::size_t max_conflicts) {

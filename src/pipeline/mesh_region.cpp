@@ -222,7 +222,8 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
       {"options", {{"size", options.size}, {"threads", options.threads}, {"seed", options.seed},
                    {"corner_threshold_deg", options.corner_threshold_deg}, {"max_quads", options.max_quads},
                    {"min_scaled_jacobian", options.min_scaled_jacobian}, {"max_edge_ratio", options.max_edge_ratio},
-                   {"map", options.parts == 1 ? "single poly-square per part" : "gpm"}, {"subregions_per_part", options.parts},
+                   {"map", options.parts == 1 ? "single poly-square per part"
+                                              : (map.composition == MapComposition::gpm ? "gpm" : "ppm")}, {"subregions_per_part", options.parts},
                    {"amips_alpha", map.deform.amips_alpha}, {"amips_s", map.deform.amips_s},
                    {"boundary_weight", map.deform.boundary_weight}, {"feature_weight", map.deform.feature_weight},
                    {"parameterization_ratio", map.parameterization_ratio}}},
@@ -233,7 +234,7 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
       {"fallbacks", [&] {
          nlohmann::json f = nlohmann::json::array();
          for (std::size_t k = 0; k < fallbacks.size(); ++k)
-           if (!fallbacks[k].empty()) f.push_back({{"part", k}, {"gpm_error", fallbacks[k]}, {"used", "single poly-square"}});
+           if (!fallbacks[k].empty()) f.push_back({{"part", k}, {"partitioned_map_error", fallbacks[k]}, {"used", "single poly-square"}});
          return f;
        }()},
       {"simplify", {{"fraction_of_size", options.simplify}, {"vertices_before", simplify_stats.vertices_before},

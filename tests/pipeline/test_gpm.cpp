@@ -18,6 +18,7 @@ MeshResult gpm(const char* name, double size, int parts, int threads = 0) {
   o.parts = parts;
   o.threads = threads;
   o.keep_partition = true;
+  o.map.composition = MapComposition::gpm;
   return mesh_region(read_region(std::string(POLYSQUARE_DATA_DIR) + "/cases/" + name + ".geojson"), o);
 }
 }  // namespace
@@ -57,6 +58,6 @@ TEST(Gpm, FailedPartitionFallsBackToOnePolySquareAndSaysSo) {
   const MeshResult r = gpm("letter_M", 2.0, 2);
   EXPECT_TRUE(check_invariants(r.mesh).ok());
   ASSERT_EQ(r.report["fallbacks"].size(), 1u);
-  EXPECT_NE(r.report["fallbacks"][0]["gpm_error"].get<std::string>().find("letter_M"), std::string::npos);
+  EXPECT_NE(r.report["fallbacks"][0]["partitioned_map_error"].get<std::string>().find("letter_M"), std::string::npos);
   EXPECT_EQ(std::set<std::int32_t>(r.mesh.quad_part.begin(), r.mesh.quad_part.end()).size(), 1u);
 }

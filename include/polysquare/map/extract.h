@@ -17,15 +17,17 @@ namespace polysquare {
 /// points map exactly to their input vertex. Boundary edges carry their ring index, feature edges their curve
 /// index; separator nodes are interior and separator edges untagged. quad_part is the part (from
 /// `triangle_part`, #triangles, when given) of the triangle holding the quad's centre. Throws MeshingError
-/// naming `part_name` if a lattice node cannot be located in the deformed mesh.
+/// naming `part_name` if a lattice node cannot be located in the deformed mesh. `side_nodes`, when given, gets
+/// the number of leading nodes that lie on the sides (the rest are interior lattice nodes).
 QuadMesh extract_quads(const TriMesh& mesh, const std::vector<Vec2>& original, const std::vector<Vec2>& snapped,
                        const Layout& layout, const std::string& part_name,
-                       const std::vector<std::int32_t>* triangle_part = nullptr);
+                       const std::vector<std::int32_t>* triangle_part = nullptr, std::size_t* side_nodes = nullptr);
 
 /// Target positions of every chain vertex on the quantized poly-square: break points on their lattice point,
-/// the vertices between them spread along the side in proportion to their deformed arc length.
+/// the vertices between them spread along the side in proportion to their deformed arc length (input arc length
+/// on interfaces, so that both subregions sharing one agree).
 /// `mask` gets 1 for every vertex that received a target.
-void polysquare_targets(const TriMesh& mesh, const std::vector<Vec2>& deformed, const Layout& layout,
-                        std::vector<Vec2>& targets, std::vector<std::uint8_t>& mask);
+void polysquare_targets(const TriMesh& mesh, const std::vector<Vec2>& original, const std::vector<Vec2>& deformed,
+                        const Layout& layout, std::vector<Vec2>& targets, std::vector<std::uint8_t>& mask);
 
 }  // namespace polysquare

@@ -2,6 +2,7 @@
 // layout, integer quantization, snapping and quad extraction.
 #pragma once
 
+#include <cstdint>
 #include <optional>
 #include <string>
 
@@ -15,6 +16,12 @@
 
 namespace polysquare {
 
+/// How the subregions of a partitioned part are mapped (paper Sec. 5).
+enum class MapComposition : std::uint8_t {
+  gpm,  ///< Global Poly-square Map: one frame, the separators are sides of one poly-square (no interior singularities)
+  ppm,  ///< Piecewise Poly-square Map: one frame per subregion, interfaces matched by count (singularities at junctions)
+};
+
 struct PolysquareMapOptions {
   double size = 1.0;               ///< target quad edge length h (region units); must be set by the caller
   double parameterization_ratio = 1.0;  ///< background triangle edge length on rings and features / h
@@ -27,6 +34,7 @@ struct PolysquareMapOptions {
   PartitionOptions partition{.parts = 1};  ///< subregions of the part (GPM); parts = 1: one poly-square
   int separator_straightening = 0;   ///< smoothing sweeps over the separators zig-zag (0 = keep triangle edges; 20
                                      ///< changed SJ min by -0.09 to +0.01 on the cases and broke dam_channel k = 4)
+  MapComposition composition = MapComposition::ppm;  ///< used when partition.parts != 1
   bool keep_partition = false;     ///< keep the background triangulation in the result (for the partition picture)
   DeformOptions deform;
   LayoutOptions layout;
@@ -56,6 +64,23 @@ struct PartMapResult {
 /// Pre-orientation angle (radians) minimizing sum over edges of len * nx^2 ny^2 (eq. 11). With the normal at
 /// angle phi, nx^2 ny^2 = (1 - cos 4 phi) / 8, so the optimum is closed-form: theta = -arg(sum len e^{4 i phi})/4.
 double preorientation_angle(const std::vector<Vec2>& points, const std::vector<std::array<std::int32_t, 2>>& edges);
+
+/// A triangulation deformed towards a poly-square, in lattice units (1 = one element).
+struct MappedMesh {
+  DeformProblem problem;  ///< rest shape (centred, pre-oriented, scaled by 1 / h), triangles, aligned edges
+  std::vector<Vec2> x;    ///< deformed positions
+  double rotation_deg = 0.0;
+  DeformStats stats;
+};
+
+/// Deforms `tri` towards a poly-square: every chain edge is pulled to an axis. The pre-orientation (eq. 11) is
+/// computed over the ring edges, or with `orient_all_chains` over every chain but interior features.
+MappedMesh deform_mesh(const TriMesh& tri, const PolysquareMapOptions& options, bool orient_all_chains);
+
+/// Moves the chain vertices of a deformed mesh onto the quantized layout without inverting a triangle.
+/// Throws MeshingError naming `name` when no valid path exists.
+void snap_to_layout(const TriMesh& tri, MappedMesh& mm, const Layout& layout, const PolysquareMapOptions& options,
+                    const std::string& name);
 
 /// Meshes one part with a single poly-square map. Throws MeshingError naming the part when the map fails.
 PartMapResult map_part(const Region& region, const RegionPart& part, const PolysquareMapOptions& options);

@@ -30,6 +30,15 @@ struct LayoutConflict {
   std::array<long long, 2> at{};
 };
 
+/// Two segments of different layouts (the two sides of a PPM interface) that must get the same number of
+/// elements.
+struct SegmentCoupling {
+  std::size_t layout_a = 0;
+  int segment_a = 0;
+  std::size_t layout_b = 0;
+  int segment_b = 0;
+};
+
 /// At most max_conflicts conflicts of the quantized layout.
 std::vector<LayoutConflict> find_conflicts(const Layout& layout, std::size_t max_conflicts);
 
@@ -41,6 +50,13 @@ std::vector<LayoutConflict> find_conflicts(const Layout& layout, std::size_t max
 /// solved again. Fills layout.lattice. Throws MeshingError naming `part_name` when there is no solution.
 QuantizeStats quantize_layout(Layout& layout, const std::vector<Vec2>& deformed, const QuantizeOptions& options,
                               const std::string& part_name);
+
+/// Quantizes several layouts (PPM subregions, each in its own frame) in one integer program whose coupled
+/// segments get equal element counts; each layout must close and keep its sides apart as in quantize_layout.
+/// Without couplings the layouts are independent and the program is the totally unimodular one above.
+QuantizeStats quantize_layouts(const std::vector<Layout*>& layouts, const std::vector<const std::vector<Vec2>*>& deformed,
+                               const std::vector<SegmentCoupling>& couplings, const QuantizeOptions& options,
+                               const std::string& part_name);
 
 /// Checks that the quantized layout is a valid poly-square: no zero-length segment, and segments of different
 /// chains or non-adjacent segments of one chain meet only at shared break points. Returns an empty string when

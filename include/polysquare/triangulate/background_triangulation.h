@@ -28,6 +28,8 @@ struct TriChain {
   bool closed = false;       ///< closed chains do not repeat their first vertex
   std::vector<std::int32_t> vertices;
   std::vector<std::uint8_t> is_input;  ///< per chain vertex: 1 if it is an input vertex (not a Steiner point)
+  int interface = -1;        ///< PPM subregion meshes: the neighbouring subregion across this piece of the
+                             ///< boundary (both sides must get the same nodes); -1 elsewhere
 };
 
 /// A triangle mesh of one part in flat arrays.
@@ -36,6 +38,9 @@ struct TriMesh {
   std::vector<std::array<std::int32_t, 3>> triangles;  ///< #T vertex indices, counter-clockwise
   std::vector<TriChain> chains;                        ///< rings of the part, then its feature curves
   std::vector<std::int32_t> feature_point_vertices;    ///< vertices of isolated feature points
+  /// Closed boundary loops made of several open chains (PPM subregions: ring pieces and interfaces), each a
+  /// cyclic list of chain indices traversed forward; the labelling closes every loop as one poly-square loop.
+  std::vector<std::vector<int>> loops;
 };
 
 /// One polygon part of a region: the indices of its rings and of the feature curves and points inside it.
