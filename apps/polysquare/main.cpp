@@ -60,7 +60,7 @@ int run_mesh(const MeshArgs& args) {
   }
   for (const auto& f : result.report["fallbacks"])
     std::cerr << "warning: part " << f["part"].get<std::size_t>() << " meshed as one poly-square: "
-              << f["gpm_error"].get<std::string>() << "\n";
+              << f["partitioned_map_error"].get<std::string>() << "\n";
   std::cout << "polysquare: " << result.mesh.quads.size() << " quads, " << result.mesh.nodes.size() << " nodes -> "
             << args.output << "\n"
             << format_quality_text(quality, &domain);

@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
+#include <cstdlib>
 #include <cmath>
 #include <map>
 #include <tuple>
@@ -340,6 +342,21 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
     layouts[p] = build_layout(subs[p].mesh, subs[p].mesh.vertices, mapped[p].x, options.layout, sub_name(p));
   });
   st.seconds_deform = seconds_since(t0);
+  if (std::getenv("PS_DEBUG")) {
+    for (std::size_t p = 0; p < n; ++p) {
+      const TriMesh& m = subs[p].mesh;
+      std::fprintf(stderr, "subregion %zu: %zu tris, %zu chains, %zu loops\n", p, m.triangles.size(), m.chains.size(), m.loops.size());
+      for (std::size_t c = 0; c < m.chains.size(); ++c) {
+        const auto& ch = m.chains[c];
+        std::fprintf(stderr, "  chain %zu kind %d idx %d if %d closed %d n %zu (%.2f,%.2f)->(%.2f,%.2f) labels:", c, (int)ch.kind, ch.index, ch.interface, (int)ch.closed, ch.vertices.size(),
+          m.vertices[ch.vertices.front()].x, m.vertices[ch.vertices.front()].y, m.vertices[ch.vertices.back()].x, m.vertices[ch.vertices.back()].y);
+        for (int l : layouts[p].chain_labels[c]) std::fprintf(stderr, "%d", l);
+        std::fprintf(stderr, "\n");
+      }
+      for (const auto& loop : m.loops) { std::fprintf(stderr, "  loop:"); for (int c : loop) std::fprintf(stderr, " %d", c); std::fprintf(stderr, "\n"); }
+      for (const auto& sg : layouts[p].segments) std::fprintf(stderr, "  seg chain %d label %d target %.2f breaks %d-%d\n", sg.chain, sg.label, sg.target, sg.break_a, sg.break_b);
+    }
+  }
   for (std::size_t p = 0; p < n; ++p) {
     st.deform.iterations += mapped[p].stats.iterations;
     st.deform.energy_before += mapped[p].stats.energy_before;
@@ -381,7 +398,21 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
     lp.push_back(&layouts[p]);
     dp.push_back(&mapped[p].x);
   }
-  st.quantize = quantize_layouts(lp, dp, couplings, options.quantize, name);
+  try {
+    st.quantize = quantize_layouts(lp, dp, couplings, options.quantize, name);
+  } catch (const MeshingError& joint) {
+    // Name the subregion that cannot close on its own; if each can, the interfaces cannot agree.
+    for (std::size_t p = 0; p < n; ++p) {
+      Layout alone = layouts[p];
+      try {
+        quantize_layout(alone, mapped[p].x, options.quantize, sub_name(p));
+      } catch (const MeshingError& e) {
+        throw MeshingError(std::string(e.what()) + " [" + std::to_string(layouts[p].segments.size()) + " sides]");
+      }
+    }
+    throw MeshingError(std::string(joint.what()) + ": every subregion closes alone, but not with equal counts on both "
+                       "sides of every interface");
+  }
   for (std::size_t p = 0; p < n; ++p)
     if (const std::string problem = check_layout(layouts[p]); !problem.empty())
       throw MeshingError(sub_name(p) + ": the quantized poly-square is not valid: " + problem);

@@ -106,17 +106,22 @@ void solve_joint(JointProblem& jp, const std::vector<SegmentCoupling>& couplings
         throw MeshingError(part_name + ": quantization is infeasible: a side of the poly-square (chain " +
                            std::to_string(s.chain) + ") would have zero length");
       const double sg = label_sign(s.label);
-      const int u = glp_add_cols(P, 1);
+      const int u = glp_add_cols(P, 2);  // u: deviation from t; w: deviation beyond the band [lo, hi]
       glp_set_col_bnds(P, u, GLP_LO, 0.0, 0.0);
       glp_set_obj_coef(P, u, 1.0 / std::max(s.target, 1.0));
+      glp_set_col_bnds(P, u + 1, GLP_LO, 0.0, 0.0);
+      glp_set_obj_coef(P, u + 1, options.outside_band_weight / std::max(s.target, 1.0));
       // Integer right-hand sides keep the LP vertex integral (the matrix is totally unimodular).
       const double t = std::max(std::round(s.target), 1.0);
-      // n = sg (X_b - X_a) in [lo, hi] ; u >= n - t ; u >= t - n
+      // n = sg (X_b - X_a) >= 1 ; u >= |n - t| ; w >= n - hi, w >= lo - n. The band is soft: a layout that only
+      // closes with a stretched side still gets counts, and the quality checks downstream judge the result.
       const double lo = std::max(1.0, std::ceil(t / options.max_side_change));
       const double hi = std::max(lo, std::floor(t * options.max_side_change));
-      add_row({{xb, sg}, {xa, -sg}}, GLP_DB, lo, hi);
+      add_row({{xb, sg}, {xa, -sg}}, GLP_LO, 1.0, 0.0);
       add_row({{u, 1.0}, {xb, -sg}, {xa, sg}}, GLP_LO, -t, 0.0);
       add_row({{u, 1.0}, {xb, sg}, {xa, -sg}}, GLP_LO, t, 0.0);
+      add_row({{u + 1, 1.0}, {xb, -sg}, {xa, sg}}, GLP_LO, -hi, 0.0);
+      add_row({{u + 1, 1.0}, {xb, sg}, {xa, -sg}}, GLP_LO, lo, 0.0);
     }
   }
   for (const SegmentCoupling& c : couplings) {
@@ -135,9 +140,8 @@ void solve_joint(JointProblem& jp, const std::vector<SegmentCoupling>& couplings
   parm.presolve = GLP_ON;
   parm.msg_lev = GLP_MSG_OFF;
   parm.tm_lim = options.time_limit_ms;
-  const std::string infeasible = part_name + ": quantization has no integer solution with every side within a factor " +
-                                 std::to_string(options.max_side_change) +
-                                 " of its length (the labelled sides cannot close into poly-squares)";
+  const std::string infeasible = part_name + ": quantization has no integer solution (the labelled sides cannot close "
+                                             "into poly-squares without overlapping)";
   if (glp_simplex(P, &parm) != 0 || glp_get_status(P) != GLP_OPT) throw MeshingError(infeasible);
   auto value = [&](int c) { return integer ? glp_mip_col_val(P, c) : glp_get_col_prim(P, c); };
   if (integer) {

@@ -10,8 +10,9 @@ namespace polysquare {
 struct QuantizeOptions {
   double position_weight = 1e-3;  ///< weak pull of each break point towards its deformed position (anchors
                                   ///< pieces, such as interior features, that no segment ties to the boundary)
-  double max_side_change = 2.5;   ///< a side of target length t gets between t / 2.5 and 2.5 t elements (and >= 1):
-                                  ///< a poly-square that only closes by collapsing a side is refused, not meshed
+  double max_side_change = 2.5;   ///< band [t / 2.5, 2.5 t] for a side of target length t (every side gets >= 1)
+  double outside_band_weight = 20.0;  ///< cost per element outside the band, relative to the cost inside it: the
+                                      ///< band is soft so that tight layouts still close; quality checks judge them
   int max_separation_rounds = 20; ///< rounds of re-solving with separations between overlapping sides
   int time_limit_ms = 20000;      ///< GLPK simplex time limit
 };
