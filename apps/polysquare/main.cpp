@@ -58,9 +58,19 @@ int run_mesh(const MeshArgs& args) {
     partition.triangle_part = result.background_part;
     write_partition_svg(args.partition_picture, result.background, partition);
   }
-  for (const auto& f : result.report["fallbacks"])
-    std::cerr << "warning: part " << f["part"].get<std::size_t>() << " meshed as one poly-square: "
-              << f["partitioned_map_error"].get<std::string>() << "\n";
+  // Which candidate each part kept, and why the explicitly requested one was not kept.
+  for (const auto& part : result.report["candidates"]) {
+    const bool explicit_parts = args.options.parts > 0;
+    for (const auto& c : part) {
+      if (c.contains("chosen")) {
+        if (part.size() > 1 && !explicit_parts)
+          std::cerr << "part " << c["part"] << ": " << c["subregions"] << " subregion(s) kept of " << part.size()
+                    << " candidates (scaled Jacobian min " << c["min_scaled_jacobian"] << ")\n";
+      } else if (explicit_parts && c.contains("error") && c["subregions"].get<int>() == args.options.parts) {
+        std::cerr << "warning: part " << c["part"] << " meshed as one poly-square: " << c["error"].get<std::string>() << "\n";
+      }
+    }
+  }
   std::cout << "polysquare: " << result.mesh.quads.size() << " quads, " << result.mesh.nodes.size() << " nodes -> "
             << args.output << "\n"
             << format_quality_text(quality, &domain);
@@ -100,7 +110,7 @@ int main(int argc, char** argv) {
   cmd_mesh->add_option("--report", mesh.report, "write a JSON report (options, timings, counts, quality)");
   cmd_mesh->add_option("--picture", mesh.picture, "write an SVG picture of the mesh coloured by scaled Jacobian");
   cmd_mesh->add_option("--parts", mesh.options.parts,
-                       "subregions per polygon part (1 = one poly-square per part, 0 = auto)")
+                       "subregions per polygon part (1 = one poly-square per part, 0 = try several counts and keep the best mesh)")
       ->capture_default_str()->check(CLI::NonNegativeNumber);
   cmd_mesh->add_option("--map", mesh.map,
                        "how subregions are mapped: ppm (a poly-square per subregion, singularities where they meet) or "

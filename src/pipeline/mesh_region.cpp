@@ -4,6 +4,7 @@
 #include <oneapi/tbb/info.h>
 #include <oneapi/tbb/parallel_for.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <optional>
@@ -12,6 +13,7 @@
 #include "polysquare/core/error.h"
 #include "polysquare/input/simplify.h"
 #include "polysquare/pipeline/invariants.h"
+#include "polysquare/quality/quality.h"
 #include "polysquare/triangulate/background_triangulation.h"
 
 namespace polysquare {
@@ -45,6 +47,99 @@ nlohmann::json part_json(const PartMapStats& s) {
                        {"quantize", s.seconds_quantize},
                        {"snap", s.seconds_snap},
                        {"extract", s.seconds_extract}}}};
+}
+
+double ring_area(const Region& region, const RegionPart& part) {
+  double a = 0.0;
+  for (int r : part.rings) {
+    const auto& pts = region.rings[static_cast<std::size_t>(r)].points;
+    for (std::size_t i = 0; i < pts.size(); ++i) a += 0.5 * cross(pts[i], pts[(i + 1) % pts.size()]);
+  }
+  return a;
+}
+
+// Subregion counts to try for one part, in order. An explicit --parts K is tried first and one poly-square
+// after it; automatic mode tries a range of small counts on parts small enough to afford it, and the count
+// from target_quads_per_part.
+std::vector<int> candidate_subregions(const Region& region, const RegionPart& part, const MeshOptions& options) {
+  const double quads = ring_area(region, part) / (options.size * options.size);
+  std::vector<int> ks;
+  auto add = [&](int k) { if (std::find(ks.begin(), ks.end(), k) == ks.end()) ks.push_back(k); };
+  if (options.parts > 0) {
+    add(options.parts);
+  } else {
+    add(std::max(1, static_cast<int>(std::lround(quads / static_cast<double>(options.target_quads_per_part)))));
+    if (quads <= static_cast<double>(options.search_quads))
+      for (int k : options.search_subregions)
+        if (quads / k >= 16.0) add(k);  // at least a 4 x 4 block per subregion
+  }
+  add(1);
+  return ks;
+}
+
+// One way of meshing a part: the map, then smoothing, then the checks every output must pass.
+struct Candidate {
+  std::optional<PartMapResult> result;
+  SmoothStats smooth;
+  double min_sj = -2.0, max_edge_ratio = 0.0;
+  std::size_t interior_singularities = 0;
+  std::string error;
+  nlohmann::json summary;
+
+  bool better_than(const Candidate& o) const {
+    if (std::abs(min_sj - o.min_sj) > 0.02) return min_sj > o.min_sj;  // quality first, within a margin
+    if (interior_singularities != o.interior_singularities) return interior_singularities < o.interior_singularities;
+    return min_sj > o.min_sj;
+  }
+};
+
+Candidate try_candidate(const Region& region, const RegionPart& part, const PolysquareMapOptions& map,
+                        const MeshOptions& options) {
+  Candidate c;
+  const int k = map.partition.parts;
+  c.summary = {{"part", part.part}, {"subregions", k}};
+  const std::string name = (region.source.empty() ? std::string("region") : region.source) + ": part " +
+                           std::to_string(part.part);
+  try {
+    PartMapResult r = map_part(region, part, map);
+    c.smooth = smooth_quads(r.mesh, options.smooth, &region);
+    const InvariantReport inv = check_invariants(r.mesh);
+    if (!inv.ok()) throw MeshingError(name + ": the mesh breaks an invariant (" + inv.first_problem + ")");
+    std::size_t worst = 0, longest = 0;
+    c.min_sj = 2.0;
+    for (std::size_t q = 0; q < r.mesh.quads.size(); ++q) {
+      if (const double sj = quad_min_corner_sj(r.mesh, q); sj < c.min_sj) { c.min_sj = sj; worst = q; }
+      double lmin = INFINITY, lmax = 0.0;
+      for (int e = 0; e < 4; ++e) {
+        const double l = distance(r.mesh.nodes[r.mesh.quads[q][e]], r.mesh.nodes[r.mesh.quads[q][(e + 1) % 4]]);
+        lmin = std::min(lmin, l);
+        lmax = std::max(lmax, l);
+      }
+      if (const double ratio = lmax / lmin; ratio > c.max_edge_ratio) { c.max_edge_ratio = ratio; longest = q; }
+    }
+    c.interior_singularities = compute_quality(r.mesh).interior_singularities;
+    c.summary["quads"] = r.mesh.quads.size();
+    c.summary["min_scaled_jacobian"] = c.min_sj;
+    c.summary["max_edge_ratio"] = c.max_edge_ratio;
+    c.summary["interior_singularities"] = c.interior_singularities;
+    if (c.max_edge_ratio > options.max_edge_ratio) {
+      const Vec2 p = r.mesh.nodes[r.mesh.quads[longest][0]];
+      throw MeshingError(name + ": the best mesh has a quad with edge ratio " + std::to_string(c.max_edge_ratio) +
+                         " at (" + std::to_string(p.x) + ", " + std::to_string(p.y) + "), above the maximum " +
+                         std::to_string(options.max_edge_ratio) + " (--max-edge-ratio)");
+    }
+    if (c.min_sj < options.min_scaled_jacobian) {
+      const Vec2 p = r.mesh.nodes[r.mesh.quads[worst][0]];
+      throw MeshingError(name + ": the best mesh has a quad with scaled Jacobian " + std::to_string(c.min_sj) + " at (" +
+                         std::to_string(p.x) + ", " + std::to_string(p.y) + "), below the minimum " +
+                         std::to_string(options.min_scaled_jacobian) + " (--min-sj)");
+    }
+    c.result = std::move(r);
+  } catch (const MeshingError& e) {
+    c.error = e.what();
+    c.summary["error"] = c.error;
+  }
+  return c;
 }
 
 }  // namespace
@@ -87,42 +182,41 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
   // Parts are independent: mesh them in parallel; results land in part order, so the output does not depend
   // on the thread count. A failure in one part is recorded and reported with all the others, never dropped.
   std::vector<std::optional<PartMapResult>> results(parts.size());
-  std::vector<std::string> errors(parts.size()), fallbacks(parts.size());
-  // One thread limit for every parallel stage (parts here, colours in smoothing).
+  std::vector<std::string> errors(parts.size());
+  std::vector<nlohmann::json> tried(parts.size());
+  std::vector<SmoothStats> smoothed(parts.size());
+  // One thread limit for every parallel stage (parts, candidates, subregions, colours in smoothing).
   const int threads = options.threads > 0 ? options.threads : static_cast<int>(oneapi::tbb::info::default_concurrency());
   oneapi::tbb::global_control limit(oneapi::tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
-  {
-    oneapi::tbb::parallel_for(std::size_t{0}, parts.size(), [&](std::size_t k) {
-      try {
-        PolysquareMapOptions part_map = map;
-        part_map.partition.parts = options.parts;
-        if (options.parts == 0) {  // from the expected number of quads of this part
-          double a = 0.0;
-          for (int r : parts[k].rings) {
-            const auto& pts = work->rings[static_cast<std::size_t>(r)].points;
-            for (std::size_t i = 0; i < pts.size(); ++i) a += 0.5 * cross(pts[i], pts[(i + 1) % pts.size()]);
-          }
-          part_map.partition.parts = std::max(1, static_cast<int>(std::lround(a / (options.size * options.size) /
-                                                                               static_cast<double>(options.target_quads_per_part))));
-        }
-        try {
-          results[k] = map_part(*work, parts[k], part_map);
-        } catch (const MeshingError& e) {
-          if (part_map.partition.parts == 1) throw;
-          // GPM over this partition failed: fall back to one poly-square for the part, and say so.
-          fallbacks[k] = e.what();
-          part_map.partition.parts = 1;
-          try {
-            results[k] = map_part(*work, parts[k], part_map);
-          } catch (const MeshingError& e2) {
-            throw MeshingError(fallbacks[k] + "; without partitioning: " + e2.what());
-          }
-        }
-      } catch (const std::exception& e) {
-        errors[k] = e.what();
-      }
+  oneapi::tbb::parallel_for(std::size_t{0}, parts.size(), [&](std::size_t k) {
+    const std::vector<int> ks = candidate_subregions(*work, parts[k], options);
+    std::vector<Candidate> cands(ks.size());
+    // Every candidate is meshed, smoothed and measured; the best valid one wins, so the choice depends only on
+    // the input and the options, never on timing.
+    oneapi::tbb::parallel_for(std::size_t{0}, ks.size(), [&](std::size_t c) {
+      PolysquareMapOptions part_map = map;
+      part_map.partition.parts = ks[c];
+      cands[c] = try_candidate(*work, parts[k], part_map, options);
     });
-  }
+    int best = -1;
+    for (std::size_t c = 0; c < cands.size(); ++c) {
+      tried[k].push_back(cands[c].summary);
+      // An explicit --parts K is kept whenever it meshes; one poly-square is only its fallback.
+      if (cands[c].error.empty() && (best < 0 || (options.parts == 0 && cands[c].better_than(cands[static_cast<std::size_t>(best)]))))
+        best = static_cast<int>(c);
+    }
+    if (best < 0) {
+      std::string all;
+      for (std::size_t c = 0; c < cands.size(); ++c)
+        all += (c ? "; " : "") + (cands.size() > 1 ? "with " + std::to_string(ks[c]) + " subregions: " : std::string()) +
+               cands[c].error;
+      errors[k] = all;
+      return;
+    }
+    tried[k][static_cast<std::size_t>(best)]["chosen"] = true;
+    smoothed[k] = cands[static_cast<std::size_t>(best)].smooth;
+    results[k] = std::move(cands[static_cast<std::size_t>(best)].result);
+  });
   std::ostringstream failed;
   int nfailed = 0;
   for (std::size_t k = 0; k < parts.size(); ++k)
@@ -177,41 +271,15 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
     out.parts.push_back(r->stats);
   }
 
-  const auto t_smooth = std::chrono::steady_clock::now();
-  const SmoothStats smooth = smooth_quads(mesh, options.smooth, work);
-  const double seconds_smooth = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_smooth).count();
-
+  SmoothStats smooth;
+  for (const SmoothStats& st : smoothed) {
+    smooth.sweeps = std::max(smooth.sweeps, st.sweeps);
+    smooth.moves += st.moves;
+    smooth.curve_moves += st.curve_moves;
+  }
   const InvariantReport inv = check_invariants(mesh);
   if (!inv.ok())
-    throw MeshingError(src + ": the mesh of one poly-square per part breaks an invariant (" + inv.first_problem +
-                       "); nothing was written");
-  // A valid but badly shaped mesh is refused too: a single poly-square per part cannot serve every region.
-  std::size_t worst = 0, longest = 0;
-  double worst_sj = 2.0, worst_ratio = 0.0;
-  for (std::size_t q = 0; q < mesh.quads.size(); ++q) {
-    if (const double sj = quad_min_corner_sj(mesh, q); sj < worst_sj) { worst_sj = sj; worst = q; }
-    double lmin = INFINITY, lmax = 0.0;
-    for (int k = 0; k < 4; ++k) {
-      const double l = distance(mesh.nodes[mesh.quads[q][k]], mesh.nodes[mesh.quads[q][(k + 1) % 4]]);
-      lmin = std::min(lmin, l);
-      lmax = std::max(lmax, l);
-    }
-    if (const double r = lmax / lmin; r > worst_ratio) { worst_ratio = r; longest = q; }
-  }
-  if (worst_ratio > options.max_edge_ratio) {
-    const Vec2 p = mesh.nodes[mesh.quads[longest][0]];
-    throw MeshingError(src + ": part " + std::to_string(mesh.quad_part[longest]) +
-                       ": the best quad mesh of one poly-square has a quad with edge ratio " + std::to_string(worst_ratio) +
-                       " at (" + std::to_string(p.x) + ", " + std::to_string(p.y) + "), above the maximum " +
-                       std::to_string(options.max_edge_ratio) + " (--max-edge-ratio); this region needs partitioning");
-  }
-  if (worst_sj < options.min_scaled_jacobian) {
-    const Vec2 p = mesh.nodes[mesh.quads[worst][0]];
-    throw MeshingError(src + ": part " + std::to_string(mesh.quad_part[worst]) + ": the best quad mesh of one poly-square has a quad with scaled Jacobian " +
-                       std::to_string(worst_sj) + " at (" + std::to_string(p.x) + ", " + std::to_string(p.y) +
-                       "), below the minimum " + std::to_string(options.min_scaled_jacobian) +
-                       " (--min-sj); this region needs partitioning into several poly-squares (not implemented yet)");
-  }
+    throw MeshingError(src + ": the assembled mesh breaks an invariant (" + inv.first_problem + "); nothing was written");
 
   nlohmann::json parts_json = nlohmann::json::array();
   for (const auto& s : out.parts) parts_json.push_back(part_json(s));
@@ -231,16 +299,11 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
                   {"boundary_edges", mesh.boundary_edges.size()}, {"feature_edges", mesh.feature_edges.size()}}},
       {"parts", parts_json},
       {"partition", partition_json},
-      {"fallbacks", [&] {
-         nlohmann::json f = nlohmann::json::array();
-         for (std::size_t k = 0; k < fallbacks.size(); ++k)
-           if (!fallbacks[k].empty()) f.push_back({{"part", k}, {"partitioned_map_error", fallbacks[k]}, {"used", "single poly-square"}});
-         return f;
-       }()},
+      {"candidates", tried},
       {"simplify", {{"fraction_of_size", options.simplify}, {"vertices_before", simplify_stats.vertices_before},
                     {"vertices_after", simplify_stats.vertices_after}, {"refused", simplify_stats.refused}}},
       {"smooth", {{"sweeps", smooth.sweeps}, {"moves", smooth.moves}, {"curve_moves", smooth.curve_moves}}},
-      {"seconds", {{"parts", seconds_parts}, {"smooth", seconds_smooth}}},
+      {"seconds", {{"parts", seconds_parts}}},
   };
   return out;
 }

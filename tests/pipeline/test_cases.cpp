@@ -18,6 +18,7 @@ struct Case {
   const char* name;
   double size;
   double sj_floor;  // the figure to reach (Gmsh's SJ min from anchors.md where we meet it; see README otherwise)
+  std::size_t gmsh_interior_singularities;  // anchors.md; the bound is a quarter of it
 };
 
 Region load(const std::string& name) { return read_region(std::string(POLYSQUARE_DATA_DIR) + "/cases/" + name + ".geojson"); }
@@ -46,8 +47,8 @@ TEST_P(SlicedCase, HoldsEveryInvariant) {
   EXPECT_EQ(q.inverted, 0u);
   EXPECT_EQ(q.non_manifold_edges, 0u);
   EXPECT_EQ(q.boundary_edges, m.boundary_edges.size());
-  // A single poly-square map puts every singularity on the boundary.
-  EXPECT_EQ(q.interior_singularities, 0u);
+  // Poly-square maps put singularities on the boundary or where subregions meet: at most a quarter of Gmsh's.
+  EXPECT_LE(4 * q.interior_singularities, c.gmsh_interior_singularities) << c.name;
   // 4: boundary fidelity, sharp vertices are nodes, area preserved.
   const DomainDistance d = domain_distance(m, region);
   EXPECT_LT(d.boundary_max_relative, 1e-9);
@@ -69,11 +70,13 @@ TEST_P(SlicedCase, HoldsEveryInvariant) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Cases, SlicedCase,
-                         // Floors: Gmsh 4.8.4 SJ min from anchors.md (rect_feature has no Gmsh figure: dam_channel.s).
-                         ::testing::Values(Case{"letter_I", 2.0, 0.99}, Case{"pentagon", 3.0, 0.70},
-                                           Case{"letter_M", 2.0, 0.71}, Case{"square_feature", 3.0, 0.34},
-                                           Case{"dam_channel", 2.0, 0.67}, Case{"rect_feature", 3.0, 0.67},
-                                           Case{"mechanical_part", 3.0, 0.18}),
+                         // Gmsh 4.8.4 SJ min and interior singularities from anchors.md (rect_feature has no Gmsh
+                         // figure: dam_channel's).
+                         ::testing::Values(Case{"letter_I", 2.0, 0.99, 58}, Case{"pentagon", 3.0, 0.70, 100},
+                                           Case{"letter_M", 2.0, 0.71, 177}, Case{"square_feature", 3.0, 0.34, 219},
+                                           Case{"triangle", 3.0, 0.71, 101},
+                                           Case{"dam_channel", 2.0, 0.67, 508}, Case{"rect_feature", 3.0, 0.67, 508},
+                                           Case{"mechanical_part", 3.0, 0.18, 319}),
                          [](const auto& info) { return std::string(info.param.name); });
 
 TEST(Pipeline, LetterIIsAPerfectStructuredGrid) {

@@ -21,11 +21,15 @@ struct MeshOptions {
   double simplify = 0.0;         ///< simplify curves first: remove vertices whose triangle area is below
                                  ///< (simplify * size)^2, keeping topology (coastlines: 0.5); 0 = off
   std::size_t max_quads = 50'000'000;  ///< refuse sizes whose estimated quad count exceeds this
-  int parts = 1;                 ///< subregions per polygon part, meshed as one Global Poly-square Map (GPM);
-                                 ///< 1 = a single poly-square; 0 = from target_quads_per_part
-  std::size_t target_quads_per_part = 20000;  ///< subregion size when parts = 0
+  int parts = 0;                 ///< subregions per polygon part; 0 = automatic: every count of search_subregions
+                                 ///< (parts up to search_quads quads) and the one from target_quads_per_part are
+                                 ///< meshed and the best mesh is kept; K > 0: K subregions. One poly-square per part
+                                 ///< is always a candidate too (alone with parts = 1).
+  std::size_t target_quads_per_part = 20000;  ///< subregion size for large parts in automatic mode
+  std::size_t search_quads = 200'000;         ///< parts up to this many quads try every count of search_subregions
+  std::vector<int> search_subregions{2, 3, 4, 5, 6, 8};
   bool keep_partition = false;   ///< return the background triangulation and its partition (for pictures)
-  double min_scaled_jacobian = 0.2;    ///< refuse (MeshingError) a mesh whose worst quad is below this; 0 = accept any valid mesh
+  double min_scaled_jacobian = 0.2;    ///< a candidate whose worst quad is below this is refused; 0 = accept any valid mesh
   double max_edge_ratio = 20.0;        ///< refuse a mesh with a quad whose longest / shortest edge exceeds this
   PolysquareMapOptions map;      ///< stages 2 and 4-6 (map.size and map.layout.corner_threshold_deg are set from above)
   SmoothOptions smooth;          ///< stage 7 smoothing
