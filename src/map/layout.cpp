@@ -18,13 +18,14 @@ const Vec2 kLabelDir[4] = {{1, 0}, {0, 1}, {-1, 0}, {0, -1}};
 // per label of its first edge, with the running number of quarter turns in the state, so that it closes with
 // exactly `required_turns` (+4 counter-clockwise, -4 clockwise): every loop becomes a valid orthogonal polygon.
 std::vector<int> label_chain(const std::vector<Vec2>& edge_vec, const std::vector<std::uint8_t>& free_change,
-                             const std::vector<std::uint8_t>& locked, bool closed, double change_cost,
-                             int required_turns) {
+                             const std::vector<std::uint8_t>& locked, const std::vector<std::uint8_t>& allowed,
+                             bool closed, double change_cost, int required_turns) {
   const int m = static_cast<int>(edge_vec.size());
   constexpr double kBig = 1e300;
   constexpr int kMaxTurns = 48;  // |running turns| bound: coastlines with many bays wind far before closing
   constexpr int kT = 2 * kMaxTurns + 1;
   auto edge_cost = [&](int i, int l) {
+    if (!(allowed[i] >> l & 1)) return kBig;
     return norm(edge_vec[i]) - dot(edge_vec[i], kLabelDir[l]);  // = length * (1 - cos)
   };
   auto turn = [](int from, int to) { const int d = (to - from + 4) % 4; return d == 0 ? 0 : (d == 1 ? 1 : (d == 3 ? -1 : 99)); };
@@ -129,6 +130,7 @@ Layout build_layout(const TriMesh& mesh, const std::vector<Vec2>& original, cons
     if (!in_loop[c]) sequences.push_back({static_cast<int>(c)});
 
   layout.chain_labels.resize(mesh.chains.size());
+  std::vector<std::uint8_t> used_dirs(nv, 0);  // per vertex, the lattice directions labelled chains leave it by
   for (const auto& seq : sequences) {
     const bool closed = seq.size() > 1 || mesh.chains[static_cast<std::size_t>(seq.front())].closed;
     std::vector<std::int32_t> verts;  // edge i runs from verts[i] to verts[i + 1] (cyclic when closed)
@@ -156,8 +158,26 @@ Layout build_layout(const TriMesh& mesh, const std::vector<Vec2>& original, cons
     // feature loops drawn that way), -4 when clockwise (holes).
     double area = 0.0;
     for (int i = 0; i < nverts; ++i) area += cross(deformed[verts[i]], deformed[verts[(i + 1) % nverts]]);
-    const std::vector<int> labels =
-        label_chain(edge_vec, free_change, locked, closed, options.label_change_cost, area >= 0 ? 4 : -4);
+    // An open chain must not leave its end points along a direction a labelled chain already takes there (a
+    // feature leaving the boundary along the boundary's side would overlap it); relaxed if nothing else fits.
+    std::vector<std::uint8_t> allowed(static_cast<std::size_t>(m), 0xF);
+    if (!closed && m > 0) {
+      allowed.front() = static_cast<std::uint8_t>(0xF & ~used_dirs[verts.front()]);
+      std::uint8_t back = 0xF;
+      for (int l = 0; l < 4; ++l)
+        if (used_dirs[verts.back()] >> ((l + 2) % 4) & 1) back = static_cast<std::uint8_t>(back & ~(1 << l));
+      allowed.back() = static_cast<std::uint8_t>(allowed.back() & back);
+    }
+    std::vector<int> labels =
+        label_chain(edge_vec, free_change, locked, allowed, closed, options.label_change_cost, area >= 0 ? 4 : -4);
+    if (labels.empty() && !closed) {
+      std::fill(allowed.begin(), allowed.end(), 0xF);
+      labels = label_chain(edge_vec, free_change, locked, allowed, closed, options.label_change_cost, 0);
+    }
+    for (int i = 0; i < m && !labels.empty(); ++i) {
+      used_dirs[verts[i]] |= static_cast<std::uint8_t>(1 << labels[i]);
+      used_dirs[verts[(i + 1) % nverts]] |= static_cast<std::uint8_t>(1 << ((labels[i] + 2) % 4));
+    }
     if (labels.empty())
       throw MeshingError(part_name + ": no axis labelling of " + what + " closes into an orthogonal polygon");
     int turning = 0;

@@ -421,6 +421,22 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
   t0 = std::chrono::steady_clock::now();
   std::vector<QuadMesh> meshes(n);
   std::vector<std::size_t> side_nodes(n, 0);
+  if (std::getenv("PS_DEBUG"))
+    for (std::size_t p = 0; p < n; ++p) {
+      double ra = 0, da = 0;
+      for (const auto& t : subs[p].mesh.triangles) {
+        ra += 0.5 * orient2(mapped[p].problem.rest[t[0]], mapped[p].problem.rest[t[1]], mapped[p].problem.rest[t[2]]);
+        da += 0.5 * orient2(mapped[p].x[t[0]], mapped[p].x[t[1]], mapped[p].x[t[2]]);
+      }
+      double dev = 0;
+      for (const auto& sg : layouts[p].segments) {
+        const auto a = layouts[p].lattice[sg.break_a], b = layouts[p].lattice[sg.break_b];
+        const double nn = std::llabs(b[0] - a[0]) + std::llabs(b[1] - a[1]);
+        std::fprintf(stderr, "  sub %zu seg chain %d target %.2f n %.0f\n", p, sg.chain, sg.target, nn);
+        dev += nn - sg.target;
+      }
+      std::fprintf(stderr, "sub %zu rest area %.1f deformed %.1f sum(n - t) %.1f\n", p, ra, da, dev);
+    }
   for_each_subregion(n, [&](std::size_t p) {
     snap_to_layout(subs[p].mesh, mapped[p], layouts[p], options, sub_name(p));
     meshes[p] = extract_quads(subs[p].mesh, subs[p].mesh.vertices, mapped[p].x, layouts[p], sub_name(p), nullptr,

@@ -1,3 +1,4 @@
+#include <cmath>
 #include <algorithm>
 #include <unordered_map>
 #include <unordered_set>
@@ -121,6 +122,91 @@ std::size_t straighten_separator_chains(TriMesh& mesh, int iterations) {
     }
   }
   return moves;
+}
+
+}  // namespace polysquare
+
+namespace polysquare {
+
+std::size_t snap_separator_ends_to_corners(const TriMesh& mesh, std::vector<std::int32_t>& triangle_part,
+                                           double corner_threshold_deg, int max_edges) {
+  std::vector<std::vector<std::int32_t>> around(mesh.vertices.size());
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+    for (auto v : mesh.triangles[t]) around[v].push_back(static_cast<std::int32_t>(t));
+  auto edge_triangle = [&](std::int32_t a, std::int32_t b) {
+    for (auto t : around[a])
+      for (auto v : mesh.triangles[t])
+        if (v == b) return t;
+    return std::int32_t{-1};
+  };
+  // The part keeps one edge-connected piece: checked by a flood over its triangles.
+  auto connected = [&](std::int32_t part) {
+    std::vector<std::int32_t> members;
+    for (std::size_t t = 0; t < triangle_part.size(); ++t)
+      if (triangle_part[t] == part) members.push_back(static_cast<std::int32_t>(t));
+    if (members.empty()) return false;
+    std::vector<std::uint8_t> seen(triangle_part.size(), 0);
+    std::vector<std::int32_t> stack{members.front()};
+    seen[members.front()] = 1;
+    std::size_t reached = 0;
+    while (!stack.empty()) {
+      const auto t = stack.back();
+      stack.pop_back();
+      ++reached;
+      for (int k = 0; k < 3; ++k) {
+        const auto a = mesh.triangles[t][k], b = mesh.triangles[t][(k + 1) % 3];
+        for (auto u : around[a]) {
+          if (seen[u] || triangle_part[u] != part) continue;
+          const auto& tu = mesh.triangles[u];
+          if (tu[0] == b || tu[1] == b || tu[2] == b) { seen[u] = 1; stack.push_back(u); }
+        }
+      }
+    }
+    return reached == members.size();
+  };
+  const double cos_threshold = std::cos(corner_threshold_deg * 3.14159265358979323846 / 180.0);
+  std::size_t moved = 0;
+  for (const TriChain& ch : mesh.chains) {
+    if (ch.kind != TriChain::Kind::ring || !ch.closed) continue;
+    const int n = static_cast<int>(ch.vertices.size());
+    std::vector<std::uint8_t> sharp(n, 0);
+    for (int i = 0; i < n; ++i) {
+      if (!ch.is_input[i]) continue;
+      const Vec2 a = mesh.vertices[ch.vertices[(i + n - 1) % n]], b = mesh.vertices[ch.vertices[i]],
+                 c = mesh.vertices[ch.vertices[(i + 1) % n]];
+      const Vec2 u = b - a, w = c - b;
+      sharp[i] = dot(u, w) < cos_threshold * norm(u) * norm(w);
+    }
+    auto edge_part = [&](int i) {  // part of the triangle on ring edge i (vertices i, i + 1)
+      const auto t = edge_triangle(ch.vertices[((i % n) + n) % n], ch.vertices[(((i + 1) % n) + n) % n]);
+      return t < 0 ? -1 : triangle_part[t];
+    };
+    for (int i = 0; i < n; ++i) {
+      const int before = edge_part(i - 1), after = edge_part(i);
+      if (before == after || before < 0 || after < 0 || sharp[i]) continue;
+      // The nearest sharp corner within max_edges on either side, whose edges all belong to one part.
+      for (int d = 1; d <= max_edges; ++d) {
+        int dir = 0;
+        if (sharp[(i + d) % n] && [&] { for (int e = 0; e < d; ++e) if (edge_part(i + e) != after) return false; return true; }()) dir = 1;
+        else if (sharp[((i - d) % n + n) % n] && [&] { for (int e = 1; e <= d; ++e) if (edge_part(i - e) != before) return false; return true; }()) dir = -1;
+        if (dir == 0) continue;
+        // Hand the triangles of the losing part around the ring vertices between the separator's end and the
+        // corner to the other part: the separator then ends at the corner.
+        const std::int32_t from = dir == 1 ? after : before, to = dir == 1 ? before : after;
+        std::vector<std::int32_t> changed;
+        for (int e = 0; e < d; ++e)
+          for (auto t : around[ch.vertices[((i + dir * e) % n + n) % n]])
+            if (triangle_part[t] == from) { triangle_part[t] = to; changed.push_back(t); }
+        if (connected(from) && connected(to)) {
+          moved += changed.size();
+        } else {
+          for (auto t : changed) triangle_part[t] = from;
+        }
+        break;
+      }
+    }
+  }
+  return moved;
 }
 
 }  // namespace polysquare

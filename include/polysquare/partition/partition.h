@@ -66,6 +66,13 @@ namespace polysquare {
 /// ring or feature chain); separator loops without junctions become closed chains. Returns the number added.
 std::size_t add_separator_chains(TriMesh& mesh, const std::vector<std::int32_t>& triangle_part);
 
+/// Moves separator ends that meet a ring within `max_edges` ring edges of a sharp corner (an input vertex turning
+/// by more than corner_threshold_deg) onto the corner, by handing the triangles around the ring vertices in
+/// between to the neighbouring part (kept only if both parts stay connected): otherwise the corner and the end
+/// make a side far shorter than one element. Returns the number of triangles moved.
+std::size_t snap_separator_ends_to_corners(const TriMesh& mesh, std::vector<std::int32_t>& triangle_part,
+                                           double corner_threshold_deg, int max_edges = 2);
+
 /// Straightens the zig-zag of separator chains (paths of triangle edges): their free vertices move half-way to
 /// the midpoint of their chain neighbours, `iterations` times, each move kept only while every incident
 /// triangle keeps at least a tenth of its area. Vertices on rings, features and junctions never move.
