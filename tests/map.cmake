@@ -1,1 +1,2 @@
 list(APPEND TEST_SOURCES map/test_map_stages.cpp)
+list(APPEND TEST_SOURCES map/test_ppm.cpp)

@@ -4,8 +4,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cstdio>
-#include <cstdlib>
 #include <cmath>
 #include <map>
 #include <tuple>
@@ -342,21 +340,6 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
     layouts[p] = build_layout(subs[p].mesh, subs[p].mesh.vertices, mapped[p].x, options.layout, sub_name(p));
   });
   st.seconds_deform = seconds_since(t0);
-  if (std::getenv("PS_DEBUG")) {
-    for (std::size_t p = 0; p < n; ++p) {
-      const TriMesh& m = subs[p].mesh;
-      std::fprintf(stderr, "subregion %zu: %zu tris, %zu chains, %zu loops\n", p, m.triangles.size(), m.chains.size(), m.loops.size());
-      for (std::size_t c = 0; c < m.chains.size(); ++c) {
-        const auto& ch = m.chains[c];
-        std::fprintf(stderr, "  chain %zu kind %d idx %d if %d closed %d n %zu (%.2f,%.2f)->(%.2f,%.2f) labels:", c, (int)ch.kind, ch.index, ch.interface, (int)ch.closed, ch.vertices.size(),
-          m.vertices[ch.vertices.front()].x, m.vertices[ch.vertices.front()].y, m.vertices[ch.vertices.back()].x, m.vertices[ch.vertices.back()].y);
-        for (int l : layouts[p].chain_labels[c]) std::fprintf(stderr, "%d", l);
-        std::fprintf(stderr, "\n");
-      }
-      for (const auto& loop : m.loops) { std::fprintf(stderr, "  loop:"); for (int c : loop) std::fprintf(stderr, " %d", c); std::fprintf(stderr, "\n"); }
-      for (const auto& sg : layouts[p].segments) std::fprintf(stderr, "  seg chain %d label %d target %.2f breaks %d-%d\n", sg.chain, sg.label, sg.target, sg.break_a, sg.break_b);
-    }
-  }
   for (std::size_t p = 0; p < n; ++p) {
     st.deform.iterations += mapped[p].stats.iterations;
     st.deform.energy_before += mapped[p].stats.energy_before;
@@ -421,22 +404,6 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
   t0 = std::chrono::steady_clock::now();
   std::vector<QuadMesh> meshes(n);
   std::vector<std::size_t> side_nodes(n, 0);
-  if (std::getenv("PS_DEBUG"))
-    for (std::size_t p = 0; p < n; ++p) {
-      double ra = 0, da = 0;
-      for (const auto& t : subs[p].mesh.triangles) {
-        ra += 0.5 * orient2(mapped[p].problem.rest[t[0]], mapped[p].problem.rest[t[1]], mapped[p].problem.rest[t[2]]);
-        da += 0.5 * orient2(mapped[p].x[t[0]], mapped[p].x[t[1]], mapped[p].x[t[2]]);
-      }
-      double dev = 0;
-      for (const auto& sg : layouts[p].segments) {
-        const auto a = layouts[p].lattice[sg.break_a], b = layouts[p].lattice[sg.break_b];
-        const double nn = std::llabs(b[0] - a[0]) + std::llabs(b[1] - a[1]);
-        std::fprintf(stderr, "  sub %zu seg chain %d target %.2f n %.0f\n", p, sg.chain, sg.target, nn);
-        dev += nn - sg.target;
-      }
-      std::fprintf(stderr, "sub %zu rest area %.1f deformed %.1f sum(n - t) %.1f\n", p, ra, da, dev);
-    }
   for_each_subregion(n, [&](std::size_t p) {
     snap_to_layout(subs[p].mesh, mapped[p], layouts[p], options, sub_name(p));
     meshes[p] = extract_quads(subs[p].mesh, subs[p].mesh.vertices, mapped[p].x, layouts[p], sub_name(p), nullptr,

@@ -8,12 +8,17 @@
 #include <cmath>
 #include <numeric>
 #include <memory>
+#include <mutex>
 #include <array>
 
 #include "polysquare/core/error.h"
 
 namespace polysquare {
 namespace {
+
+// GLPK keeps its environment in process-wide state unless built with thread-local storage; parts and candidates
+// are quantized from several threads, so every call into GLPK holds this lock (the programs take milliseconds).
+std::mutex glpk_mutex;
 
 struct UnionFind {
   std::vector<int> parent;
@@ -59,6 +64,7 @@ struct JointProblem {
 void solve_joint(JointProblem& jp, const std::vector<SegmentCoupling>& couplings,
                  const std::vector<Separation>& separations, const QuantizeOptions& options,
                  const std::string& part_name, QuantizeStats& stats) {
+  const std::lock_guard<std::mutex> lock(glpk_mutex);
   std::unique_ptr<glp_prob, void (*)(glp_prob*)> lp(glp_create_prob(), glp_delete_prob);
   glp_prob* P = lp.get();
   glp_set_obj_dir(P, GLP_MIN);
@@ -205,7 +211,10 @@ bool best_separation(const Layout& layout, const std::vector<Vec2>& deformed, co
 QuantizeStats quantize_layouts(const std::vector<Layout*>& layouts, const std::vector<const std::vector<Vec2>*>& deformed,
                                const std::vector<SegmentCoupling>& couplings, const QuantizeOptions& options,
                                const std::string& part_name) {
-  glp_term_out(GLP_OFF);
+  {
+    const std::lock_guard<std::mutex> lock(glpk_mutex);
+    glp_term_out(GLP_OFF);
+  }
   JointProblem jp;
   jp.layouts = layouts;
   jp.deformed = deformed;

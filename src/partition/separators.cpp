@@ -210,3 +210,88 @@ std::size_t snap_separator_ends_to_corners(const TriMesh& mesh, std::vector<std:
 }
 
 }  // namespace polysquare
+
+namespace polysquare {
+
+std::size_t absorb_pieces_cut_off_by_features(const TriMesh& mesh, std::vector<std::int32_t>& triangle_part,
+                                              int max_rounds) {
+  auto key = [](std::int32_t a, std::int32_t b) {
+    if (a > b) std::swap(a, b);
+    return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) | static_cast<std::uint32_t>(b);
+  };
+  std::unordered_set<std::uint64_t> feature_edges;
+  for (const TriChain& ch : mesh.chains) {
+    if (ch.kind != TriChain::Kind::feature) continue;
+    const std::size_t n = ch.vertices.size();
+    for (std::size_t i = 0; i + (ch.closed ? 0 : 1) < n; ++i) feature_edges.insert(key(ch.vertices[i], ch.vertices[(i + 1) % n]));
+  }
+  if (feature_edges.empty()) return 0;
+  // Edge neighbours of every triangle, with whether the shared edge lies on a feature.
+  std::unordered_map<std::uint64_t, std::array<std::int32_t, 2>> owners;
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      auto [it, inserted] = owners.try_emplace(key(mesh.triangles[t][k], mesh.triangles[t][(k + 1) % 3]),
+                                               std::array<std::int32_t, 2>{static_cast<std::int32_t>(t), -1});
+      if (!inserted) it->second[1] = static_cast<std::int32_t>(t);
+    }
+  struct Nb { std::int32_t t; bool feature; double length; };
+  std::vector<std::array<Nb, 3>> nb(mesh.triangles.size());
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      const auto a = mesh.triangles[t][k], b = mesh.triangles[t][(k + 1) % 3];
+      const auto& o = owners[key(a, b)];
+      nb[t][k] = {o[0] == static_cast<std::int32_t>(t) ? o[1] : o[0], feature_edges.count(key(a, b)) > 0,
+                  distance(mesh.vertices[a], mesh.vertices[b])};
+    }
+  std::size_t moved = 0;
+  for (int round = 0; round < max_rounds; ++round) {
+    // Components of each part with feature edges as walls; all but the largest (by area) of a part move to the
+    // neighbouring part they share the longest non-feature edge length with.
+    std::vector<std::int32_t> comp(mesh.triangles.size(), -1);
+    std::vector<double> comp_area;
+    std::vector<std::int32_t> comp_part;
+    for (std::size_t s = 0; s < mesh.triangles.size(); ++s) {
+      if (comp[s] >= 0) continue;
+      const auto c = static_cast<std::int32_t>(comp_area.size());
+      comp_area.push_back(0.0);
+      comp_part.push_back(triangle_part[s]);
+      std::vector<std::int32_t> stack{static_cast<std::int32_t>(s)};
+      comp[s] = c;
+      while (!stack.empty()) {
+        const auto t = stack.back();
+        stack.pop_back();
+        const auto& tr = mesh.triangles[t];
+        comp_area[c] += orient2(mesh.vertices[tr[0]], mesh.vertices[tr[1]], mesh.vertices[tr[2]]);
+        for (const Nb& e : nb[t])
+          if (e.t >= 0 && !e.feature && comp[e.t] < 0 && triangle_part[e.t] == triangle_part[t]) {
+            comp[e.t] = c;
+            stack.push_back(e.t);
+          }
+      }
+    }
+    std::unordered_map<std::int32_t, std::int32_t> largest;  // part -> its largest component
+    for (std::size_t c = 0; c < comp_area.size(); ++c) {
+      auto [it, inserted] = largest.try_emplace(comp_part[c], static_cast<std::int32_t>(c));
+      if (!inserted && comp_area[c] > comp_area[it->second]) it->second = static_cast<std::int32_t>(c);
+    }
+    std::vector<std::unordered_map<std::int32_t, double>> contact(comp_area.size());
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+      for (const Nb& e : nb[t])
+        if (e.t >= 0 && !e.feature && triangle_part[e.t] != triangle_part[t]) contact[comp[t]][triangle_part[e.t]] += e.length;
+    std::vector<std::int32_t> target(comp_area.size(), -1);
+    for (std::size_t c = 0; c < comp_area.size(); ++c) {
+      if (largest[comp_part[c]] == static_cast<std::int32_t>(c)) continue;
+      double best = 0.0;
+      for (const auto& [p, len] : contact[c])
+        if (len > best || (len == best && p < target[c])) { best = len; target[c] = p; }
+    }
+    std::size_t round_moves = 0;
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+      if (target[comp[t]] >= 0) { triangle_part[t] = target[comp[t]]; ++round_moves; }
+    moved += round_moves;
+    if (round_moves == 0) break;
+  }
+  return moved;
+}
+
+}  // namespace polysquare

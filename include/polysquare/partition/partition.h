@@ -66,6 +66,13 @@ namespace polysquare {
 /// ring or feature chain); separator loops without junctions become closed chains. Returns the number added.
 std::size_t add_separator_chains(TriMesh& mesh, const std::vector<std::int32_t>& triangle_part);
 
+/// Keeps each part in one piece when its feature curves count as walls: every smaller piece a feature cuts off
+/// (a sliver between a feature and a separator, part of a feature loop's inside) moves to the neighbouring part
+/// it shares the most non-feature edge length with; repeated until nothing moves (at most max_rounds). Pieces
+/// enclosed by features alone stay. Returns the number of triangle moves.
+std::size_t absorb_pieces_cut_off_by_features(const TriMesh& mesh, std::vector<std::int32_t>& triangle_part,
+                                              int max_rounds = 10);
+
 /// Moves separator ends that meet a ring within `max_edges` ring edges of a sharp corner (an input vertex turning
 /// by more than corner_threshold_deg) onto the corner, by handing the triangles around the ring vertices in
 /// between to the neighbouring part (kept only if both parts stay connected): otherwise the corner and the end

@@ -1,0 +1,233 @@
+// Piecewise Poly-square Map (paper Sec. 5.2): interval assignment across interfaces on hand-made layouts, the
+// cutting of a partitioned triangulation into subregions, and conforming stitched meshes on the real cases.
+#include <gtest/gtest.h>
+
+#include <map>
+#include <set>
+
+#include "polysquare/input/read_region.h"
+#include "polysquare/map/piecewise_map.h"
+#include "polysquare/map/quantize.h"
+#include "polysquare/partition/partition.h"
+#include "polysquare/pipeline/invariants.h"
+#include "polysquare/pipeline/mesh_region.h"
+#include "polysquare/quality/quality.h"
+
+using namespace polysquare;
+
+namespace {
+
+// A rectangle layout from its four corners (counter-clockwise from bottom-left), with extra straight break
+// points on its right side (heights in `right_breaks`), deformed positions taken as given.
+struct RectLayout {
+  Layout layout;
+  std::vector<Vec2> deformed;
+};
+
+RectLayout rectangle(Vec2 lo, Vec2 hi, const std::vector<double>& right_breaks = {}) {
+  RectLayout r;
+  std::vector<Vec2> ring{lo, {hi.x, lo.y}};
+  for (double y : right_breaks) ring.push_back({hi.x, y});
+  ring.push_back(hi);
+  ring.push_back({lo.x, hi.y});
+  r.deformed = ring;
+  const int n = static_cast<int>(ring.size());
+  for (int i = 0; i < n; ++i) {
+    r.layout.break_vertex.push_back(i);
+    r.layout.break_is_corner.push_back(1);
+    r.layout.vertex_break.push_back(i);
+  }
+  for (int i = 0; i < n; ++i) {
+    const Vec2 d = ring[(i + 1) % n] - ring[i];
+    LayoutSegment s;
+    s.chain = 0;
+    s.first = i;
+    s.count = 1;
+    s.label = std::abs(d.x) > std::abs(d.y) ? (d.x > 0 ? 0 : 2) : (d.y > 0 ? 1 : 3);
+    s.break_a = i;
+    s.break_b = (i + 1) % n;
+    s.target = norm(d);
+    r.layout.segments.push_back(s);
+  }
+  return r;
+}
+
+}  // namespace
+
+TEST(InterfaceQuantization, TJunctionCountsAgreeAcrossSubregions) {
+  // A (left, 4.3 x 6.2) has its right side split at the T-junction where the separator between B (top right)
+  // and C (bottom right) meets it. Each subregion is in its own frame; the targets disagree across every interface
+  // (2.4 vs 3.6 below, 3.8 vs 2.6 above), so only the coupling can make the counts equal.
+  RectLayout A = rectangle({0, 0}, {4.3, 6.2}, {2.4});
+  RectLayout B = rectangle({0, 0}, {5.1, 2.6});  // its left side (segment 3, -Y) faces A's upper right piece
+  RectLayout C = rectangle({0, 0}, {5.4, 3.6});  // its left side faces A's lower piece, its top faces B's bottom
+  auto seg_len = [](const Layout& l, int k) {
+    const auto a = l.lattice[l.segments[k].break_a], b = l.lattice[l.segments[k].break_b];
+    return std::llabs(b[0] - a[0]) + std::llabs(b[1] - a[1]);
+  };
+  {  // Alone, each rectangle keeps its own counts: the interfaces disagree.
+    RectLayout a = A, c = C;
+    quantize_layout(a.layout, a.deformed, QuantizeOptions{}, "A");
+    quantize_layout(c.layout, c.deformed, QuantizeOptions{}, "C");
+    EXPECT_NE(seg_len(a.layout, 1), seg_len(c.layout, 3));
+  }
+  // A: 0 bottom, 1 right lower, 2 right upper, 3 top, 4 left. B and C: 0 bottom, 1 right, 2 top, 3 left.
+  const std::vector<SegmentCoupling> couplings{{0, 1, 2, 3}, {0, 2, 1, 3}, {1, 0, 2, 2}};
+  const QuantizeStats st = quantize_layouts({&A.layout, &B.layout, &C.layout}, {&A.deformed, &B.deformed, &C.deformed},
+                                            couplings, QuantizeOptions{}, "T");
+  for (const RectLayout* r : {&A, &B, &C}) EXPECT_EQ(check_layout(r->layout), "");
+  EXPECT_EQ(seg_len(A.layout, 1), seg_len(C.layout, 3));
+  EXPECT_EQ(seg_len(A.layout, 2), seg_len(B.layout, 3));
+  EXPECT_EQ(seg_len(B.layout, 0), seg_len(C.layout, 2));
+  // Every rectangle closes: opposite sides equal, A's left side the sum of its two right pieces.
+  EXPECT_EQ(seg_len(A.layout, 4), seg_len(A.layout, 1) + seg_len(A.layout, 2));
+  EXPECT_EQ(seg_len(B.layout, 1), seg_len(B.layout, 3));
+  EXPECT_EQ(seg_len(C.layout, 1), seg_len(C.layout, 3));
+  // Counts stay near the targets: each within one element of the nearer of its two targets' range.
+  EXPECT_GE(seg_len(A.layout, 1), 2);
+  EXPECT_LE(seg_len(A.layout, 1), 4);
+  EXPECT_GE(seg_len(A.layout, 2), 2);
+  EXPECT_LE(seg_len(A.layout, 2), 4);
+  EXPECT_EQ(seg_len(A.layout, 0), 4);  // 4.3, uncoupled
+  EXPECT_LT(st.max_relative_deviation, 0.5);
+}
+
+TEST(InterfaceQuantization, CouplingsPropagateThroughSubregions) {
+  // A wants 1 x 3 elements; its bottom is coupled to B's right side and its right side to B's left side. B is a
+  // rectangle (left = right), so A must come out square: counts travel across subregions, not just one interface.
+  RectLayout A = rectangle({0, 0}, {1, 3}), B = rectangle({0, 0}, {2, 2});
+  QuantizeOptions o;
+  const std::vector<SegmentCoupling> couplings{{0, 0, 1, 1}, {0, 1, 1, 3}};
+  quantize_layouts({&A.layout, &B.layout}, {&A.deformed, &B.deformed}, couplings, o, "square");
+  const auto len = [](const Layout& l, int k) {
+    const auto a = l.lattice[l.segments[k].break_a], b = l.lattice[l.segments[k].break_b];
+    return std::llabs(b[0] - a[0]) + std::llabs(b[1] - a[1]);
+  };
+  EXPECT_EQ(len(A.layout, 0), len(A.layout, 1));
+  EXPECT_EQ(check_layout(A.layout), "");
+}
+
+namespace {
+Region load(const std::string& name) {
+  return read_region(std::string(POLYSQUARE_DATA_DIR) + "/cases/" + name + ".geojson");
+}
+
+TriMesh background(const Region& region, double h) {
+  const auto parts = split_into_parts(region);
+  TriangulationOptions t;
+  t.boundary_edge = h;
+  t.max_edge = 4 * h;
+  return triangulate_part(region, parts.front(), t);
+}
+
+// The background triangulation of a case and its k-way partition.
+struct Partitioned {
+  TriMesh tri;
+  std::vector<std::int32_t> triangle_part;
+};
+
+Partitioned partitioned(const char* name, double h, int k) {
+  Partitioned p;
+  p.tri = background(load(name), h);
+  PartitionOptions po;
+  po.parts = k;
+  p.triangle_part = partition_triangles(p.tri, po).triangle_part;
+  return p;
+}
+}  // namespace
+
+TEST(Subregions, EveryInterfaceIsCutIdenticallyOnBothSides) {
+  for (const auto& [name, h, k] : {std::make_tuple("pentagon", 3.0, 4), std::make_tuple("letter_M", 2.0, 6),
+                                   std::make_tuple("rect_feature", 3.0, 4)}) {
+    const auto [tri, triangle_part] = partitioned(name, h, k);
+    const std::vector<Subregion> subs = split_subregions(tri, triangle_part, k, name);
+    ASSERT_EQ(subs.size(), static_cast<std::size_t>(k));
+    std::size_t triangles = 0;
+    // Interface pieces by their global vertex sequence: each must appear once from each side, reversed.
+    std::map<std::vector<std::int32_t>, int> pieces;
+    for (std::size_t p = 0; p < subs.size(); ++p) {
+      const Subregion& s = subs[p];
+      triangles += s.mesh.triangles.size();
+      for (const auto& loop : s.mesh.loops)
+        for (std::size_t i = 0; i < loop.size(); ++i) {  // consecutive chains of a loop join end to start
+          const auto& a = s.mesh.chains[static_cast<std::size_t>(loop[i])];
+          const auto& b = s.mesh.chains[static_cast<std::size_t>(loop[(i + 1) % loop.size()])];
+          EXPECT_EQ(a.vertices.back(), b.vertices.front()) << name;
+        }
+      for (const TriChain& ch : s.mesh.chains) {
+        if (ch.interface < 0) continue;
+        std::vector<std::int32_t> g;
+        for (auto v : ch.vertices) g.push_back(s.global_vertex[static_cast<std::size_t>(v)]);
+        std::vector<std::int32_t> r(g.rbegin(), g.rend());
+        if (auto it = pieces.find(r); it != pieces.end()) {
+          EXPECT_EQ(it->second, ch.interface) << name;  // the neighbour named is the other side
+          pieces.erase(it);
+        } else {
+          pieces.emplace(g, static_cast<int>(p));
+        }
+      }
+    }
+    EXPECT_TRUE(pieces.empty()) << name << ": " << pieces.size() << " interface pieces without a partner";
+    // Triangles are only added by splitting constrained interior edges, never lost.
+    EXPECT_GE(triangles, tri.triangles.size()) << name;
+  }
+}
+
+TEST(PartitionRepair, FeaturePiecesAndCornerEndsAreSettledInOnePass) {
+  for (const auto& [name, h, k] : {std::make_tuple("rect_feature", 3.0, 4), std::make_tuple("square_feature", 3.0, 4),
+                                   std::make_tuple("letter_R", 2.0, 5)}) {
+    auto [tri, tp] = partitioned(name, h, k);
+    absorb_pieces_cut_off_by_features(tri, tp);
+    snap_separator_ends_to_corners(tri, tp, 30.0);
+    // A second pass finds nothing left to move, and every part still has triangles.
+    std::vector<std::int32_t> again = tp;
+    EXPECT_EQ(absorb_pieces_cut_off_by_features(tri, again), 0u) << name;
+    EXPECT_EQ(again, tp);
+    EXPECT_EQ(std::set<std::int32_t>(tp.begin(), tp.end()).size(), static_cast<std::size_t>(k)) << name;
+  }
+}
+
+namespace {
+MeshResult ppm(const char* name, double size, int parts, int threads = 0) {
+  MeshOptions o;
+  o.size = size;
+  o.parts = parts;
+  o.threads = threads;
+  return mesh_region(load(name), o);
+}
+}  // namespace
+
+class PpmCase : public ::testing::TestWithParam<std::tuple<const char*, double, int, std::size_t>> {};
+
+TEST_P(PpmCase, SubregionsAreStitchedConformingly) {
+  const auto [name, size, parts, gmsh_singularities] = GetParam();
+  const MeshResult r = ppm(name, size, parts);
+  // The requested partition was kept (no fallback to one poly-square): every subregion has quads.
+  const std::set<std::int32_t> used(r.mesh.quad_part.begin(), r.mesh.quad_part.end());
+  EXPECT_EQ(used.size(), static_cast<std::size_t>(parts)) << name;
+  const InvariantReport inv = check_invariants(r.mesh);
+  EXPECT_TRUE(inv.ok()) << inv.first_problem;
+  const QualityReport q = compute_quality(r.mesh);
+  EXPECT_EQ(q.non_manifold_edges, 0u);
+  EXPECT_GT(q.sj.min, 0.2) << name;
+  EXPECT_LE(4 * q.interior_singularities, gmsh_singularities) << name;  // the bound: a quarter of Gmsh's
+  const Region region = load(name);
+  const DomainDistance d = domain_distance(r.mesh, region);
+  EXPECT_LT(d.boundary_max_relative, 1e-9);
+  EXPECT_EQ(d.sharp_vertices_missing, 0u);
+  EXPECT_LT(d.feature_node_max_distance, 1e-9 * region.bounding_box().diagonal());
+  EXPECT_LT(d.feature_max_distance, 0.1 * size) << name;
+}
+
+INSTANTIATE_TEST_SUITE_P(Cases, PpmCase,
+                         ::testing::Values(std::make_tuple("triangle", 3.0, 3, 101), std::make_tuple("pentagon", 3.0, 5, 100),
+                                           std::make_tuple("letter_M", 2.0, 8, 177), std::make_tuple("letter_R", 2.0, 3, 152),
+                                           std::make_tuple("key", 2.0, 4, 184), std::make_tuple("dam_channel", 2.0, 4, 508)));
+
+TEST(Ppm, IndependentOfTheThreadCount) {
+  const QuadMesh a = ppm("letter_M", 2.0, 8, 1).mesh, b = ppm("letter_M", 2.0, 8, 2).mesh;
+  ASSERT_EQ(a.quads, b.quads);
+  ASSERT_EQ(a.quad_part, b.quad_part);
+  ASSERT_EQ(a.nodes.size(), b.nodes.size());
+  for (std::size_t i = 0; i < a.nodes.size(); ++i) ASSERT_TRUE(a.nodes[i] == b.nodes[i]) << i;
+}
