@@ -58,6 +58,9 @@ int run_mesh(const MeshArgs& args) {
     partition.triangle_part = result.background_part;
     write_partition_svg(args.partition_picture, result.background, partition);
   }
+  for (const auto& d : result.report["dropped_parts"])
+    std::cerr << "warning: part " << d["part"] << " left out: its area " << d["area"] << " is less than one element, at ("
+              << d["at"][0] << ", " << d["at"][1] << ")\n";
   // Which candidate each part kept, and why the explicitly requested one was not kept.
   for (const auto& part : result.report["candidates"]) {
     const bool explicit_parts = args.options.parts > 0;

@@ -68,7 +68,16 @@ std::vector<int> candidate_subregions(const Region& region, const RegionPart& pa
   if (options.parts > 0) {
     add(options.parts);
   } else {
+    // Large parts get k from their area; long, convoluted boundaries (coastlines) need more subregions than
+    // their area says, so k from the perimeter is tried too.
+    double perimeter = 0.0;
+    for (int r : part.rings) {
+      const auto& pts = region.rings[static_cast<std::size_t>(r)].points;
+      for (std::size_t i = 0; i < pts.size(); ++i) perimeter += distance(pts[i], pts[(i + 1) % pts.size()]);
+    }
     add(std::max(1, static_cast<int>(std::lround(quads / static_cast<double>(options.target_quads_per_part)))));
+    const int by_perimeter = static_cast<int>(std::lround(perimeter / (options.perimeter_per_subregion * options.size)));
+    if (by_perimeter > 1 && quads / by_perimeter >= 16.0) add(by_perimeter);
     if (quads <= static_cast<double>(options.search_quads))
       for (int k : options.search_subregions)
         if (quads / k >= 16.0) add(k);  // at least a 4 x 4 block per subregion
@@ -177,7 +186,22 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
   map.layout.corner_threshold_deg = options.corner_threshold_deg;
   map.keep_partition = options.keep_partition;
   map.partition.seed = options.seed;
-  const std::vector<RegionPart> parts = split_into_parts(*work);
+  // Polygon parts smaller than one element (islets, slivers of a coastline at this size) cannot hold a quad:
+  // with drop_small_parts they are left out and listed in the report, never silently.
+  std::vector<RegionPart> parts;
+  nlohmann::json dropped = nlohmann::json::array();
+  for (RegionPart& p : split_into_parts(*work)) {
+    const double a = ring_area(*work, p);
+    if (options.drop_small_parts && a < options.size * options.size) {
+      const Vec2 at = work->rings[static_cast<std::size_t>(p.rings.front())].points.front();
+      dropped.push_back({{"part", p.part}, {"area", a}, {"at", {at.x, at.y}}});
+      continue;
+    }
+    parts.push_back(std::move(p));
+  }
+  if (parts.empty())
+    throw MeshingError(src + ": every polygon part is smaller than one element (size^2 = " +
+                       std::to_string(options.size * options.size) + "); use a smaller size");
 
   // Parts are independent: mesh them in parallel; results land in part order, so the output does not depend
   // on the thread count. A failure in one part is recorded and reported with all the others, never dropped.
@@ -300,6 +324,7 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
       {"parts", parts_json},
       {"partition", partition_json},
       {"candidates", tried},
+      {"dropped_parts", dropped},
       {"simplify", {{"fraction_of_size", options.simplify}, {"vertices_before", simplify_stats.vertices_before},
                     {"vertices_after", simplify_stats.vertices_after}, {"refused", simplify_stats.refused}}},
       {"smooth", {{"sweeps", smooth.sweeps}, {"moves", smooth.moves}, {"curve_moves", smooth.curve_moves}}},

@@ -2,6 +2,9 @@
 // quality figures the slice must reach against Gmsh 4.8.4 (anchors.md).
 #include <gtest/gtest.h>
 
+#include <filesystem>
+#include <fstream>
+
 #include <string>
 
 #include "polysquare/core/error.h"
@@ -120,4 +123,25 @@ TEST(Pipeline, BadSizesAreInputErrors) {
   o.size = 0.01;
   o.max_quads = 1000;
   EXPECT_THROW(mesh_region(r, o), InputError);  // would need ~14 million quads
+}
+
+TEST(Pipeline, PartsSmallerThanOneElementAreLeftOutAndReported) {
+  // A 40 x 20 rectangle and a 1 x 1 islet at h = 2: the islet cannot hold a quad.
+  const auto path = std::filesystem::temp_directory_path() / "polysquare_islet.geojson";
+  {
+    std::ofstream f(path);
+    f << R"({"type":"FeatureCollection","features":[)"
+      << R"({"type":"Feature","properties":{},"geometry":{"type":"MultiPolygon","coordinates":[)"
+      << R"([[[0,0],[40,0],[40,20],[0,20],[0,0]]],[[[50,5],[51,5],[51,6],[50,6],[50,5]]]]}}]})";
+  }
+  const Region r = read_region(path.string());
+  MeshOptions o;
+  o.size = 2.0;
+  const MeshResult res = mesh_region(r, o);
+  ASSERT_EQ(res.report["dropped_parts"].size(), 1u);
+  EXPECT_NEAR(res.report["dropped_parts"][0]["area"].get<double>(), 1.0, 1e-12);
+  EXPECT_EQ(res.mesh.quads.size(), 200u);  // 20 x 10 on the rectangle
+  o.drop_small_parts = false;
+  EXPECT_THROW(mesh_region(r, o), MeshingError);
+  std::filesystem::remove(path);
 }

@@ -26,6 +26,8 @@ struct MeshOptions {
                                  ///< meshed and the best mesh is kept; K > 0: K subregions. One poly-square per part
                                  ///< is always a candidate too (alone with parts = 1).
   std::size_t target_quads_per_part = 20000;  ///< subregion size for large parts in automatic mode
+  double perimeter_per_subregion = 60.0;      ///< automatic mode also tries perimeter / (this * size) subregions
+  bool drop_small_parts = true;               ///< leave out (and report) polygon parts smaller than size^2
   std::size_t search_quads = 200'000;         ///< parts up to this many quads try every count of search_subregions
   std::vector<int> search_subregions{2, 3, 4, 5, 6, 8};
   bool keep_partition = false;   ///< return the background triangulation and its partition (for pictures)
