@@ -1,5 +1,6 @@
 #include <cmath>
 #include <algorithm>
+#include <map>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -127,43 +128,54 @@ std::size_t straighten_separator_chains(TriMesh& mesh, int iterations) {
 }  // namespace polysquare
 
 namespace polysquare {
+namespace {
 
-std::size_t snap_separator_ends_to_corners(const TriMesh& mesh, std::vector<std::int32_t>& triangle_part,
-                                           double corner_threshold_deg, int max_edges) {
+// Whether the triangles of `part` form one edge-connected piece (a flood over them); false when it has none.
+bool part_connected(const TriMesh& mesh, const std::vector<std::vector<std::int32_t>>& around,
+                    const std::vector<std::int32_t>& triangle_part, std::int32_t part) {
+  std::vector<std::int32_t> members;
+  for (std::size_t t = 0; t < triangle_part.size(); ++t)
+    if (triangle_part[t] == part) members.push_back(static_cast<std::int32_t>(t));
+  if (members.empty()) return false;
+  std::vector<std::uint8_t> seen(triangle_part.size(), 0);
+  std::vector<std::int32_t> stack{members.front()};
+  seen[members.front()] = 1;
+  std::size_t reached = 0;
+  while (!stack.empty()) {
+    const auto t = stack.back();
+    stack.pop_back();
+    ++reached;
+    for (int k = 0; k < 3; ++k) {
+      const auto a = mesh.triangles[t][k], b = mesh.triangles[t][(k + 1) % 3];
+      for (auto u : around[a]) {
+        if (seen[u] || triangle_part[u] != part) continue;
+        const auto& tu = mesh.triangles[u];
+        if (tu[0] == b || tu[1] == b || tu[2] == b) { seen[u] = 1; stack.push_back(u); }
+      }
+    }
+  }
+  return reached == members.size();
+}
+
+std::vector<std::vector<std::int32_t>> vertex_triangles(const TriMesh& mesh) {
   std::vector<std::vector<std::int32_t>> around(mesh.vertices.size());
   for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
     for (auto v : mesh.triangles[t]) around[v].push_back(static_cast<std::int32_t>(t));
+  return around;
+}
+
+}  // namespace
+
+std::size_t snap_separator_ends_to_corners(const TriMesh& mesh, std::vector<std::int32_t>& triangle_part,
+                                           double corner_threshold_deg, int max_edges) {
+  const auto around = vertex_triangles(mesh);
   auto edge_triangle = [&](std::int32_t a, std::int32_t b) {
     for (auto t : around[a])
       for (auto v : mesh.triangles[t])
         if (v == b) return t;
     return std::int32_t{-1};
   };
-  // The part keeps one edge-connected piece: checked by a flood over its triangles.
-  auto connected = [&](std::int32_t part) {
-    std::vector<std::int32_t> members;
-    for (std::size_t t = 0; t < triangle_part.size(); ++t)
-      if (triangle_part[t] == part) members.push_back(static_cast<std::int32_t>(t));
-    if (members.empty()) return false;
-    std::vector<std::uint8_t> seen(triangle_part.size(), 0);
-    std::vector<std::int32_t> stack{members.front()};
-    seen[members.front()] = 1;
-    std::size_t reached = 0;
-    while (!stack.empty()) {
-      const auto t = stack.back();
-      stack.pop_back();
-      ++reached;
-      for (int k = 0; k < 3; ++k) {
-        const auto a = mesh.triangles[t][k], b = mesh.triangles[t][(k + 1) % 3];
-        for (auto u : around[a]) {
-          if (seen[u] || triangle_part[u] != part) continue;
-          const auto& tu = mesh.triangles[u];
-          if (tu[0] == b || tu[1] == b || tu[2] == b) { seen[u] = 1; stack.push_back(u); }
-        }
-      }
-    }
-    return reached == members.size();
-  };
+  auto connected = [&](std::int32_t part) { return part_connected(mesh, around, triangle_part, part); };
   const double cos_threshold = std::cos(corner_threshold_deg * 3.14159265358979323846 / 180.0);
   std::size_t moved = 0;
   for (const TriChain& ch : mesh.chains) {
@@ -290,6 +302,56 @@ std::size_t absorb_pieces_cut_off_by_features(const TriMesh& mesh, std::vector<s
       if (target[comp[t]] >= 0) { triangle_part[t] = target[comp[t]]; ++round_moves; }
     moved += round_moves;
     if (round_moves == 0) break;
+  }
+  return moved;
+}
+
+}  // namespace polysquare
+
+namespace polysquare {
+
+std::size_t keep_feature_loops_whole(const TriMesh& mesh, std::vector<std::int32_t>& triangle_part) {
+  const auto around = vertex_triangles(mesh);
+  std::size_t moved = 0;
+  for (const TriChain& ch : mesh.chains) {
+    if (ch.kind != TriChain::Kind::feature || !ch.closed) continue;
+    std::vector<Vec2> loop;
+    for (auto v : ch.vertices) loop.push_back(mesh.vertices[v]);
+    Box2 box;
+    for (Vec2 p : loop) box.add(p);
+    // The loop's inside and every triangle touching the loop.
+    std::vector<std::uint8_t> in(mesh.triangles.size(), 0);
+    for (auto v : ch.vertices)
+      for (auto t : around[v]) in[t] = 1;
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+      if (in[t]) continue;
+      const auto& tr = mesh.triangles[t];
+      const Vec2 c = (1.0 / 3.0) * (mesh.vertices[tr[0]] + mesh.vertices[tr[1]] + mesh.vertices[tr[2]]);
+      if (c.x >= box.lo.x && c.x <= box.hi.x && c.y >= box.lo.y && c.y <= box.hi.y && point_in_ring(c, loop)) in[t] = 1;
+    }
+    std::map<std::int32_t, double> area;
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+      if (in[t]) {
+        const auto& tr = mesh.triangles[t];
+        area[triangle_part[t]] += orient2(mesh.vertices[tr[0]], mesh.vertices[tr[1]], mesh.vertices[tr[2]]);
+      }
+    if (area.size() < 2) continue;
+    const std::int32_t owner =
+        std::max_element(area.begin(), area.end(), [](const auto& a, const auto& b) { return a.second < b.second; })->first;
+    std::vector<std::pair<std::int32_t, std::int32_t>> changed;  // triangle, old part
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+      if (in[t] && triangle_part[t] != owner) {
+        changed.push_back({static_cast<std::int32_t>(t), triangle_part[t]});
+        triangle_part[t] = owner;
+      }
+    bool ok = part_connected(mesh, around, triangle_part, owner);
+    for (const auto& [p, a] : area)
+      if (p != owner) ok = ok && part_connected(mesh, around, triangle_part, p);
+    if (ok) {
+      moved += changed.size();
+    } else {
+      for (const auto& [t, old] : changed) triangle_part[t] = old;
+    }
   }
   return moved;
 }

@@ -73,6 +73,11 @@ std::size_t add_separator_chains(TriMesh& mesh, const std::vector<std::int32_t>&
 std::size_t absorb_pieces_cut_off_by_features(const TriMesh& mesh, std::vector<std::int32_t>& triangle_part,
                                               int max_rounds = 10);
 
+/// Gives every closed feature loop, its inside and the triangles touching it to the part that holds most of that
+/// area, so no separator touches the loop (a loop cut by a separator leaves two-sided faces no poly-square can
+/// hold); a move that would disconnect a part is undone. Returns the number of triangles moved.
+std::size_t keep_feature_loops_whole(const TriMesh& mesh, std::vector<std::int32_t>& triangle_part);
+
 /// Moves separator ends that meet a ring within `max_edges` ring edges of a sharp corner (an input vertex turning
 /// by more than corner_threshold_deg) onto the corner, by handing the triangles around the ring vertices in
 /// between to the neighbouring part (kept only if both parts stay connected): otherwise the corner and the end
