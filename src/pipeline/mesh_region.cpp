@@ -95,9 +95,12 @@ struct Candidate {
   std::string error;
   nlohmann::json summary;
 
+  double size_deviation = 0.0;  // |log(mean quad area / h^2)|: how far the element size is from the request
+
   bool better_than(const Candidate& o) const {
     if (std::abs(min_sj - o.min_sj) > 0.02) return min_sj > o.min_sj;  // quality first, within a margin
     if (interior_singularities != o.interior_singularities) return interior_singularities < o.interior_singularities;
+    if (std::abs(size_deviation - o.size_deviation) > 0.05) return size_deviation < o.size_deviation;
     return min_sj > o.min_sj;
   }
 };
@@ -127,10 +130,15 @@ Candidate try_candidate(const Region& region, const RegionPart& part, const Poly
       if (const double ratio = lmax / lmin; ratio > c.max_edge_ratio) { c.max_edge_ratio = ratio; longest = q; }
     }
     c.interior_singularities = compute_quality(r.mesh).interior_singularities;
+    double area = 0.0;
+    for (const auto& q : r.mesh.quads)
+      area += 0.5 * cross(r.mesh.nodes[q[2]] - r.mesh.nodes[q[0]], r.mesh.nodes[q[3]] - r.mesh.nodes[q[1]]);
+    c.size_deviation = std::abs(std::log(area / static_cast<double>(r.mesh.quads.size()) / (options.size * options.size)));
     c.summary["quads"] = r.mesh.quads.size();
     c.summary["min_scaled_jacobian"] = c.min_sj;
     c.summary["max_edge_ratio"] = c.max_edge_ratio;
     c.summary["interior_singularities"] = c.interior_singularities;
+    c.summary["mean_area_over_size_squared"] = area / static_cast<double>(r.mesh.quads.size()) / (options.size * options.size);
     if (c.max_edge_ratio > options.max_edge_ratio) {
       const Vec2 p = r.mesh.nodes[r.mesh.quads[longest][0]];
       throw MeshingError(name + ": the best mesh has a quad with edge ratio " + std::to_string(c.max_edge_ratio) +
