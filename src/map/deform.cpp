@@ -248,28 +248,34 @@ bool move_constrained_vertices(const DeformProblem& problem, const DeformOptions
   std::vector<Vec2> disp(n);
   for (std::size_t v = 0; v < n; ++v)
     if (target_mask[v]) disp[v] = targets[v] - x[v];
-  if (nfree > 0) {
-    std::vector<Eigen::Triplet<double>> trip;
-    Eigen::VectorXd bx = Eigen::VectorXd::Zero(nfree), by = Eigen::VectorXd::Zero(nfree);
-    auto add_edge = [&](int a, int b) {
-      for (auto [u, w] : {std::pair{a, b}, std::pair{b, a}}) {
+  // Uniform graph Laplacian over the free vertices; `harmonic(values)` extends values given on the constrained
+  // vertices harmonically (each interior edge appears twice: weights stay symmetric).
+  std::vector<Eigen::Triplet<double>> trip;
+  for (const auto& t : problem.triangles)
+    for (int k = 0; k < 3; ++k)
+      for (auto [u, w] : {std::pair{t[k], t[(k + 1) % 3]}, std::pair{t[(k + 1) % 3], t[k]}}) {
         if (free_index[u] < 0) continue;
         trip.emplace_back(free_index[u], free_index[u], 1.0);
         if (free_index[w] >= 0) trip.emplace_back(free_index[u], free_index[w], -1.0);
-        else { bx[free_index[u]] += disp[w].x; by[free_index[u]] += disp[w].y; }
       }
-    };
-    for (const auto& t : problem.triangles)  // each interior edge appears twice: weights stay symmetric
-      for (int k = 0; k < 3; ++k) add_edge(t[k], t[(k + 1) % 3]);
-    Eigen::SparseMatrix<double> L(nfree, nfree);
-    L.setFromTriplets(trip.begin(), trip.end());
-    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(L);
-    if (solver.info() == Eigen::Success) {
-      const Eigen::VectorXd sx = solver.solve(bx), sy = solver.solve(by);
-      for (std::size_t v = 0; v < n; ++v)
-        if (free_index[v] >= 0) disp[v] = {sx[free_index[v]], sy[free_index[v]]};
-    }
-  }
+  Eigen::SparseMatrix<double> L(nfree, nfree);
+  L.setFromTriplets(trip.begin(), trip.end());
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver;
+  if (nfree > 0) solver.compute(L);
+  const bool solvable = nfree > 0 && solver.info() == Eigen::Success;
+  auto harmonic = [&](std::vector<Vec2>& values) {  // values[v] given where target_mask[v]; fills the others
+    if (!solvable) return false;
+    Eigen::VectorXd bx = Eigen::VectorXd::Zero(nfree), by = Eigen::VectorXd::Zero(nfree);
+    for (const auto& t : problem.triangles)
+      for (int k = 0; k < 3; ++k)
+        for (auto [u, w] : {std::pair{t[k], t[(k + 1) % 3]}, std::pair{t[(k + 1) % 3], t[k]}})
+          if (free_index[u] >= 0 && free_index[w] < 0) { bx[free_index[u]] += values[w].x; by[free_index[u]] += values[w].y; }
+    const Eigen::VectorXd sx = solver.solve(bx), sy = solver.solve(by);
+    for (std::size_t v = 0; v < n; ++v)
+      if (free_index[v] >= 0) values[v] = {sx[free_index[v]], sy[free_index[v]]};
+    return true;
+  };
+  harmonic(disp);
   DeformProblem inner = problem;
   inner.aligned.clear();
   inner.fixed.assign(n, 0);
@@ -287,7 +293,14 @@ bool move_constrained_vertices(const DeformProblem& problem, const DeformOptions
     if (min_signed_area(problem.triangles, trial) <= 0.0) {
       step *= 0.5;
       if (step < 1e-7) {
-        return false;
+        // The straight-line path swept the boundary through itself (the quantized shape is far from the
+        // deformed one). The uniform harmonic (Tutte) embedding with every constrained vertex on its target is
+        // bijective when they bound a convex polygon (Tutte's theorem: a rectangle, the common subregion), and
+        // is accepted in any case only if no triangle is inverted; AMIPS then improves it.
+        std::vector<Vec2> tutte = targets;
+        if (!harmonic(tutte) || min_signed_area(problem.triangles, tutte) <= 0.0) return false;
+        x = tutte;
+        break;
       }
       continue;
     }

@@ -58,32 +58,46 @@ double ring_area(const Region& region, const RegionPart& part) {
   return a;
 }
 
-// Subregion counts to try for one part, in order. An explicit --parts K is tried first and one poly-square
-// after it; automatic mode tries a range of small counts on parts small enough to afford it, and the count
-// from target_quads_per_part.
-std::vector<int> candidate_subregions(const Region& region, const RegionPart& part, const MeshOptions& options) {
+// Subregion counts to try for one part, in rounds: a round is meshed only when every candidate of the rounds
+// before it failed. An explicit --parts K is one round, one poly-square the next. Automatic mode meshes small
+// parts every way at once (one poly-square, the counts of search_subregions, the area- and perimeter-based
+// counts); a large part tries one poly-square first and partitions only if that fails, which keeps its time
+// near one map.
+std::vector<std::vector<int>> candidate_subregions(const Region& region, const RegionPart& part,
+                                                   const MeshOptions& options) {
   const double quads = ring_area(region, part) / (options.size * options.size);
-  std::vector<int> ks;
-  auto add = [&](int k) { if (std::find(ks.begin(), ks.end(), k) == ks.end()) ks.push_back(k); };
+  std::vector<std::vector<int>> rounds(1);
+  auto add = [&](int k) {
+    for (const auto& r : rounds)
+      if (std::find(r.begin(), r.end(), k) != r.end()) return;
+    rounds.back().push_back(k);
+  };
   if (options.parts > 0) {
     add(options.parts);
-  } else {
-    // Large parts get k from their area; long, convoluted boundaries (coastlines) need more subregions than
-    // their area says, so k from the perimeter is tried too.
-    double perimeter = 0.0;
-    for (int r : part.rings) {
-      const auto& pts = region.rings[static_cast<std::size_t>(r)].points;
-      for (std::size_t i = 0; i < pts.size(); ++i) perimeter += distance(pts[i], pts[(i + 1) % pts.size()]);
-    }
-    add(std::max(1, static_cast<int>(std::lround(quads / static_cast<double>(options.target_quads_per_part)))));
-    const int by_perimeter = static_cast<int>(std::lround(perimeter / (options.perimeter_per_subregion * options.size)));
-    if (by_perimeter > 1 && quads / by_perimeter >= 16.0) add(by_perimeter);
-    if (quads <= static_cast<double>(options.search_quads))
-      for (int k : options.search_subregions)
-        if (quads / k >= 16.0) add(k);  // at least a 4 x 4 block per subregion
+    rounds.emplace_back();
+    add(1);
+    return rounds;
   }
+  const bool large = quads > static_cast<double>(options.search_quads);
+  if (large) {
+    add(1);
+    rounds.emplace_back();
+  }
+  // k from the area; long, convoluted boundaries (coastlines) need more subregions than their area says, so k
+  // from the perimeter too.
+  double perimeter = 0.0;
+  for (int r : part.rings) {
+    const auto& pts = region.rings[static_cast<std::size_t>(r)].points;
+    for (std::size_t i = 0; i < pts.size(); ++i) perimeter += distance(pts[i], pts[(i + 1) % pts.size()]);
+  }
+  add(std::max(1, static_cast<int>(std::lround(quads / static_cast<double>(options.target_quads_per_part)))));
+  const int by_perimeter = static_cast<int>(std::lround(perimeter / (options.perimeter_per_subregion * options.size)));
+  if (by_perimeter > 1 && quads / by_perimeter >= 16.0) add(by_perimeter);
+  if (!large)
+    for (int k : options.search_subregions)
+      if (quads / k >= 16.0) add(k);  // at least a 4 x 4 block per subregion
   add(1);
-  return ks;
+  return rounds;
 }
 
 // One way of meshing a part: the map, then smoothing, then the checks every output must pass.
@@ -221,21 +235,26 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
   const int threads = options.threads > 0 ? options.threads : static_cast<int>(oneapi::tbb::info::default_concurrency());
   oneapi::tbb::global_control limit(oneapi::tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
   oneapi::tbb::parallel_for(std::size_t{0}, parts.size(), [&](std::size_t k) {
-    const std::vector<int> ks = candidate_subregions(*work, parts[k], options);
-    std::vector<Candidate> cands(ks.size());
-    // Every candidate is meshed, smoothed and measured; the best valid one wins, so the choice depends only on
-    // the input and the options, never on timing.
-    oneapi::tbb::parallel_for(std::size_t{0}, ks.size(), [&](std::size_t c) {
-      PolysquareMapOptions part_map = map;
-      part_map.partition.parts = ks[c];
-      cands[c] = try_candidate(*work, parts[k], part_map, options);
-    });
+    std::vector<int> ks;
+    std::vector<Candidate> cands;
     int best = -1;
-    for (std::size_t c = 0; c < cands.size(); ++c) {
-      tried[k].push_back(cands[c].summary);
-      // An explicit --parts K is kept whenever it meshes; one poly-square is only its fallback.
-      if (cands[c].error.empty() && (best < 0 || (options.parts == 0 && cands[c].better_than(cands[static_cast<std::size_t>(best)]))))
-        best = static_cast<int>(c);
+    for (const std::vector<int>& round : candidate_subregions(*work, parts[k], options)) {
+      const std::size_t first = cands.size();
+      ks.insert(ks.end(), round.begin(), round.end());
+      cands.resize(ks.size());
+      // Every candidate of a round is meshed, smoothed and measured; the best valid one wins, so the choice
+      // depends only on the input and the options, never on timing.
+      oneapi::tbb::parallel_for(first, ks.size(), [&](std::size_t c) {
+        PolysquareMapOptions part_map = map;
+        part_map.partition.parts = ks[c];
+        cands[c] = try_candidate(*work, parts[k], part_map, options);
+      });
+      for (std::size_t c = first; c < cands.size(); ++c) {
+        tried[k].push_back(cands[c].summary);
+        if (cands[c].error.empty() && (best < 0 || cands[c].better_than(cands[static_cast<std::size_t>(best)])))
+          best = static_cast<int>(c);
+      }
+      if (best >= 0) break;
     }
     if (best < 0) {
       std::string all;

@@ -21,10 +21,11 @@ struct MeshOptions {
   double simplify = 0.0;         ///< simplify curves first: remove vertices whose triangle area is below
                                  ///< (simplify * size)^2, keeping topology (coastlines: 0.5); 0 = off
   std::size_t max_quads = 50'000'000;  ///< refuse sizes whose estimated quad count exceeds this
-  int parts = 0;                 ///< subregions per polygon part; 0 = automatic: every count of search_subregions
-                                 ///< (parts up to search_quads quads) and the one from target_quads_per_part are
-                                 ///< meshed and the best mesh is kept; K > 0: K subregions. One poly-square per part
-                                 ///< is always a candidate too (alone with parts = 1).
+  int parts = 0;                 ///< subregions per polygon part. 0 = automatic: parts up to search_quads quads
+                                 ///< are meshed with one poly-square, every count of search_subregions and the
+                                 ///< area- and perimeter-based counts, and the best mesh is kept; larger parts use
+                                 ///< one poly-square and partition only if it fails. K > 0: K subregions, one
+                                 ///< poly-square if that fails.
   std::size_t target_quads_per_part = 20000;  ///< subregion size for large parts in automatic mode
   double perimeter_per_subregion = 60.0;      ///< automatic mode also tries perimeter / (this * size) subregions
   bool drop_small_parts = true;               ///< leave out (and report) polygon parts smaller than size^2
