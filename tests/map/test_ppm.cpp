@@ -222,6 +222,8 @@ TEST_P(PpmCase, SubregionsAreStitchedConformingly) {
 INSTANTIATE_TEST_SUITE_P(Cases, PpmCase,
                          ::testing::Values(std::make_tuple("triangle", 3.0, 3, 101), std::make_tuple("pentagon", 3.0, 5, 100),
                                            std::make_tuple("letter_M", 2.0, 8, 177), std::make_tuple("letter_R", 2.0, 3, 152),
+                                           // subregion 1 of letter_R's 8-way partition needs the Tutte snap
+                                           std::make_tuple("letter_R", 2.0, 8, 152),
                                            std::make_tuple("key", 2.0, 4, 184), std::make_tuple("dam_channel", 2.0, 4, 508)));
 
 TEST(Ppm, IndependentOfTheThreadCount) {
