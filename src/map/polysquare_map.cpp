@@ -125,6 +125,7 @@ PartMapResult map_part(const Region& region, const RegionPart& part, const Polys
       keep_feature_loops_whole(tri, pr.triangle_part);
       absorb_pieces_cut_off_by_features(tri, pr.triangle_part);
       snap_separator_ends_to_corners(tri, pr.triangle_part, options.layout.corner_threshold_deg);
+      pr.parts = merge_enclosed_parts(tri, pr.triangle_part);
       triangle_part = pr.triangle_part;
       if (options.keep_partition) {
         result.background = tri;

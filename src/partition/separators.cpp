@@ -1,6 +1,7 @@
 #include <cmath>
 #include <algorithm>
 #include <map>
+#include <set>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -354,6 +355,62 @@ std::size_t keep_feature_loops_whole(const TriMesh& mesh, std::vector<std::int32
     }
   }
   return moved;
+}
+
+}  // namespace polysquare
+
+namespace polysquare {
+
+int merge_enclosed_parts(const TriMesh& mesh, std::vector<std::int32_t>& triangle_part) {
+  auto key = [](std::int32_t a, std::int32_t b) {
+    if (a > b) std::swap(a, b);
+    return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) | static_cast<std::uint32_t>(b);
+  };
+  std::unordered_map<std::uint64_t, std::array<std::int32_t, 2>> owners;
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      auto [it, inserted] = owners.try_emplace(key(mesh.triangles[t][k], mesh.triangles[t][(k + 1) % 3]),
+                                               std::array<std::int32_t, 2>{static_cast<std::int32_t>(t), -1});
+      if (!inserted) it->second[1] = static_cast<std::int32_t>(t);
+    }
+  for (bool changed = true; changed;) {
+    changed = false;
+    // For every part: the other parts across its boundary, and the vertices it shares with them and with the
+    // outside (its rings). A part with one neighbour whose interface never touches a ring is enclosed by it
+    // (holes inside the part do not help: the interface loop itself has no corner).
+    std::map<std::int32_t, std::set<std::int32_t>> across;
+    std::map<std::int32_t, std::set<std::int32_t>> interface_vertices, ring_vertices;
+    for (const auto& [k, o] : owners) {
+      const std::int32_t a = triangle_part[o[0]], b = o[1] < 0 ? -1 : triangle_part[o[1]];
+      if (a == b) continue;
+      const auto u = static_cast<std::int32_t>(k >> 32), v = static_cast<std::int32_t>(k & 0xffffffffULL);
+      if (b < 0) {
+        ring_vertices[a].insert({u, v});
+        continue;
+      }
+      across[a].insert(b);
+      across[b].insert(a);
+      for (auto p : {a, b}) interface_vertices[p].insert({u, v});
+    }
+    for (const auto& [part, nbrs] : across) {
+      if (nbrs.size() != 1) continue;
+      const auto& iv = interface_vertices[part];
+      const auto& rv = ring_vertices[part];
+      if (std::any_of(iv.begin(), iv.end(), [&](std::int32_t v) { return rv.count(v) > 0; })) continue;
+      const std::int32_t into = *nbrs.begin();
+      for (auto& p : triangle_part)
+        if (p == part) p = into;
+      changed = true;
+      break;  // neighbourhoods changed: recompute
+    }
+  }
+  // Renumber the remaining parts 0 .. k-1 in their old order.
+  std::map<std::int32_t, std::int32_t> renumber;
+  for (auto p : triangle_part) renumber.emplace(p, 0);
+  std::int32_t next = 0;
+  for (auto& [old, id] : renumber) id = next++;
+  for (auto& p : triangle_part) p = renumber[p];
+  return next;
 }
 
 }  // namespace polysquare

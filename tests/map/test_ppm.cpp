@@ -2,6 +2,7 @@
 // cutting of a partitioned triangulation into subregions, and conforming stitched meshes on the real cases.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <map>
 #include <set>
 
@@ -232,4 +233,25 @@ TEST(Ppm, IndependentOfTheThreadCount) {
   ASSERT_EQ(a.quad_part, b.quad_part);
   ASSERT_EQ(a.nodes.size(), b.nodes.size());
   for (std::size_t i = 0; i < a.nodes.size(); ++i) ASSERT_TRUE(a.nodes[i] == b.nodes[i]) << i;
+}
+
+TEST(PartitionRepair, APartEnclosedByAnotherIsMergedIntoIt) {
+  // pentagon: a disc of triangles around the centre is part 1 (enclosed by part 0), a wedge touching the
+  // boundary is part 2 (kept), everything else part 0.
+  auto [tri, tp] = partitioned("pentagon", 3.0, 2);
+  Box2 box;
+  for (Vec2 p : tri.vertices) box.add(p);
+  const Vec2 c = 0.5 * (box.lo + box.hi);
+  const double r = 0.15 * box.diagonal();
+  for (std::size_t t = 0; t < tri.triangles.size(); ++t) {
+    const auto& tr = tri.triangles[t];
+    const Vec2 m = (1.0 / 3.0) * (tri.vertices[tr[0]] + tri.vertices[tr[1]] + tri.vertices[tr[2]]);
+    tp[t] = distance(m, c) < r ? 1 : (m.x > box.hi.x - 0.2 * (box.hi.x - box.lo.x) ? 2 : 0);
+  }
+  const std::size_t disc = static_cast<std::size_t>(std::count(tp.begin(), tp.end(), 1));
+  ASSERT_GT(disc, 0u);
+  EXPECT_EQ(merge_enclosed_parts(tri, tp), 2);
+  EXPECT_EQ(std::count(tp.begin(), tp.end(), 2), 0);  // renumbered: the wedge is now part 1
+  EXPECT_GT(std::count(tp.begin(), tp.end(), 1), 0);
+  EXPECT_EQ(std::set<std::int32_t>(tp.begin(), tp.end()).size(), 2u);
 }

@@ -73,6 +73,11 @@ std::size_t add_separator_chains(TriMesh& mesh, const std::vector<std::int32_t>&
 std::size_t absorb_pieces_cut_off_by_features(const TriMesh& mesh, std::vector<std::int32_t>& triangle_part,
                                               int max_rounds = 10);
 
+/// Merges every part whose whole boundary faces one other part (a part enclosed by another: its loop has no
+/// corner to close a poly-square on) into that part, repeatedly, and renumbers the parts 0 .. k-1 keeping their
+/// order. Returns the new number of parts.
+int merge_enclosed_parts(const TriMesh& mesh, std::vector<std::int32_t>& triangle_part);
+
 /// Gives every closed feature loop, its inside and the triangles touching it to the part that holds most of that
 /// area, so no separator touches the loop (a loop cut by a separator leaves two-sided faces no poly-square can
 /// hold); a move that would disconnect a part is undone. Returns the number of triangles moved.
