@@ -17,11 +17,6 @@
 namespace polysquare {
 namespace {
 
-std::uint64_t edge_key(std::int32_t a, std::int32_t b) {
-  if (a > b) std::swap(a, b);
-  return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) | static_cast<std::uint32_t>(b);
-}
-
 std::string at_text(Vec2 p) { return "(" + std::to_string(p.x) + ", " + std::to_string(p.y) + ")"; }
 
 // What lies across a boundary edge of a subregion: the outside (a ring piece) or a neighbour, with the feature
@@ -44,12 +39,7 @@ struct PartitionTopology {
 PartitionTopology topology(const TriMesh& tri, const std::vector<std::int32_t>& tp) {
   PartitionTopology g;
   const std::size_t nv = tri.vertices.size();
-  for (std::size_t t = 0; t < tri.triangles.size(); ++t)
-    for (int k = 0; k < 3; ++k) {
-      auto [it, inserted] = g.owners.try_emplace(edge_key(tri.triangles[t][k], tri.triangles[t][(k + 1) % 3]),
-                                                 std::array<std::int32_t, 2>{static_cast<std::int32_t>(t), -1});
-      if (!inserted) it->second[1] = static_cast<std::int32_t>(t);
-    }
+  g.owners = edge_owners(tri);
   g.input.assign(nv, 0);
   for (std::size_t c = 0; c < tri.chains.size(); ++c) {
     const TriChain& ch = tri.chains[c];

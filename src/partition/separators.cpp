@@ -10,17 +10,8 @@
 namespace polysquare {
 
 std::size_t add_separator_chains(TriMesh& mesh, const std::vector<std::int32_t>& triangle_part) {
-  auto key = [](std::int32_t a, std::int32_t b) {
-    if (a > b) std::swap(a, b);
-    return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) | static_cast<std::uint32_t>(b);
-  };
-  std::unordered_map<std::uint64_t, std::array<std::int32_t, 2>> owners;  // edge -> its (one or two) triangles
-  for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
-    for (int k = 0; k < 3; ++k) {
-      auto [it, inserted] = owners.try_emplace(key(mesh.triangles[t][k], mesh.triangles[t][(k + 1) % 3]),
-                                               std::array<std::int32_t, 2>{static_cast<std::int32_t>(t), -1});
-      if (!inserted) it->second[1] = static_cast<std::int32_t>(t);
-    }
+  const auto key = edge_key;
+  auto owners = edge_owners(mesh);  // edge -> its (one or two) triangles
   std::vector<std::vector<std::int32_t>> adj(mesh.vertices.size());
   for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
     for (int k = 0; k < 3; ++k) {
@@ -228,10 +219,7 @@ namespace polysquare {
 
 std::size_t absorb_pieces_cut_off_by_features(const TriMesh& mesh, std::vector<std::int32_t>& triangle_part,
                                               int max_rounds) {
-  auto key = [](std::int32_t a, std::int32_t b) {
-    if (a > b) std::swap(a, b);
-    return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) | static_cast<std::uint32_t>(b);
-  };
+  const auto key = edge_key;
   std::unordered_set<std::uint64_t> feature_edges;
   for (const TriChain& ch : mesh.chains) {
     if (ch.kind != TriChain::Kind::feature) continue;
@@ -240,13 +228,7 @@ std::size_t absorb_pieces_cut_off_by_features(const TriMesh& mesh, std::vector<s
   }
   if (feature_edges.empty()) return 0;
   // Edge neighbours of every triangle, with whether the shared edge lies on a feature.
-  std::unordered_map<std::uint64_t, std::array<std::int32_t, 2>> owners;
-  for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
-    for (int k = 0; k < 3; ++k) {
-      auto [it, inserted] = owners.try_emplace(key(mesh.triangles[t][k], mesh.triangles[t][(k + 1) % 3]),
-                                               std::array<std::int32_t, 2>{static_cast<std::int32_t>(t), -1});
-      if (!inserted) it->second[1] = static_cast<std::int32_t>(t);
-    }
+  auto owners = edge_owners(mesh);  // edge -> its (one or two) triangles
   struct Nb { std::int32_t t; bool feature; double length; };
   std::vector<std::array<Nb, 3>> nb(mesh.triangles.size());
   for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
@@ -362,17 +344,8 @@ std::size_t keep_feature_loops_whole(const TriMesh& mesh, std::vector<std::int32
 namespace polysquare {
 
 int merge_enclosed_parts(const TriMesh& mesh, std::vector<std::int32_t>& triangle_part) {
-  auto key = [](std::int32_t a, std::int32_t b) {
-    if (a > b) std::swap(a, b);
-    return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) | static_cast<std::uint32_t>(b);
-  };
-  std::unordered_map<std::uint64_t, std::array<std::int32_t, 2>> owners;
-  for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
-    for (int k = 0; k < 3; ++k) {
-      auto [it, inserted] = owners.try_emplace(key(mesh.triangles[t][k], mesh.triangles[t][(k + 1) % 3]),
-                                               std::array<std::int32_t, 2>{static_cast<std::int32_t>(t), -1});
-      if (!inserted) it->second[1] = static_cast<std::int32_t>(t);
-    }
+  const auto key = edge_key;
+  auto owners = edge_owners(mesh);  // edge -> its (one or two) triangles
   for (bool changed = true; changed;) {
     changed = false;
     // For every part: the other parts across its boundary, and the vertices it shares with them and with the

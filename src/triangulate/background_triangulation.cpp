@@ -43,6 +43,18 @@ struct PairHash {
 
 }  // namespace
 
+std::unordered_map<std::uint64_t, std::array<std::int32_t, 2>> edge_owners(const TriMesh& mesh) {
+  std::unordered_map<std::uint64_t, std::array<std::int32_t, 2>> owners;
+  owners.reserve(mesh.triangles.size() * 2);
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      auto [it, inserted] = owners.try_emplace(edge_key(mesh.triangles[t][k], mesh.triangles[t][(k + 1) % 3]),
+                                               std::array<std::int32_t, 2>{static_cast<std::int32_t>(t), -1});
+      if (!inserted) it->second[1] = static_cast<std::int32_t>(t);
+    }
+  return owners;
+}
+
 // Triangles with one, two or three split edges are subdivided into two, three or four, keeping
 // counter-clockwise order; the midpoint vertex of a split edge is free to move inwards.
 void split_constrained_interior_edges(TriMesh& mesh, std::vector<std::int32_t>* parent) {

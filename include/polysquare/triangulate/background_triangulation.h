@@ -4,6 +4,8 @@
 #include <array>
 #include <cstdint>
 #include <string>
+#include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include "polysquare/core/geometry.h"
@@ -50,6 +52,15 @@ struct RegionPart {
   std::vector<int> features;
   std::vector<int> feature_points;
 };
+
+/// Key of the undirected edge (a, b) for hash maps.
+inline std::uint64_t edge_key(std::int32_t a, std::int32_t b) {
+  if (a > b) std::swap(a, b);
+  return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) | static_cast<std::uint32_t>(b);
+}
+
+/// The one or two triangles of every edge (second -1 on the boundary), by edge_key.
+std::unordered_map<std::uint64_t, std::array<std::int32_t, 2>> edge_owners(const TriMesh& mesh);
 
 /// Splits every interior edge whose two end points lie on chains (e.g. the edge cutting off a corner ear), so
 /// that straightening the chains never squeezes a triangle to zero area. When `parent` is given it receives,
