@@ -30,7 +30,7 @@ void on_signal(int sig) {
 
 struct MeshArgs {
   std::string input, output, report, picture, partition_picture, map = "ppm";
-  bool binary = false;
+  bool binary = false, bend_interfaces = false;
   InputOptions input_options;
   MeshOptions options;
 };
@@ -42,6 +42,7 @@ int run_mesh(const MeshArgs& args) {
   MeshOptions options = args.options;
   options.keep_partition = !args.partition_picture.empty();
   options.map.composition = args.map == "gpm" ? MapComposition::gpm : MapComposition::ppm;
+  options.map.layout.straight_interfaces = !args.bend_interfaces;
   MeshResult result = mesh_region(region, options);
   const QualityReport quality = compute_quality(result.mesh);
   const DomainDistance domain = domain_distance(result.mesh, region, {args.options.corner_threshold_deg});
@@ -124,6 +125,9 @@ int main(int argc, char** argv) {
   cmd_mesh->add_option("--threads", mesh.options.threads, "worker threads (0 = all cores); output does not depend on it")
       ->check(CLI::NonNegativeNumber);
   cmd_mesh->add_option("--seed", mesh.options.seed, "seed of randomized stages");
+  cmd_mesh->add_flag("--bend-interfaces", mesh.bend_interfaces,
+                     "PPM: let interfaces between subregions bend (both sides share every break point) instead of "
+                     "keeping each one straight");
   cmd_mesh->add_option("--corner-angle", mesh.options.corner_threshold_deg,
                        "input vertices turning by more than this (degrees) become mesh nodes")
       ->capture_default_str();

@@ -94,7 +94,8 @@ std::vector<int> label_chain(const std::vector<Vec2>& edge_vec, const std::vecto
 }  // namespace
 
 Layout build_layout(const TriMesh& mesh, const std::vector<Vec2>& original, const std::vector<Vec2>& deformed,
-                    const LayoutOptions& options, const std::string& part_name) {
+                    const LayoutOptions& options, const std::string& part_name,
+                    const std::vector<std::uint8_t>* extra_breaks) {
   const std::size_t nv = mesh.vertices.size();
   Layout layout;
   layout.vertex_break.assign(nv, -1);
@@ -146,7 +147,7 @@ Layout build_layout(const TriMesh& mesh, const std::vector<Vec2>& original, cons
         edge_vec.push_back(deformed[ch.vertices[(i + 1) % n]] - deformed[v]);
         free_change.push_back(corner[v]);
         // An interface is one straight side on both of its subregions, so both get the same nodes.
-        locked.push_back(ch.interface >= 0 && !corner[v]);
+        locked.push_back(options.straight_interfaces && ch.interface >= 0 && !corner[v]);
       }
       if (!closed) verts.push_back(ch.vertices.back());
     }
@@ -204,6 +205,9 @@ Layout build_layout(const TriMesh& mesh, const std::vector<Vec2>& original, cons
     }
   }
 
+  if (extra_breaks)
+    for (std::size_t v = 0; v < nv; ++v)
+      if ((*extra_breaks)[v]) is_break[v] = 1;
   for (std::size_t v = 0; v < nv; ++v) {
     if (!is_break[v]) continue;
     layout.vertex_break[v] = static_cast<std::int32_t>(layout.break_vertex.size());

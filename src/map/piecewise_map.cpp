@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <map>
+#include <set>
 #include <tuple>
 #include <unordered_map>
 
@@ -329,6 +330,24 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
     mapped[p] = deform_mesh(subs[p].mesh, options, true);
     layouts[p] = build_layout(subs[p].mesh, subs[p].mesh.vertices, mapped[p].x, options.layout, sub_name(p));
   });
+  if (!options.layout.straight_interfaces) {
+    // Bent interfaces: a break point one side puts on an interface becomes a (straight) break point on the
+    // other side too, so the two sides split it into the same segments.
+    std::set<std::int32_t> interface_breaks;
+    for (std::size_t p = 0; p < n; ++p)
+      for (std::int32_t v : layouts[p].break_vertex)
+        if (subs[p].global_vertex[static_cast<std::size_t>(v)] >= 0)
+          interface_breaks.insert(subs[p].global_vertex[static_cast<std::size_t>(v)]);
+    for_each_subregion(n, [&](std::size_t p) {
+      const TriMesh& m = subs[p].mesh;
+      std::vector<std::uint8_t> extra(m.vertices.size(), 0);
+      for (const TriChain& ch : m.chains)
+        if (ch.interface >= 0)
+          for (std::int32_t v : ch.vertices)
+            extra[static_cast<std::size_t>(v)] = interface_breaks.count(subs[p].global_vertex[static_cast<std::size_t>(v)]) > 0;
+      layouts[p] = build_layout(m, m.vertices, mapped[p].x, options.layout, sub_name(p), &extra);
+    });
+  }
   st.seconds_deform = seconds_since(t0);
   for (std::size_t p = 0; p < n; ++p) {
     st.deform.iterations += mapped[p].stats.iterations;

@@ -255,3 +255,21 @@ TEST(PartitionRepair, APartEnclosedByAnotherIsMergedIntoIt) {
   EXPECT_GT(std::count(tp.begin(), tp.end(), 1), 0);
   EXPECT_EQ(std::set<std::int32_t>(tp.begin(), tp.end()).size(), 2u);
 }
+
+TEST(Ppm, BentInterfacesShareTheirBreakPointsAndStitch) {
+  // With a cheap label change the labelling bends interfaces; each side then takes the other's break points,
+  // so the stitched mesh stays conforming. Straight interfaces give fewer break points on the same partition.
+  for (const auto& [name, h, k] : {std::make_tuple("letter_R", 2.0, 3), std::make_tuple("pentagon", 3.0, 5)}) {
+    auto [tri, tp] = partitioned(name, h, k);
+    PolysquareMapOptions o;
+    o.size = h;
+    o.layout.label_change_cost = 0.5;
+    PartMapStats straight, bent;
+    map_piecewise(tri, tp, k, o, name, straight);
+    o.layout.straight_interfaces = false;
+    const QuadMesh m = map_piecewise(tri, tp, k, o, name, bent);
+    EXPECT_GT(bent.break_points, straight.break_points) << name;
+    const InvariantReport inv = check_invariants(m);
+    EXPECT_TRUE(inv.ok()) << name << ": " << inv.first_problem;
+  }
+}

@@ -16,6 +16,8 @@ struct LayoutOptions {
   double corner_threshold_deg = 30.0;  ///< input vertices turning by more than this become mesh nodes
   double label_change_cost = 6.0;      ///< cost of a label change (element lengths) away from sharp vertices;
                                        ///< 6 keeps smooth features straight (square_feature: SJ min 0.58 vs 0.11 at 3)
+  bool straight_interfaces = true;     ///< PPM interfaces get one label (one straight side) on each side; false
+                                       ///< lets them bend, the two sides then sharing every break point
 };
 
 /// Axis labels: 0 = +X, 1 = +Y, 2 = -X, 3 = -Y (the direction of travel along the chain).
@@ -43,8 +45,10 @@ struct Layout {
 
 /// Labels and break points of every chain of `mesh` deformed to `deformed` (lattice units: 1 = one element).
 /// `original` holds the input coordinates used for turning angles. Throws MeshingError (naming `part_name`)
-/// when a closed chain's labels do not turn by +-4 quarter turns.
+/// when a closed chain's labels do not turn by +-4 quarter turns. `extra_breaks` (#V flags, optional) adds break
+/// points that do not turn (where the other side of a bent interface has a corner).
 Layout build_layout(const TriMesh& mesh, const std::vector<Vec2>& original, const std::vector<Vec2>& deformed,
-                    const LayoutOptions& options, const std::string& part_name);
+                    const LayoutOptions& options, const std::string& part_name,
+                    const std::vector<std::uint8_t>* extra_breaks = nullptr);
 
 }  // namespace polysquare
