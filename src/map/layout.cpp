@@ -12,14 +12,13 @@ namespace {
 const Vec2 kLabelDir[4] = {{1, 0}, {0, 1}, {-1, 0}, {0, -1}};
 
 // Labels of one chain by dynamic programming: each edge pays its length times (1 - cos) of the angle between
-// its deformed direction and the label's axis direction; each label change pays `change_cost` (nothing at a
-// sharp input vertex, where a corner is natural); U-turns are forbidden. This removes the staircases that the
+// its deformed direction and the label's axis direction; a label change into edge i pays change_cost[i] (nothing at a
+// sharp input vertex, where a corner is natural; 1e300 forbids it); U-turns are forbidden. This removes the staircases that the
 // L1 term alone favours and the short runs that would become spurious corners. A closed chain is solved once
 // per label of its first edge, with the running number of quarter turns in the state, so that it closes with
 // exactly `required_turns` (+4 counter-clockwise, -4 clockwise): every loop becomes a valid orthogonal polygon.
-std::vector<int> label_chain(const std::vector<Vec2>& edge_vec, const std::vector<std::uint8_t>& free_change,
-                             const std::vector<std::uint8_t>& locked, const std::vector<std::uint8_t>& allowed,
-                             bool closed, double change_cost, int required_turns) {
+std::vector<int> label_chain(const std::vector<Vec2>& edge_vec, const std::vector<double>& change_cost,
+                             const std::vector<std::uint8_t>& allowed, bool closed, int required_turns) {
   const int m = static_cast<int>(edge_vec.size());
   constexpr double kBig = 1e300;
   constexpr int kMaxTurns = 48;  // |running turns| bound: coastlines with many bays wind far before closing
@@ -31,8 +30,7 @@ std::vector<int> label_chain(const std::vector<Vec2>& edge_vec, const std::vecto
   auto turn = [](int from, int to) { const int d = (to - from + 4) % 4; return d == 0 ? 0 : (d == 1 ? 1 : (d == 3 ? -1 : 99)); };
   auto change = [&](int i, int from, int to) {  // cost of the transition into edge i
     if (from == to) return 0.0;
-    if (locked[i]) return kBig;
-    return free_change[i] ? 0.0 : change_cost;
+    return change_cost[i];
   };
   const int turn_states = closed ? kT : 1;
   std::vector<int> best_labels;
@@ -136,7 +134,7 @@ Layout build_layout(const TriMesh& mesh, const std::vector<Vec2>& original, cons
     const bool closed = seq.size() > 1 || mesh.chains[static_cast<std::size_t>(seq.front())].closed;
     std::vector<std::int32_t> verts;  // edge i runs from verts[i] to verts[i + 1] (cyclic when closed)
     std::vector<Vec2> edge_vec;
-    std::vector<std::uint8_t> free_change, locked;
+    std::vector<double> change_cost;  // of a label change into each edge
     for (int c : seq) {
       const TriChain& ch = mesh.chains[static_cast<std::size_t>(c)];
       const int n = static_cast<int>(ch.vertices.size());
@@ -145,9 +143,11 @@ Layout build_layout(const TriMesh& mesh, const std::vector<Vec2>& original, cons
         const std::int32_t v = ch.vertices[i];
         verts.push_back(v);
         edge_vec.push_back(deformed[ch.vertices[(i + 1) % n]] - deformed[v]);
-        free_change.push_back(corner[v]);
-        // An interface is one straight side on both of its subregions, so both get the same nodes.
-        locked.push_back(options.straight_interfaces && ch.interface >= 0 && !corner[v]);
+        // Free at corners; an interface is one straight side on both of its subregions (so both get the same
+        // nodes) unless bending is allowed, at its own cost.
+        if (corner[v]) change_cost.push_back(0.0);
+        else if (ch.interface < 0) change_cost.push_back(options.label_change_cost);
+        else change_cost.push_back(options.straight_interfaces ? 1e300 : options.interface_change_cost);
       }
       if (!closed) verts.push_back(ch.vertices.back());
     }
@@ -170,10 +170,10 @@ Layout build_layout(const TriMesh& mesh, const std::vector<Vec2>& original, cons
       allowed.back() = static_cast<std::uint8_t>(allowed.back() & back);
     }
     std::vector<int> labels =
-        label_chain(edge_vec, free_change, locked, allowed, closed, options.label_change_cost, area >= 0 ? 4 : -4);
+        label_chain(edge_vec, change_cost, allowed, closed, area >= 0 ? 4 : -4);
     if (labels.empty() && !closed) {
       std::fill(allowed.begin(), allowed.end(), 0xF);
-      labels = label_chain(edge_vec, free_change, locked, allowed, closed, options.label_change_cost, 0);
+      labels = label_chain(edge_vec, change_cost, allowed, closed, 0);
     }
     for (int i = 0; i < m && !labels.empty(); ++i) {
       used_dirs[verts[i]] |= static_cast<std::uint8_t>(1 << labels[i]);

@@ -3,6 +3,7 @@
 #include <metis.h>
 
 #include <algorithm>
+#include <mutex>
 #include <cmath>
 #include <deque>
 #include <fstream>
@@ -238,6 +239,10 @@ PartitionResult partition_triangles(const TriMesh& mesh, const PartitionOptions&
     opts[METIS_OPTION_SEED] = static_cast<idx_t>(options.seed % 1000003);
     opts[METIS_OPTION_CONTIG] = 1;
     std::vector<idx_t> part(nt, 0);
+    // METIS draws from one process-wide random state (GKlib): concurrent calls (parts and candidates are
+    // partitioned from several threads) would make the partition depend on timing, so they are serialized.
+    static std::mutex metis_mutex;
+    const std::lock_guard<std::mutex> lock(metis_mutex);
     const int status = METIS_PartGraphKway(&nv, &ncon, xadj.data(), adjncy.data(), vwgt.data(), nullptr, adjwgt.data(),
                                            &nparts, nullptr, nullptr, opts, &objval, part.data());
     if (status != METIS_OK) throw MeshingError("partitioning: METIS failed with status " + std::to_string(status));

@@ -58,29 +58,45 @@ double ring_area(const Region& region, const RegionPart& part) {
   return a;
 }
 
-// Subregion counts to try for one part, in rounds: a round is meshed only when every candidate of the rounds
-// before it failed. An explicit --parts K is one round, one poly-square the next. Automatic mode meshes small
-// parts every way at once (one poly-square, the counts of search_subregions, the area- and perimeter-based
-// counts); a large part tries one poly-square first and partitions only if that fails, which keeps its time
-// near one map.
-std::vector<std::vector<int>> candidate_subregions(const Region& region, const RegionPart& part,
-                                                   const MeshOptions& options) {
+// One way to map a part: the number of subregions and whether PPM interfaces may bend.
+struct CandidateSpec {
+  int subregions = 1;
+  bool bend_interfaces = false;
+  bool operator==(const CandidateSpec&) const = default;
+};
+
+// Candidates for one part, in rounds: a round is meshed only when every candidate of the rounds before it
+// failed. An explicit --parts K is one round, K with bendable interfaces the next, one poly-square the last.
+// Automatic mode meshes small parts every way at once (one poly-square, the counts of search_subregions, the
+// area- and perimeter-based counts); a large part tries one poly-square first and partitions only if that
+// fails, which keeps its time near one map. A last round retries the partitions with bendable interfaces.
+std::vector<std::vector<CandidateSpec>> candidate_rounds(const Region& region, const RegionPart& part,
+                                                         const MeshOptions& options) {
   const double quads = ring_area(region, part) / (options.size * options.size);
-  std::vector<std::vector<int>> rounds(1);
-  auto add = [&](int k) {
+  std::vector<std::vector<CandidateSpec>> rounds(1);
+  auto add = [&](CandidateSpec c) {
     for (const auto& r : rounds)
-      if (std::find(r.begin(), r.end(), k) != r.end()) return;
-    rounds.back().push_back(k);
+      if (std::find(r.begin(), r.end(), c) != r.end()) return;
+    rounds.back().push_back(c);
+  };
+  auto add_bent_round = [&] {
+    std::vector<CandidateSpec> bent;
+    for (const auto& r : rounds)
+      for (const CandidateSpec& c : r)
+        if (c.subregions > 1 && !c.bend_interfaces && options.map.composition == MapComposition::ppm)
+          bent.push_back({c.subregions, true});
+    if (!bent.empty()) rounds.push_back(std::move(bent));
   };
   if (options.parts > 0) {
-    add(options.parts);
+    add({options.parts});
+    add_bent_round();
     rounds.emplace_back();
-    add(1);
+    add({1});
     return rounds;
   }
   const bool large = quads > static_cast<double>(options.search_quads);
   if (large) {
-    add(1);
+    add({1});
     rounds.emplace_back();
   }
   // k from the area; long, convoluted boundaries (coastlines) need more subregions than their area says, so k
@@ -90,13 +106,14 @@ std::vector<std::vector<int>> candidate_subregions(const Region& region, const R
     const auto& pts = region.rings[static_cast<std::size_t>(r)].points;
     for (std::size_t i = 0; i < pts.size(); ++i) perimeter += distance(pts[i], pts[(i + 1) % pts.size()]);
   }
-  add(std::max(1, static_cast<int>(std::lround(quads / static_cast<double>(options.target_quads_per_part)))));
+  add({std::max(1, static_cast<int>(std::lround(quads / static_cast<double>(options.target_quads_per_part))))});
   const int by_perimeter = static_cast<int>(std::lround(perimeter / (options.perimeter_per_subregion * options.size)));
-  if (by_perimeter > 1 && quads / by_perimeter >= 16.0) add(by_perimeter);
+  if (by_perimeter > 1 && quads / by_perimeter >= 16.0) add({by_perimeter});
   if (!large)
     for (int k : options.search_subregions)
-      if (quads / k >= 16.0) add(k);  // at least a 4 x 4 block per subregion
-  add(1);
+      if (quads / k >= 16.0) add({k});  // at least a 4 x 4 block per subregion
+  add({1});
+  add_bent_round();
   return rounds;
 }
 
@@ -124,6 +141,7 @@ Candidate try_candidate(const Region& region, const RegionPart& part, const Poly
   Candidate c;
   const int k = map.partition.parts;
   c.summary = {{"part", part.part}, {"subregions", k}};
+  if (k > 1 && map.composition == MapComposition::ppm) c.summary["bent_interfaces"] = !map.layout.straight_interfaces;
   const std::string name = (region.source.empty() ? std::string("region") : region.source) + ": part " +
                            std::to_string(part.part);
   try {
@@ -235,10 +253,10 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
   const int threads = options.threads > 0 ? options.threads : static_cast<int>(oneapi::tbb::info::default_concurrency());
   oneapi::tbb::global_control limit(oneapi::tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
   oneapi::tbb::parallel_for(std::size_t{0}, parts.size(), [&](std::size_t k) {
-    std::vector<int> ks;
+    std::vector<CandidateSpec> ks;
     std::vector<Candidate> cands;
     int best = -1;
-    for (const std::vector<int>& round : candidate_subregions(*work, parts[k], options)) {
+    for (const std::vector<CandidateSpec>& round : candidate_rounds(*work, parts[k], options)) {
       const std::size_t first = cands.size();
       ks.insert(ks.end(), round.begin(), round.end());
       cands.resize(ks.size());
@@ -246,7 +264,8 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
       // depends only on the input and the options, never on timing.
       oneapi::tbb::parallel_for(first, ks.size(), [&](std::size_t c) {
         PolysquareMapOptions part_map = map;
-        part_map.partition.parts = ks[c];
+        part_map.partition.parts = ks[c].subregions;
+        part_map.layout.straight_interfaces = !ks[c].bend_interfaces;
         cands[c] = try_candidate(*work, parts[k], part_map, options);
       });
       for (std::size_t c = first; c < cands.size(); ++c) {
@@ -259,7 +278,9 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
     if (best < 0) {
       std::string all;
       for (std::size_t c = 0; c < cands.size(); ++c)
-        all += (c ? "; " : "") + (cands.size() > 1 ? "with " + std::to_string(ks[c]) + " subregions: " : std::string()) +
+        all += (c ? "; " : "") + (cands.size() > 1 ? "with " + std::to_string(ks[c].subregions) + " subregions" +
+                                                (ks[c].bend_interfaces ? " (bent interfaces): " : ": ")
+                                              : std::string()) +
                cands[c].error;
       errors[k] = all;
       return;

@@ -145,3 +145,20 @@ TEST(Pipeline, PartsSmallerThanOneElementAreLeftOutAndReported) {
   EXPECT_THROW(mesh_region(r, o), MeshingError);
   std::filesystem::remove(path);
 }
+
+TEST(Pipeline, SmileMeshesThroughBentInterfaces) {
+  // Every straight-interface candidate fails on smile; the round with bendable interfaces meshes it.
+  const Region region = load("smile");
+  const MeshResult r = mesh(region, 2.5);
+  EXPECT_TRUE(check_invariants(r.mesh).ok());
+  const QualityReport q = compute_quality(r.mesh);
+  EXPECT_GE(q.sj.min, MeshOptions{}.min_scaled_jacobian);
+  EXPECT_LE(4 * q.interior_singularities, 221u);  // a quarter of Gmsh's (anchors.md)
+  const DomainDistance d = domain_distance(r.mesh, region);
+  EXPECT_LT(d.boundary_max_relative, 1e-9);
+  EXPECT_LT(d.feature_node_max_distance, 1e-9 * region.bounding_box().diagonal());
+  bool bent_kept = false;
+  for (const auto& c : r.report["candidates"][0])
+    if (c.contains("chosen")) bent_kept = c.value("bent_interfaces", false);
+  EXPECT_TRUE(bent_kept);
+}

@@ -18,6 +18,8 @@ struct LayoutOptions {
                                        ///< 6 keeps smooth features straight (square_feature: SJ min 0.58 vs 0.11 at 3)
   bool straight_interfaces = true;     ///< PPM interfaces get one label (one straight side) on each side; false
                                        ///< lets them bend, the two sides then sharing every break point
+  double interface_change_cost = 1.5;  ///< label change cost on a bendable interface (smile meshes at 1.5, not
+                                       ///< at 6 or 0.5)
 };
 
 /// Axis labels: 0 = +X, 1 = +Y, 2 = -X, 3 = -Y (the direction of travel along the chain).
