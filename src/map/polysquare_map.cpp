@@ -83,13 +83,9 @@ PartMapResult map_part(const Region& region, const RegionPart& part, const Polys
                            std::to_string(part.part);
   const double h = options.size;
 
-  double part_area = 0.0;
-  for (int r : part.rings) {
-    const auto& pts = region.rings[static_cast<std::size_t>(r)].points;
-    for (std::size_t i = 0; i < pts.size(); ++i) part_area += 0.5 * cross(pts[i], pts[(i + 1) % pts.size()]);
-  }
-  if (part_area < h * h)
-    throw MeshingError(name + " has area " + std::to_string(part_area) + ", less than one element (size^2 = " +
+  const double area = part_area(region, part);
+  if (area < h * h)
+    throw MeshingError(name + " has area " + std::to_string(area) + ", less than one element (size^2 = " +
                        std::to_string(h * h) + "); remove it from the input or use a smaller size");
 
   auto t0 = std::chrono::steady_clock::now();

@@ -34,10 +34,6 @@ struct Topology {
 
   explicit Topology(const TriMesh& m) {
     std::unordered_map<std::uint64_t, std::int32_t> index;
-    auto key = [](std::int32_t a, std::int32_t b) {
-      if (a > b) std::swap(a, b);
-      return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) | static_cast<std::uint32_t>(b);
-    };
     tri_edges.resize(m.triangles.size());
     double total_len = 0;
     for (std::size_t t = 0; t < m.triangles.size(); ++t) {
@@ -45,7 +41,7 @@ struct Topology {
       area.push_back(0.5 * orient2(m.vertices[tri[0]], m.vertices[tri[1]], m.vertices[tri[2]]));
       for (int k = 0; k < 3; ++k) {
         const std::int32_t a = tri[k], b = tri[(k + 1) % 3];
-        auto [it, inserted] = index.try_emplace(key(a, b), static_cast<std::int32_t>(edges.size()));
+        auto [it, inserted] = index.try_emplace(edge_key(a, b), static_cast<std::int32_t>(edges.size()));
         if (inserted) {
           edges.push_back({a, b, static_cast<std::int32_t>(t), -1, distance(m.vertices[a], m.vertices[b]), false});
           total_len += edges.back().length;
@@ -61,7 +57,7 @@ struct Topology {
       if (ch.kind != TriChain::Kind::feature) continue;
       const std::size_t n = ch.vertices.size(), segs = ch.closed ? n : n - 1;
       for (std::size_t i = 0; i < segs; ++i) {
-        auto it = index.find(key(ch.vertices[i], ch.vertices[(i + 1) % n]));
+        auto it = index.find(edge_key(ch.vertices[i], ch.vertices[(i + 1) % n]));
         if (it == index.end() || edges[it->second].feature) continue;
         edges[it->second].feature = true;
         feature_length += edges[it->second].length;

@@ -10,13 +10,12 @@
 namespace polysquare {
 
 std::size_t add_separator_chains(TriMesh& mesh, const std::vector<std::int32_t>& triangle_part) {
-  const auto key = edge_key;
   auto owners = edge_owners(mesh);  // edge -> its (one or two) triangles
   std::vector<std::vector<std::int32_t>> adj(mesh.vertices.size());
   for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
     for (int k = 0; k < 3; ++k) {
       const std::int32_t a = mesh.triangles[t][k], b = mesh.triangles[t][(k + 1) % 3];
-      const auto& o = owners[key(a, b)];
+      const auto& o = owners[edge_key(a, b)];
       if (o[1] < 0 || triangle_part[o[0]] == triangle_part[o[1]] || a > b) continue;
       adj[a].push_back(b);
       adj[b].push_back(a);
@@ -41,13 +40,13 @@ std::size_t add_separator_chains(TriMesh& mesh, const std::vector<std::int32_t>&
   auto walk = [&](std::int32_t start, std::int32_t next) {
     std::vector<std::int32_t> verts{start};
     std::int32_t prev = start, cur = next;
-    used.insert(key(prev, cur));
+    used.insert(edge_key(prev, cur));
     while (true) {
       verts.push_back(cur);
       if (junction(cur) || cur == start) break;
       const std::int32_t nxt = adj[cur][0] == prev ? adj[cur][1] : adj[cur][0];
-      if (used.count(key(cur, nxt))) break;
-      used.insert(key(cur, nxt));
+      if (used.count(edge_key(cur, nxt))) break;
+      used.insert(edge_key(cur, nxt));
       prev = cur;
       cur = nxt;
     }
@@ -56,12 +55,12 @@ std::size_t add_separator_chains(TriMesh& mesh, const std::vector<std::int32_t>&
   for (std::int32_t v = 0; v < static_cast<std::int32_t>(mesh.vertices.size()); ++v) {
     if (!junction(v)) continue;
     for (std::int32_t w : adj[v])
-      if (!used.count(key(v, w))) add(walk(v, w), false);
+      if (!used.count(edge_key(v, w))) add(walk(v, w), false);
   }
   // Loops that meet nothing (a part inside another): closed chains.
   for (std::int32_t v = 0; v < static_cast<std::int32_t>(mesh.vertices.size()); ++v)
     for (std::int32_t w : adj[v])
-      if (!used.count(key(v, w))) {
+      if (!used.count(edge_key(v, w))) {
         auto verts = walk(v, w);
         if (verts.size() > 2 && verts.back() == verts.front()) verts.pop_back();
         add(std::move(verts), true);
@@ -219,12 +218,11 @@ namespace polysquare {
 
 std::size_t absorb_pieces_cut_off_by_features(const TriMesh& mesh, std::vector<std::int32_t>& triangle_part,
                                               int max_rounds) {
-  const auto key = edge_key;
   std::unordered_set<std::uint64_t> feature_edges;
   for (const TriChain& ch : mesh.chains) {
     if (ch.kind != TriChain::Kind::feature) continue;
     const std::size_t n = ch.vertices.size();
-    for (std::size_t i = 0; i + (ch.closed ? 0 : 1) < n; ++i) feature_edges.insert(key(ch.vertices[i], ch.vertices[(i + 1) % n]));
+    for (std::size_t i = 0; i + (ch.closed ? 0 : 1) < n; ++i) feature_edges.insert(edge_key(ch.vertices[i], ch.vertices[(i + 1) % n]));
   }
   if (feature_edges.empty()) return 0;
   // Edge neighbours of every triangle, with whether the shared edge lies on a feature.
@@ -234,8 +232,8 @@ std::size_t absorb_pieces_cut_off_by_features(const TriMesh& mesh, std::vector<s
   for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
     for (int k = 0; k < 3; ++k) {
       const auto a = mesh.triangles[t][k], b = mesh.triangles[t][(k + 1) % 3];
-      const auto& o = owners[key(a, b)];
-      nb[t][k] = {o[0] == static_cast<std::int32_t>(t) ? o[1] : o[0], feature_edges.count(key(a, b)) > 0,
+      const auto& o = owners[edge_key(a, b)];
+      nb[t][k] = {o[0] == static_cast<std::int32_t>(t) ? o[1] : o[0], feature_edges.count(edge_key(a, b)) > 0,
                   distance(mesh.vertices[a], mesh.vertices[b])};
     }
   std::size_t moved = 0;
@@ -344,7 +342,6 @@ std::size_t keep_feature_loops_whole(const TriMesh& mesh, std::vector<std::int32
 namespace polysquare {
 
 int merge_enclosed_parts(const TriMesh& mesh, std::vector<std::int32_t>& triangle_part) {
-  const auto key = edge_key;
   auto owners = edge_owners(mesh);  // edge -> its (one or two) triangles
   for (bool changed = true; changed;) {
     changed = false;

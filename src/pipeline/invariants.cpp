@@ -6,12 +6,6 @@
 #include "polysquare/smooth/smooth.h"
 
 namespace polysquare {
-namespace {
-std::uint64_t edge_key(std::int32_t a, std::int32_t b) {
-  if (a > b) std::swap(a, b);
-  return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) | static_cast<std::uint32_t>(b);
-}
-}  // namespace
 
 InvariantReport check_invariants(const QuadMesh& mesh) {
   InvariantReport r;

@@ -49,15 +49,6 @@ nlohmann::json part_json(const PartMapStats& s) {
                        {"extract", s.seconds_extract}}}};
 }
 
-double ring_area(const Region& region, const RegionPart& part) {
-  double a = 0.0;
-  for (int r : part.rings) {
-    const auto& pts = region.rings[static_cast<std::size_t>(r)].points;
-    for (std::size_t i = 0; i < pts.size(); ++i) a += 0.5 * cross(pts[i], pts[(i + 1) % pts.size()]);
-  }
-  return a;
-}
-
 // One way to map a part: the number of subregions and whether PPM interfaces may bend.
 struct CandidateSpec {
   int subregions = 1;
@@ -72,7 +63,7 @@ struct CandidateSpec {
 // fails, which keeps its time near one map. A last round retries the partitions with bendable interfaces.
 std::vector<std::vector<CandidateSpec>> candidate_rounds(const Region& region, const RegionPart& part,
                                                          const MeshOptions& options) {
-  const double quads = ring_area(region, part) / (options.size * options.size);
+  const double quads = part_area(region, part) / (options.size * options.size);
   std::vector<std::vector<CandidateSpec>> rounds(1);
   auto add = [&](CandidateSpec c) {
     for (const auto& r : rounds)
@@ -231,7 +222,7 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
   std::vector<RegionPart> parts;
   nlohmann::json dropped = nlohmann::json::array();
   for (RegionPart& p : split_into_parts(*work)) {
-    const double a = ring_area(*work, p);
+    const double a = part_area(*work, p);
     if (options.drop_small_parts && a < options.size * options.size) {
       const Vec2 at = work->rings[static_cast<std::size_t>(p.rings.front())].points.front();
       dropped.push_back({{"part", p.part}, {"area", a}, {"at", {at.x, at.y}}});

@@ -10,11 +10,6 @@
 namespace polysquare {
 namespace {
 
-std::uint64_t edge_key(std::int32_t a, std::int32_t b) {
-  if (a > b) std::swap(a, b);
-  return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) | static_cast<std::uint32_t>(b);
-}
-
 Stats stats_of(const std::vector<double>& v) {
   Stats s;
   s.count = v.size();

@@ -43,6 +43,15 @@ struct PairHash {
 
 }  // namespace
 
+double part_area(const Region& region, const RegionPart& part) {
+  double a = 0.0;
+  for (int r : part.rings) {
+    const auto& pts = region.rings[static_cast<std::size_t>(r)].points;
+    for (std::size_t i = 0; i < pts.size(); ++i) a += 0.5 * cross(pts[i], pts[(i + 1) % pts.size()]);
+  }
+  return a;
+}
+
 std::unordered_map<std::uint64_t, std::array<std::int32_t, 2>> edge_owners(const TriMesh& mesh) {
   std::unordered_map<std::uint64_t, std::array<std::int32_t, 2>> owners;
   owners.reserve(mesh.triangles.size() * 2);
@@ -60,22 +69,18 @@ std::unordered_map<std::uint64_t, std::array<std::int32_t, 2>> edge_owners(const
 void split_constrained_interior_edges(TriMesh& mesh, std::vector<std::int32_t>* parent) {
   std::vector<std::uint8_t> on_chain(mesh.vertices.size(), 0);
   std::unordered_set<std::uint64_t> chain_edges;
-  auto ekey = [](std::int32_t a, std::int32_t b) {
-    if (a > b) std::swap(a, b);
-    return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) | static_cast<std::uint32_t>(b);
-  };
   for (const TriChain& ch : mesh.chains) {
     const std::size_t n = ch.vertices.size();
     for (std::size_t i = 0; i < n; ++i) {
       on_chain[ch.vertices[i]] = 1;
-      if (ch.closed || i + 1 < n) chain_edges.insert(ekey(ch.vertices[i], ch.vertices[(i + 1) % n]));
+      if (ch.closed || i + 1 < n) chain_edges.insert(edge_key(ch.vertices[i], ch.vertices[(i + 1) % n]));
     }
   }
   for (auto v : mesh.feature_point_vertices) on_chain[v] = 1;
   std::unordered_map<std::uint64_t, std::int32_t> midpoint;
   auto mid = [&](std::int32_t a, std::int32_t b) -> std::int32_t {
-    if (!on_chain[a] || !on_chain[b] || chain_edges.count(ekey(a, b))) return -1;
-    auto [it, inserted] = midpoint.try_emplace(ekey(a, b), static_cast<std::int32_t>(mesh.vertices.size()));
+    if (!on_chain[a] || !on_chain[b] || chain_edges.count(edge_key(a, b))) return -1;
+    auto [it, inserted] = midpoint.try_emplace(edge_key(a, b), static_cast<std::int32_t>(mesh.vertices.size()));
     if (inserted) mesh.vertices.push_back(lerp(mesh.vertices[a], mesh.vertices[b], 0.5));
     return it->second;
   };

@@ -2,6 +2,8 @@
 #pragma once
 
 #include <cmath>
+#include <cstdint>
+#include <utility>
 #include <vector>
 
 namespace polysquare {
@@ -11,6 +13,12 @@ struct Vec2 {
   double x = 0.0;
   double y = 0.0;
 };
+
+/// Key of the undirected edge (a, b) between two vertex indices, for hash maps and sets.
+inline std::uint64_t edge_key(std::int32_t a, std::int32_t b) {
+  if (a > b) std::swap(a, b);
+  return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) | static_cast<std::uint32_t>(b);
+}
 
 inline Vec2 operator+(Vec2 a, Vec2 b) { return {a.x + b.x, a.y + b.y}; }
 inline Vec2 operator-(Vec2 a, Vec2 b) { return {a.x - b.x, a.y - b.y}; }

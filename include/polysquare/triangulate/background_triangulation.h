@@ -5,7 +5,6 @@
 #include <cstdint>
 #include <string>
 #include <unordered_map>
-#include <utility>
 #include <vector>
 
 #include "polysquare/core/geometry.h"
@@ -53,12 +52,6 @@ struct RegionPart {
   std::vector<int> feature_points;
 };
 
-/// Key of the undirected edge (a, b) for hash maps.
-inline std::uint64_t edge_key(std::int32_t a, std::int32_t b) {
-  if (a > b) std::swap(a, b);
-  return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) | static_cast<std::uint32_t>(b);
-}
-
 /// The one or two triangles of every edge (second -1 on the boundary), by edge_key.
 std::unordered_map<std::uint64_t, std::array<std::int32_t, 2>> edge_owners(const TriMesh& mesh);
 
@@ -69,6 +62,9 @@ void split_constrained_interior_edges(TriMesh& mesh, std::vector<std::int32_t>* 
 
 /// Name of a chain for messages: "ring 2", "feature 5", "separator 1".
 std::string chain_name(const TriChain& chain);
+
+/// Area of a polygon part: its outer ring minus its holes (rings are oriented that way by validation).
+double part_area(const Region& region, const RegionPart& part);
 
 /// Groups the rings, features and feature points of a validated region by polygon part.
 std::vector<RegionPart> split_into_parts(const Region& region);
