@@ -10,17 +10,18 @@ namespace polysquare {
 namespace {
 
 const Vec2 kLabelDir[4] = {{1, 0}, {0, 1}, {-1, 0}, {0, -1}};
+constexpr double kForbidden = 1e300;  // cost of a label (change) that must not happen
 
 // Labels of one chain by dynamic programming: each edge pays its length times (1 - cos) of the angle between
 // its deformed direction and the label's axis direction; a label change into edge i pays change_cost[i] (nothing at a
-// sharp input vertex, where a corner is natural; 1e300 forbids it); U-turns are forbidden. This removes the staircases that the
+// sharp input vertex, where a corner is natural; kForbidden forbids it); U-turns are forbidden. This removes the staircases that the
 // L1 term alone favours and the short runs that would become spurious corners. A closed chain is solved once
 // per label of its first edge, with the running number of quarter turns in the state, so that it closes with
 // exactly `required_turns` (+4 counter-clockwise, -4 clockwise): every loop becomes a valid orthogonal polygon.
 std::vector<int> label_chain(const std::vector<Vec2>& edge_vec, const std::vector<double>& change_cost,
                              const std::vector<std::uint8_t>& allowed, bool closed, int required_turns) {
   const int m = static_cast<int>(edge_vec.size());
-  constexpr double kBig = 1e300;
+  constexpr double kBig = kForbidden;
   constexpr int kMaxTurns = 48;  // |running turns| bound: coastlines with many bays wind far before closing
   constexpr int kT = 2 * kMaxTurns + 1;
   auto edge_cost = [&](int i, int l) {
@@ -89,14 +90,59 @@ std::vector<int> label_chain(const std::vector<Vec2>& edge_vec, const std::vecto
   return best_labels;
 }
 
+// Break points from the flags and the straight sides between them, along every chain with its labels.
+void set_breaks(Layout& layout, const TriMesh& mesh, const std::vector<Vec2>& deformed,
+                const std::vector<std::uint8_t>& is_break, const std::vector<std::uint8_t>& corner,
+                const std::string& part_name) {
+  const std::size_t nv = mesh.vertices.size();
+  layout.vertex_break.assign(nv, -1);
+  layout.break_vertex.clear();
+  layout.break_is_corner.clear();
+  layout.segments.clear();
+  for (std::size_t v = 0; v < nv; ++v) {
+    if (!is_break[v]) continue;
+    layout.vertex_break[v] = static_cast<std::int32_t>(layout.break_vertex.size());
+    layout.break_vertex.push_back(static_cast<std::int32_t>(v));
+    layout.break_is_corner.push_back(corner[v]);
+  }
+
+  for (std::size_t c = 0; c < mesh.chains.size(); ++c) {
+    const TriChain& ch = mesh.chains[c];
+    const int n = static_cast<int>(ch.vertices.size());
+    const int m = ch.closed ? n : n - 1;
+    const auto& labels = layout.chain_labels[c];
+    int start = -1;
+    for (int i = 0; i < n && start < 0; ++i)
+      if (is_break[ch.vertices[i]]) start = i;
+    if (start < 0)
+      throw MeshingError(part_name + ": " + chain_name(ch) + " has no corner");
+    int first = start;
+    for (int k = 1; k <= (ch.closed ? m : m - start); ++k) {
+      const int i = ch.closed ? (start + k) % n : start + k;
+      if (!is_break[ch.vertices[i]]) continue;
+      LayoutSegment s;
+      s.chain = static_cast<int>(c);
+      s.first = first;
+      s.count = (i - first + n) % n == 0 ? n : (i - first + n) % n;
+      if (!ch.closed) s.count = i - first;
+      s.label = labels[first % m];
+      // Chord rather than arc length: a side that still zig-zags after the deformation would otherwise get
+      // far too many elements.
+      s.target = distance(deformed[ch.vertices[first]], deformed[ch.vertices[i]]);
+      s.break_a = layout.vertex_break[ch.vertices[first]];
+      s.break_b = layout.vertex_break[ch.vertices[i]];
+      layout.segments.push_back(s);
+      first = i;
+    }
+  }
+}
+
 }  // namespace
 
 Layout build_layout(const TriMesh& mesh, const std::vector<Vec2>& original, const std::vector<Vec2>& deformed,
-                    const LayoutOptions& options, const std::string& part_name,
-                    const std::vector<std::uint8_t>* extra_breaks) {
+                    const LayoutOptions& options, const std::string& part_name) {
   const std::size_t nv = mesh.vertices.size();
   Layout layout;
-  layout.vertex_break.assign(nv, -1);
   std::vector<int> appearances(nv, 0);
   std::vector<std::uint8_t> corner(nv, 0), is_break(nv, 0);
   const double cos_threshold = std::cos(options.corner_threshold_deg * std::numbers::pi / 180.0);
@@ -147,7 +193,7 @@ Layout build_layout(const TriMesh& mesh, const std::vector<Vec2>& original, cons
         // nodes) unless bending is allowed, at its own cost.
         if (corner[v]) change_cost.push_back(0.0);
         else if (ch.interface < 0) change_cost.push_back(options.label_change_cost);
-        else change_cost.push_back(options.straight_interfaces ? 1e300 : options.interface_change_cost);
+        else change_cost.push_back(options.straight_interfaces ? kForbidden : options.interface_change_cost);
       }
       if (!closed) verts.push_back(ch.vertices.back());
     }
@@ -205,46 +251,22 @@ Layout build_layout(const TriMesh& mesh, const std::vector<Vec2>& original, cons
     }
   }
 
-  if (extra_breaks)
-    for (std::size_t v = 0; v < nv; ++v)
-      if ((*extra_breaks)[v]) is_break[v] = 1;
-  for (std::size_t v = 0; v < nv; ++v) {
-    if (!is_break[v]) continue;
-    layout.vertex_break[v] = static_cast<std::int32_t>(layout.break_vertex.size());
-    layout.break_vertex.push_back(static_cast<std::int32_t>(v));
-    layout.break_is_corner.push_back(corner[v]);
-  }
-
-  for (std::size_t c = 0; c < mesh.chains.size(); ++c) {
-    const TriChain& ch = mesh.chains[c];
-    const int n = static_cast<int>(ch.vertices.size());
-    const int m = ch.closed ? n : n - 1;
-    const auto& labels = layout.chain_labels[c];
-    int start = -1;
-    for (int i = 0; i < n && start < 0; ++i)
-      if (is_break[ch.vertices[i]]) start = i;
-    if (start < 0)
-      throw MeshingError(part_name + ": " + chain_name(ch) + " has no corner");
-    int first = start;
-    for (int k = 1; k <= (ch.closed ? m : m - start); ++k) {
-      const int i = ch.closed ? (start + k) % n : start + k;
-      if (!is_break[ch.vertices[i]]) continue;
-      LayoutSegment s;
-      s.chain = static_cast<int>(c);
-      s.first = first;
-      s.count = (i - first + n) % n == 0 ? n : (i - first + n) % n;
-      if (!ch.closed) s.count = i - first;
-      s.label = labels[first % m];
-      // Chord rather than arc length: a side that still zig-zags after the deformation would otherwise get
-      // far too many elements.
-      s.target = distance(deformed[ch.vertices[first]], deformed[ch.vertices[i]]);
-      s.break_a = layout.vertex_break[ch.vertices[first]];
-      s.break_b = layout.vertex_break[ch.vertices[i]];
-      layout.segments.push_back(s);
-      first = i;
-    }
-  }
+  set_breaks(layout, mesh, deformed, is_break, corner, part_name);
   return layout;
+}
+
+}  // namespace polysquare
+
+namespace polysquare {
+
+void add_straight_breaks(Layout& layout, const TriMesh& mesh, const std::vector<Vec2>& deformed,
+                         const std::vector<std::uint8_t>& extra, const std::string& part_name) {
+  std::vector<std::uint8_t> is_break = extra, corner(mesh.vertices.size(), 0);
+  for (std::size_t b = 0; b < layout.break_vertex.size(); ++b) {
+    is_break[static_cast<std::size_t>(layout.break_vertex[b])] = 1;
+    corner[static_cast<std::size_t>(layout.break_vertex[b])] = layout.break_is_corner[b];
+  }
+  set_breaks(layout, mesh, deformed, is_break, corner, part_name);
 }
 
 }  // namespace polysquare

@@ -345,7 +345,7 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
         if (ch.interface >= 0)
           for (std::int32_t v : ch.vertices)
             extra[static_cast<std::size_t>(v)] = interface_breaks.count(subs[p].global_vertex[static_cast<std::size_t>(v)]) > 0;
-      layouts[p] = build_layout(m, m.vertices, mapped[p].x, options.layout, sub_name(p), &extra);
+      add_straight_breaks(layouts[p], m, mapped[p].x, extra, sub_name(p));
     });
   }
   st.seconds_deform = seconds_since(t0);

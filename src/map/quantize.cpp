@@ -51,7 +51,7 @@ struct Separation {
 
 // The joint integer program over several layouts (PPM subregions, each in its own frame): one integer
 // coordinate per class of break points per axis per layout; every segment's length n = sign * (end - start)
-// within [t / c, c t] and near t (deviation columns); coupled segments (the two sides of an interface) get the
+// >= 1, near t and preferably within [t / c, c t] (deviation columns); coupled segments (the two sides of an interface) get the
 // same n. Without couplings the matrix is totally unimodular and the simplex optimum is integral; with them,
 // GLPK's branch-and-cut finishes from the simplex optimum.
 struct JointProblem {

@@ -140,40 +140,35 @@ Candidate try_candidate(const Region& region, const RegionPart& part, const Poly
     c.smooth = smooth_quads(r.mesh, options.smooth, &region);
     const InvariantReport inv = check_invariants(r.mesh);
     if (!inv.ok()) throw MeshingError(name + ": the mesh breaks an invariant (" + inv.first_problem + ")");
-    std::size_t worst = 0, longest = 0;
-    c.min_sj = 2.0;
-    for (std::size_t q = 0; q < r.mesh.quads.size(); ++q) {
-      if (const double sj = quad_min_corner_sj(r.mesh, q); sj < c.min_sj) { c.min_sj = sj; worst = q; }
-      double lmin = INFINITY, lmax = 0.0;
-      for (int e = 0; e < 4; ++e) {
-        const double l = distance(r.mesh.nodes[r.mesh.quads[q][e]], r.mesh.nodes[r.mesh.quads[q][(e + 1) % 4]]);
-        lmin = std::min(lmin, l);
-        lmax = std::max(lmax, l);
-      }
-      if (const double ratio = lmax / lmin; ratio > c.max_edge_ratio) { c.max_edge_ratio = ratio; longest = q; }
-    }
-    c.interior_singularities = compute_quality(r.mesh).interior_singularities;
+    const QualityReport q = compute_quality(r.mesh);
+    c.min_sj = q.sj.min;
+    c.max_edge_ratio = q.edge_ratio.max;
+    c.interior_singularities = q.interior_singularities;
     double area = 0.0;
-    for (const auto& q : r.mesh.quads)
-      area += 0.5 * cross(r.mesh.nodes[q[2]] - r.mesh.nodes[q[0]], r.mesh.nodes[q[3]] - r.mesh.nodes[q[1]]);
-    c.size_deviation = std::abs(std::log(area / static_cast<double>(r.mesh.quads.size()) / (options.size * options.size)));
+    for (const auto& quad : r.mesh.quads)
+      area += 0.5 * cross(r.mesh.nodes[quad[2]] - r.mesh.nodes[quad[0]], r.mesh.nodes[quad[3]] - r.mesh.nodes[quad[1]]);
+    const double mean_area = area / static_cast<double>(r.mesh.quads.size()) / (options.size * options.size);
+    c.size_deviation = std::abs(std::log(mean_area));
     c.summary["quads"] = r.mesh.quads.size();
     c.summary["min_scaled_jacobian"] = c.min_sj;
     c.summary["max_edge_ratio"] = c.max_edge_ratio;
     c.summary["interior_singularities"] = c.interior_singularities;
-    c.summary["mean_area_over_size_squared"] = area / static_cast<double>(r.mesh.quads.size()) / (options.size * options.size);
-    if (c.max_edge_ratio > options.max_edge_ratio) {
-      const Vec2 p = r.mesh.nodes[r.mesh.quads[longest][0]];
+    c.summary["mean_area_over_size_squared"] = mean_area;
+    // Where the refused figure is (only computed for a refusal).
+    auto at = [&](const std::vector<double>& per_quad, bool largest) {
+      const auto it = largest ? std::max_element(per_quad.begin(), per_quad.end())
+                              : std::min_element(per_quad.begin(), per_quad.end());
+      const Vec2 p = r.mesh.nodes[r.mesh.quads[static_cast<std::size_t>(it - per_quad.begin())][0]];
+      return "(" + std::to_string(p.x) + ", " + std::to_string(p.y) + ")";
+    };
+    if (c.max_edge_ratio > options.max_edge_ratio)
       throw MeshingError(name + ": the best mesh has a quad with edge ratio " + std::to_string(c.max_edge_ratio) +
-                         " at (" + std::to_string(p.x) + ", " + std::to_string(p.y) + "), above the maximum " +
+                         " at " + at(quad_metrics(r.mesh).edge_ratio, true) + ", above the maximum " +
                          std::to_string(options.max_edge_ratio) + " (--max-edge-ratio)");
-    }
-    if (c.min_sj < options.min_scaled_jacobian) {
-      const Vec2 p = r.mesh.nodes[r.mesh.quads[worst][0]];
-      throw MeshingError(name + ": the best mesh has a quad with scaled Jacobian " + std::to_string(c.min_sj) + " at (" +
-                         std::to_string(p.x) + ", " + std::to_string(p.y) + "), below the minimum " +
+    if (c.min_sj < options.min_scaled_jacobian)
+      throw MeshingError(name + ": the best mesh has a quad with scaled Jacobian " + std::to_string(c.min_sj) + " at " +
+                         at(quad_metrics(r.mesh).sj, false) + ", below the minimum " +
                          std::to_string(options.min_scaled_jacobian) + " (--min-sj)");
-    }
     c.result = std::move(r);
   } catch (const MeshingError& e) {
     c.error = e.what();

@@ -47,10 +47,13 @@ struct Layout {
 
 /// Labels and break points of every chain of `mesh` deformed to `deformed` (lattice units: 1 = one element).
 /// `original` holds the input coordinates used for turning angles. Throws MeshingError (naming `part_name`)
-/// when a closed chain's labels do not turn by +-4 quarter turns. `extra_breaks` (#V flags, optional) adds break
-/// points that do not turn (where the other side of a bent interface has a corner).
+/// when a closed chain's labels do not turn by +-4 quarter turns.
 Layout build_layout(const TriMesh& mesh, const std::vector<Vec2>& original, const std::vector<Vec2>& deformed,
-                    const LayoutOptions& options, const std::string& part_name,
-                    const std::vector<std::uint8_t>* extra_breaks = nullptr);
+                    const LayoutOptions& options, const std::string& part_name);
+
+/// Adds break points that do not turn (flags `extra`, #V) to a built layout and rebuilds its sides from the
+/// labels already chosen: where the other side of a bent interface has a corner, this side gets a break too.
+void add_straight_breaks(Layout& layout, const TriMesh& mesh, const std::vector<Vec2>& deformed,
+                         const std::vector<std::uint8_t>& extra, const std::string& part_name);
 
 }  // namespace polysquare
