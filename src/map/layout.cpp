@@ -145,7 +145,6 @@ Layout build_layout(const TriMesh& mesh, const std::vector<Vec2>& original, cons
   Layout layout;
   std::vector<int> appearances(nv, 0);
   std::vector<std::uint8_t> corner(nv, 0), is_break(nv, 0);
-  const double cos_threshold = std::cos(options.corner_threshold_deg * std::numbers::pi / 180.0);
 
   for (const TriChain& ch : mesh.chains) {
     const int n = static_cast<int>(ch.vertices.size());
@@ -155,9 +154,9 @@ Layout build_layout(const TriMesh& mesh, const std::vector<Vec2>& original, cons
       const bool end = !ch.closed && (i == 0 || i == n - 1);
       if (end) { corner[v] = 1; continue; }
       if (!ch.is_input[i]) continue;
-      const Vec2 a = original[ch.vertices[(i + n - 1) % n]], b = original[v], c = original[ch.vertices[(i + 1) % n]];
-      const Vec2 u = b - a, w = c - b;
-      if (dot(u, w) < cos_threshold * norm(u) * norm(w)) corner[v] = 1;
+      if (sharp_turn(original[ch.vertices[(i + n - 1) % n]], original[v], original[ch.vertices[(i + 1) % n]],
+                     options.corner_threshold_deg))
+        corner[v] = 1;
     }
   }
   for (std::int32_t v : mesh.feature_point_vertices) corner[v] = 1;

@@ -1,4 +1,3 @@
-#include <cmath>
 #include <algorithm>
 #include <map>
 #include <set>
@@ -167,7 +166,6 @@ std::size_t snap_separator_ends_to_corners(const TriMesh& mesh, std::vector<std:
     return std::int32_t{-1};
   };
   auto connected = [&](std::int32_t part) { return part_connected(mesh, around, triangle_part, part); };
-  const double cos_threshold = std::cos(corner_threshold_deg * 3.14159265358979323846 / 180.0);
   std::size_t moved = 0;
   for (const TriChain& ch : mesh.chains) {
     if (ch.kind != TriChain::Kind::ring || !ch.closed) continue;
@@ -175,10 +173,8 @@ std::size_t snap_separator_ends_to_corners(const TriMesh& mesh, std::vector<std:
     std::vector<std::uint8_t> sharp(n, 0);
     for (int i = 0; i < n; ++i) {
       if (!ch.is_input[i]) continue;
-      const Vec2 a = mesh.vertices[ch.vertices[(i + n - 1) % n]], b = mesh.vertices[ch.vertices[i]],
-                 c = mesh.vertices[ch.vertices[(i + 1) % n]];
-      const Vec2 u = b - a, w = c - b;
-      sharp[i] = dot(u, w) < cos_threshold * norm(u) * norm(w);
+      sharp[i] = sharp_turn(mesh.vertices[ch.vertices[(i + n - 1) % n]], mesh.vertices[ch.vertices[i]],
+                            mesh.vertices[ch.vertices[(i + 1) % n]], corner_threshold_deg);
     }
     auto edge_part = [&](int i) {  // part of the triangle on ring edge i (vertices i, i + 1)
       const auto t = edge_triangle(ch.vertices[((i % n) + n) % n], ch.vertices[(((i + 1) % n) + n) % n]);

@@ -199,12 +199,10 @@ DomainDistance domain_distance(const QuadMesh& mesh, const Region& region, const
   std::vector<std::array<Vec2, 2>> node_points;
   for (Vec2 p : mesh.nodes) node_points.push_back({p, p});
   const SegmentGrid nodes(node_points);
-  const double cos_t = std::cos(options.corner_threshold_deg * std::numbers::pi / 180.0);
   for (const Ring& r : region.rings) {
     const std::size_t n = r.points.size();
     for (std::size_t i = 0; i < n; ++i) {
-      const Vec2 u = r.points[i] - r.points[(i + n - 1) % n], w = r.points[(i + 1) % n] - r.points[i];
-      if (dot(u, w) >= cos_t * norm(u) * norm(w)) continue;
+      if (!sharp_turn(r.points[(i + n - 1) % n], r.points[i], r.points[(i + 1) % n], options.corner_threshold_deg)) continue;
       d.sharp_vertices_total++;
       if (nodes.nearest(r.points[i]) > 1e-9 * diag) d.sharp_vertices_missing++;
     }

@@ -30,6 +30,12 @@ inline double dot(Vec2 a, Vec2 b) { return a.x * b.x + a.y * b.y; }
 inline double cross(Vec2 a, Vec2 b) { return a.x * b.y - a.y * b.x; }
 inline double norm(Vec2 a) { return std::hypot(a.x, a.y); }
 inline double distance(Vec2 a, Vec2 b) { return norm(a - b); }
+/// Whether the polyline prev -> at -> next turns at `at` by more than threshold_deg (a corner that must be a node).
+inline bool sharp_turn(Vec2 prev, Vec2 at, Vec2 next, double threshold_deg) {
+  const Vec2 u = at - prev, w = next - at;
+  return dot(u, w) < std::cos(threshold_deg * 3.14159265358979323846 / 180.0) * norm(u) * norm(w);
+}
+
 inline Vec2 lerp(Vec2 a, Vec2 b, double t) { return {a.x + t * (b.x - a.x), a.y + t * (b.y - a.y)}; }
 
 /// Twice the signed area of triangle abc (positive when counter-clockwise).
