@@ -26,7 +26,8 @@ struct Energy {
   double eps = 0.1;
   bool with_alignment = true;
   std::vector<RestTriangle> rest;
-  std::vector<double> edge_scale;  // rest length / mean rest length of aligned edges
+  std::vector<double> edge_scale;  // rest length / total rest length of aligned edges
+  std::vector<double> rest_length; // rest length of each aligned edge
 
   Energy(const DeformProblem& p, const DeformOptions& o)
       : problem(p), c_angle(o.amips_alpha * o.amips_s / 4.0), c_area((1.0 - o.amips_alpha) * o.amips_s / 2.0),
@@ -45,7 +46,10 @@ struct Energy {
     for (auto& r : rest) r.weight /= total;
     double len = 0.0;
     for (const auto& e : p.aligned) len += distance(p.rest[e.a], p.rest[e.b]);
-    for (const auto& e : p.aligned) edge_scale.push_back(distance(p.rest[e.a], p.rest[e.b]) / len);
+    for (const auto& e : p.aligned) {
+      rest_length.push_back(std::max(distance(p.rest[e.a], p.rest[e.b]), 1e-12));
+      edge_scale.push_back(rest_length.back() / len);
+    }
   }
 
   // Energy and (optionally) gradient at x. Returns +inf if any triangle is inverted or degenerate.
@@ -87,12 +91,25 @@ struct Energy {
       for (std::size_t k = 0; k < problem.aligned.size(); ++k) {
         const AlignedEdge& ed = problem.aligned[k];
         const Vec2 d = x[ed.b] - x[ed.a];
+        const double w = ed.weight * edge_scale[k];
+        if (ed.label >= 0) {
+          // d in the label's frame: along (par) and across (perp) its direction, in units of the rest length.
+          const Vec2 dir = ed.label == 0 ? Vec2{1, 0} : ed.label == 1 ? Vec2{0, 1} : ed.label == 2 ? Vec2{-1, 0} : Vec2{0, -1};
+          const Vec2 nrm{-dir.y, dir.x};
+          const double inv = 1.0 / rest_length[k];
+          const double perp = dot(d, nrm) * inv, back = std::max(0.0, -dot(d, dir) * inv);
+          align += w * (perp * perp + back * back);
+          if (!grad) continue;
+          const Vec2 g = (2.0 * w * inv) * (perp * nrm - back * dir);
+          (*grad)[ed.b] = (*grad)[ed.b] + g;
+          (*grad)[ed.a] = (*grad)[ed.a] - g;
+          continue;
+        }
         const double len = norm(d);
         if (!(len > 0.0)) return kInf;
         const Vec2 u = (1.0 / len) * d;
         const double sx = std::sqrt(u.x * u.x + eps2), sy = std::sqrt(u.y * u.y + eps2);
         // Smoothed ||n||_1 - 1 (the L1 norm of the unit normal equals that of the unit direction).
-        const double w = ed.weight * edge_scale[k];
         align += w * (sx + sy - 1.0);
         if (!grad) continue;
         const Vec2 q{u.x / sx, u.y / sy};

@@ -66,6 +66,28 @@ MappedMesh deform_mesh(const TriMesh& tri, const PolysquareMapOptions& options, 
   return mm;
 }
 
+void straighten_to_labels(MappedMesh& mm, Layout& layout, const TriMesh& tri, const PolysquareMapOptions& options) {
+  if (options.label_weights.empty()) return;
+  DeformProblem problem = mm.problem;
+  problem.aligned.clear();
+  for (std::size_t c = 0; c < tri.chains.size(); ++c) {
+    const TriChain& ch = tri.chains[c];
+    const int n = static_cast<int>(ch.vertices.size());
+    const int m = ch.closed ? n : n - 1;
+    for (int i = 0; i < m; ++i)
+      problem.aligned.push_back({ch.vertices[i], ch.vertices[(i + 1) % n], 1.0, layout.chain_labels[c][i]});
+  }
+  DeformOptions o = options.deform;
+  o.eps_schedule = {o.eps_schedule.empty() ? 0.01 : o.eps_schedule.back()};
+  for (double w : options.label_weights) {
+    for (AlignedEdge& e : problem.aligned) e.weight = w;
+    const DeformStats s = deform_to_polysquare(problem, o, mm.x);
+    mm.stats.iterations += s.iterations;
+  }
+  for (LayoutSegment& s : layout.segments)
+    s.target = distance(mm.x[layout.break_vertex[s.break_a]], mm.x[layout.break_vertex[s.break_b]]);
+}
+
 void snap_to_layout(const TriMesh& tri, MappedMesh& mm, const Layout& layout, const PolysquareMapOptions& options,
                     const std::string& name) {
   std::vector<Vec2> targets;
@@ -149,6 +171,7 @@ PartMapResult map_part(const Region& region, const RegionPart& part, const Polys
   Layout layout = build_layout(tri, tri.vertices, mm.x, options.layout, name);
   st.break_points = layout.break_vertex.size();
   st.segments = layout.segments.size();
+  straighten_to_labels(mm, layout, tri, options);
   st.quantize = quantize_layout(layout, mm.x, options.quantize, name);
   if (const std::string problem_text = check_layout(layout); !problem_text.empty())
     throw MeshingError(name + ": the quantized poly-square is not valid: " + problem_text);

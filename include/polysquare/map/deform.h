@@ -27,6 +27,10 @@ struct DeformOptions {
 struct AlignedEdge {
   std::int32_t a = 0, b = 0;
   double weight = 1.0;  ///< boundary_weight for boundary edges, feature_weight for feature edges
+  /// -1: pulled to the nearest axis (smoothed L1 of the direction, eq. 8/10). 0..3 (+X, +Y, -X, -Y, the layout's
+  /// labels): the edge must run along that direction; its slope off the axis and any backward run are
+  /// penalized quadratically, whose gradient, unlike the L1 term's, does not vanish on an edge at 90 degrees.
+  int label = -1;
 };
 
 /// The deformation problem: rest shape, triangles (counter-clockwise in the rest shape) and aligned edges.

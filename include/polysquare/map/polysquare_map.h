@@ -37,6 +37,11 @@ struct PolysquareMapOptions {
   MapComposition composition = MapComposition::ppm;  ///< used when partition.parts != 1
   bool keep_partition = false;     ///< keep the background triangulation in the result (for the partition picture)
   DeformOptions deform;
+  /// Weights of the labelled deformation that runs between labelling and quantization (continuation, one L-BFGS
+  /// solve per weight): every side is pulled straight along its label, so the deformed layout the quantization
+  /// reads orders and sizes the sides as the labels say (turtle_shell's bottom otherwise stays a staircase under
+  /// a straight label and its holes overlap it). Empty: off.
+  std::vector<double> label_weights{5.0, 50.0, 500.0};
   LayoutOptions layout;
   QuantizeOptions quantize;
 };
@@ -76,6 +81,10 @@ struct MappedMesh {
 /// Deforms `tri` towards a poly-square: every chain edge is pulled to an axis. The pre-orientation (eq. 11) is
 /// computed over the ring edges, or with `orient_all_chains` over every chain but interior features.
 MappedMesh deform_mesh(const TriMesh& tri, const PolysquareMapOptions& options, bool orient_all_chains);
+
+/// Deforms `mm` again with every chain edge pulled along its layout label (options.label_weights), then sets each
+/// side's target to its new chord length. Keeps the map inversion-free; does nothing when the weights are empty.
+void straighten_to_labels(MappedMesh& mm, Layout& layout, const TriMesh& tri, const PolysquareMapOptions& options);
 
 /// Moves the chain vertices of a deformed mesh onto the quantized layout without inverting a triangle.
 /// Throws MeshingError naming `name` when no valid path exists.
