@@ -145,6 +145,10 @@ int main(int argc, char** argv) {
                        "lambda of the boundary alignment term (paper eq. 9)")->capture_default_str();
   cmd_mesh->add_option("--feature-weight", mesh.options.map.deform.feature_weight,
                        "weight of the feature alignment term (paper eq. 10)")->capture_default_str();
+  cmd_mesh->add_option("--flat-corner-angle", mesh.options.refine.flat_corner_deg,
+                       "collapse the quad at a boundary node whose single corner there is flatter than this (degrees), "
+                       "leaving an interior valence-3 node; 180 = off")
+      ->capture_default_str();
   cmd_mesh->add_flag("--binary", mesh.binary, "write binary MSH");
   cmd_mesh->add_flag("--repair", mesh.input_options.repair,
                      "drop repeated points and clip features crossing holes instead of refusing the input (reported)");

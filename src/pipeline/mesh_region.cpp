@@ -137,6 +137,9 @@ Candidate try_candidate(const Region& region, const RegionPart& part, const Poly
                            std::to_string(part.part);
   try {
     PartMapResult r = map_part(region, part, map);
+    const RefineStats refined = refine_flat_corners(r.mesh, options.refine);
+    c.summary["flat_corners"] = refined.flat_corners;
+    c.summary["flat_corners_collapsed"] = refined.collapsed;
     c.smooth = smooth_quads(r.mesh, options.smooth, &region);
     const InvariantReport inv = check_invariants(r.mesh);
     if (!inv.ok()) throw MeshingError(name + ": the mesh breaks an invariant (" + inv.first_problem + ")");
@@ -352,7 +355,8 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
                                               : (map.composition == MapComposition::gpm ? "gpm" : "ppm")}, {"subregions_per_part", options.parts},
                    {"amips_alpha", map.deform.amips_alpha}, {"amips_s", map.deform.amips_s},
                    {"boundary_weight", map.deform.boundary_weight}, {"feature_weight", map.deform.feature_weight},
-                   {"parameterization_ratio", map.parameterization_ratio}}},
+                   {"parameterization_ratio", map.parameterization_ratio},
+                   {"flat_corner_deg", options.refine.enabled ? options.refine.flat_corner_deg : 180.0}}},
       {"counts", {{"nodes", mesh.nodes.size()}, {"quads", mesh.quads.size()},
                   {"boundary_edges", mesh.boundary_edges.size()}, {"feature_edges", mesh.feature_edges.size()}}},
       {"parts", parts_json},

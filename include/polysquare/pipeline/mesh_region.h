@@ -9,6 +9,7 @@
 #include "polysquare/core/quad_mesh.h"
 #include "polysquare/core/region.h"
 #include "polysquare/map/polysquare_map.h"
+#include "polysquare/refine/refine.h"
 #include "polysquare/smooth/smooth.h"
 
 namespace polysquare {
@@ -35,6 +36,7 @@ struct MeshOptions {
   double min_scaled_jacobian = 0.2;    ///< a candidate whose worst quad is below this is refused; 0 = accept any valid mesh
   double max_edge_ratio = 20.0;        ///< refuse a mesh with a quad whose longest / shortest edge exceeds this
   PolysquareMapOptions map;      ///< stages 2 and 4-6 (map.size and map.layout.corner_threshold_deg are set from above)
+  RefineOptions refine;          ///< stage 8 templates at flattened boundary corners (before smoothing)
   SmoothOptions smooth;          ///< stage 7 smoothing
 };
 

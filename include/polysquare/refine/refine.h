@@ -1,0 +1,33 @@
+// Stage 8 (first template): adaptive singularity refinement (paper Sec. 5.3). A poly-square corner that the map
+// put on a smooth stretch of the boundary leaves a boundary node with a single quad whose corner there is nearly
+// flat (a disc meshed as one poly-square has four). The paper's triangle patch with the thinnest strip, one
+// element, reduces to collapsing that quad along its diagonal: the corner node stays on the curve, its two
+// boundary neighbours merge into it, and the node across becomes an interior valence-3 singularity whose three
+// quads smoothing opens to about 120 degrees.
+#pragma once
+
+#include <cstddef>
+
+#include "polysquare/core/quad_mesh.h"
+
+namespace polysquare {
+
+struct RefineOptions {
+  bool enabled = true;             ///< apply the template (the map's raw corners are kept when false)
+  double flat_corner_deg = 135.0;  ///< a boundary node with one quad whose angle there exceeds this is collapsed
+                                   ///< (sin 135 = SJ 0.71: flatter corners are worse than the valence-3 node
+                                   ///< the template leaves)
+};
+
+struct RefineStats {
+  std::size_t flat_corners = 0;   ///< boundary nodes with one quad and an angle above the threshold
+  std::size_t collapsed = 0;      ///< of those, collapsed (the others had a neighbourhood the template cannot take)
+};
+
+/// Collapses the quads at flattened boundary corners of `mesh` in place (nodes renumbered, tags and quad_part
+/// kept consistent). Only boundary nodes of kind `boundary` (never input corners) on one ring qualify; a quad
+/// whose collapse would join two nodes that already share a neighbour, or touch a collapse already made, is left.
+/// Deterministic: candidates in node order.
+RefineStats refine_flat_corners(QuadMesh& mesh, const RefineOptions& options);
+
+}  // namespace polysquare

@@ -1,0 +1,1 @@
+list(APPEND MODULE_SOURCES refine.cpp)
