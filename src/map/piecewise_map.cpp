@@ -348,6 +348,9 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
       add_straight_breaks(layouts[p], m, mapped[p].x, extra, sub_name(p));
     });
   }
+  for_each_subregion(n, [&](std::size_t p) {
+    straighten_to_labels(mapped[p], layouts[p], subs[p].mesh, options);
+  });
   st.seconds_deform = seconds_since(t0);
   for (std::size_t p = 0; p < n; ++p) {
     st.deform.iterations += mapped[p].stats.iterations;
