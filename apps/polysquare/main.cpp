@@ -66,7 +66,12 @@ int run_mesh(const MeshArgs& args) {
   for (const auto& part : result.report["candidates"]) {
     const bool explicit_parts = args.options.parts > 0;
     for (const auto& c : part) {
-      if (c.contains("chosen")) {
+      if (c.contains("chosen") && c.contains("fallback")) {
+        std::cerr << "warning: part " << c["part"] << ": none of " << part.size() - 1
+                  << " poly-square candidates meshed it; meshed unstructured by splitting triangles into quads ("
+                  << c["interior_singularities"] << " interior singularities, scaled Jacobian min "
+                  << c["min_scaled_jacobian"] << "); the report's candidates say why each failed\n";
+      } else if (c.contains("chosen")) {
         if (part.size() > 1 && !explicit_parts)
           std::cerr << "part " << c["part"] << ": " << c["subregions"] << " subregion(s) kept of " << part.size()
                     << " candidates (scaled Jacobian min " << c["min_scaled_jacobian"] << ")\n";

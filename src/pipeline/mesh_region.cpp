@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "polysquare/core/error.h"
+#include "polysquare/fallback/split_triangles.h"
 #include "polysquare/input/simplify.h"
 #include "polysquare/pipeline/invariants.h"
 #include "polysquare/quality/quality.h"
@@ -127,16 +128,16 @@ struct Candidate {
   }
 };
 
-Candidate try_candidate(const Region& region, const RegionPart& part, const PolysquareMapOptions& map,
-                        const MeshOptions& options) {
+// Meshes a part with `make_mesh` (a map candidate or the fallback), then smooths, checks and measures it.
+template <typename MakeMesh>
+Candidate finish_candidate(const Region& region, const RegionPart& part, const MeshOptions& options,
+                           nlohmann::json summary, MakeMesh make_mesh) {
   Candidate c;
-  const int k = map.partition.parts;
-  c.summary = {{"part", part.part}, {"subregions", k}};
-  if (k > 1 && map.composition == MapComposition::ppm) c.summary["bent_interfaces"] = !map.layout.straight_interfaces;
+  c.summary = std::move(summary);
   const std::string name = (region.source.empty() ? std::string("region") : region.source) + ": part " +
                            std::to_string(part.part);
   try {
-    PartMapResult r = map_part(region, part, map);
+    PartMapResult r = make_mesh();
     const RefineStats refined = refine_flat_corners(r.mesh, options.refine);
     c.summary["flat_corners"] = refined.flat_corners;
     c.summary["flat_corners_collapsed"] = refined.collapsed;
@@ -178,6 +179,29 @@ Candidate try_candidate(const Region& region, const RegionPart& part, const Poly
     c.summary["error"] = c.error;
   }
   return c;
+}
+
+Candidate try_candidate(const Region& region, const RegionPart& part, const PolysquareMapOptions& map,
+                        const MeshOptions& options) {
+  const int k = map.partition.parts;
+  nlohmann::json summary = {{"part", part.part}, {"subregions", k}};
+  if (k > 1 && map.composition == MapComposition::ppm) summary["bent_interfaces"] = !map.layout.straight_interfaces;
+  return finish_candidate(region, part, options, std::move(summary), [&] { return map_part(region, part, map); });
+}
+
+// The last resort for a part no poly-square candidate meshes: triangles split into quads (unstructured).
+Candidate try_split_fallback(const Region& region, const RegionPart& part, const MeshOptions& options) {
+  nlohmann::json summary = {{"part", part.part}, {"subregions", 0}, {"fallback", "split_triangles"}};
+  return finish_candidate(region, part, options, std::move(summary), [&] {
+    SplitOptions so;
+    so.size = options.size;
+    so.corner_threshold_deg = options.corner_threshold_deg;
+    PartMapResult r;
+    r.stats.part = part.part;
+    r.mesh = split_triangles(region, part, so);
+    r.stats.quads = r.mesh.quads.size();
+    return r;
+  });
 }
 
 }  // namespace
@@ -263,6 +287,12 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
           best = static_cast<int>(c);
       }
       if (best >= 0) break;
+    }
+    if (best < 0 && options.split_fallback) {
+      cands.push_back(try_split_fallback(*work, parts[k], options));
+      ks.push_back({0, false});
+      tried[k].push_back(cands.back().summary);
+      if (cands.back().error.empty()) best = static_cast<int>(cands.size()) - 1;
     }
     if (best < 0) {
       std::string all;

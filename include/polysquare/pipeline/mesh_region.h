@@ -32,6 +32,8 @@ struct MeshOptions {
   bool drop_small_parts = true;               ///< leave out (and report) polygon parts smaller than size^2
   std::size_t search_quads = 200'000;         ///< parts up to this many quads try every count of search_subregions
   std::vector<int> search_subregions{2, 3, 4, 5, 6, 8};
+  bool split_fallback = true;    ///< a part no poly-square candidate meshes gets an unstructured all-quad mesh
+                                 ///< (triangles split into three quads), reported under `fallbacks`; false: refuse
   bool keep_partition = false;   ///< return the background triangulation and its partition (for pictures)
   double min_scaled_jacobian = 0.2;    ///< a candidate whose worst quad is below this is refused; 0 = accept any valid mesh
   double max_edge_ratio = 20.0;        ///< refuse a mesh with a quad whose longest / shortest edge exceeds this

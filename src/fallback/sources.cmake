@@ -1,0 +1,1 @@
+list(APPEND MODULE_SOURCES split_triangles.cpp)
