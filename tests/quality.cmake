@@ -1,1 +1,2 @@
 list(APPEND TEST_SOURCES quality/test_gmsh_reference.cpp)
+list(APPEND TEST_SOURCES quality/test_pinned_corners.cpp)

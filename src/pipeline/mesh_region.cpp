@@ -61,7 +61,8 @@ struct CandidateSpec {
 // failed. An explicit --parts K is one round, K with bendable interfaces the next, one poly-square the last.
 // Automatic mode meshes small parts every way at once (one poly-square, the counts of search_subregions, the
 // area- and perimeter-based counts); a large part tries one poly-square first and partitions only if that
-// fails, which keeps its time near one map. A last round retries the partitions with bendable interfaces.
+// fails, which keeps its time near one map. A last round retries the partitions with bendable interfaces (parts
+// up to bent_round_quads: on coastline parts it doubled the search and meshed none).
 std::vector<std::vector<CandidateSpec>> candidate_rounds(const Region& region, const RegionPart& part,
                                                          const MeshOptions& options) {
   const double quads = part_area(region, part) / (options.size * options.size);
@@ -105,7 +106,7 @@ std::vector<std::vector<CandidateSpec>> candidate_rounds(const Region& region, c
     for (int k : options.search_subregions)
       if (quads / k >= 16.0) add({k});  // at least a 4 x 4 block per subregion
   add({1});
-  add_bent_round();
+  if (quads <= static_cast<double>(options.bent_round_quads)) add_bent_round();
   return rounds;
 }
 
@@ -114,6 +115,7 @@ struct Candidate {
   std::optional<PartMapResult> result;
   SmoothStats smooth;
   double min_sj = -2.0, max_edge_ratio = 0.0;
+  double gated_sj = -2.0;  // SJ min without the quads pinned by sharp input corners: what the mesher controls
   std::size_t interior_singularities = 0;
   std::string error;
   nlohmann::json summary;
@@ -121,10 +123,10 @@ struct Candidate {
   double size_deviation = 0.0;  // |log(mean quad area / h^2)|: how far the element size is from the request
 
   bool better_than(const Candidate& o) const {
-    if (std::abs(min_sj - o.min_sj) > 0.02) return min_sj > o.min_sj;  // quality first, within a margin
+    if (std::abs(gated_sj - o.gated_sj) > 0.02) return gated_sj > o.gated_sj;  // quality first, within a margin
     if (interior_singularities != o.interior_singularities) return interior_singularities < o.interior_singularities;
     if (std::abs(size_deviation - o.size_deviation) > 0.05) return size_deviation < o.size_deviation;
-    return min_sj > o.min_sj;
+    return gated_sj > o.gated_sj;
   }
 };
 
@@ -158,20 +160,44 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
     c.summary["max_edge_ratio"] = c.max_edge_ratio;
     c.summary["interior_singularities"] = c.interior_singularities;
     c.summary["mean_area_over_size_squared"] = mean_area;
-    // Where the refused figure is (only computed for a refusal).
+    // The gates judge the quads the mesher controls: quads pinned by an input corner sharper than the SJ gate
+    // are only counted (they cannot do better in any conforming mesh).
+    const std::vector<std::uint8_t> pinned = quads_pinned_by_sharp_input(r.mesh, options.min_scaled_jacobian);
+    const QuadMetrics metrics = quad_metrics(r.mesh);
+    double& gated_sj = c.gated_sj;
+    double gated_edge_ratio = 1.0, pinned_sj = 1.0;
+    gated_sj = 1.0;
+    std::size_t pinned_count = 0;
+    for (std::size_t q = 0; q < pinned.size(); ++q) {
+      if (pinned[q]) {
+        ++pinned_count;
+        pinned_sj = std::min(pinned_sj, metrics.sj[q]);
+        continue;
+      }
+      gated_sj = std::min(gated_sj, metrics.sj[q]);
+      gated_edge_ratio = std::max(gated_edge_ratio, metrics.edge_ratio[q]);
+    }
+    if (pinned_count > 0) {
+      c.summary["quads_pinned_by_sharp_input"] = pinned_count;
+      c.summary["pinned_min_scaled_jacobian"] = pinned_sj;
+      c.summary["unpinned_min_scaled_jacobian"] = gated_sj;
+    }
+    // Where the refused figure is.
     auto at = [&](const std::vector<double>& per_quad, bool largest) {
-      const auto it = largest ? std::max_element(per_quad.begin(), per_quad.end())
-                              : std::min_element(per_quad.begin(), per_quad.end());
-      const Vec2 p = r.mesh.nodes[r.mesh.quads[static_cast<std::size_t>(it - per_quad.begin())][0]];
+      std::size_t worst = pinned.size();
+      for (std::size_t q = 0; q < per_quad.size(); ++q)
+        if (!pinned[q] && (worst == pinned.size() || (largest ? per_quad[q] > per_quad[worst] : per_quad[q] < per_quad[worst])))
+          worst = q;
+      const Vec2 p = r.mesh.nodes[r.mesh.quads[worst][0]];
       return "(" + std::to_string(p.x) + ", " + std::to_string(p.y) + ")";
     };
-    if (c.max_edge_ratio > options.max_edge_ratio)
-      throw MeshingError(name + ": the best mesh has a quad with edge ratio " + std::to_string(c.max_edge_ratio) +
-                         " at " + at(quad_metrics(r.mesh).edge_ratio, true) + ", above the maximum " +
+    if (gated_edge_ratio > options.max_edge_ratio)
+      throw MeshingError(name + ": the best mesh has a quad with edge ratio " + std::to_string(gated_edge_ratio) +
+                         " at " + at(metrics.edge_ratio, true) + ", above the maximum " +
                          std::to_string(options.max_edge_ratio) + " (--max-edge-ratio)");
-    if (c.min_sj < options.min_scaled_jacobian)
-      throw MeshingError(name + ": the best mesh has a quad with scaled Jacobian " + std::to_string(c.min_sj) + " at " +
-                         at(quad_metrics(r.mesh).sj, false) + ", below the minimum " +
+    if (gated_sj < options.min_scaled_jacobian)
+      throw MeshingError(name + ": the best mesh has a quad with scaled Jacobian " + std::to_string(gated_sj) + " at " +
+                         at(metrics.sj, false) + ", below the minimum " +
                          std::to_string(options.min_scaled_jacobian) + " (--min-sj)");
     c.result = std::move(r);
   } catch (const MeshingError& e) {

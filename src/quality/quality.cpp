@@ -210,6 +210,27 @@ DomainDistance domain_distance(const QuadMesh& mesh, const Region& region, const
   return d;
 }
 
+std::vector<std::uint8_t> quads_pinned_by_sharp_input(const QuadMesh& mesh, double below) {
+  std::vector<std::uint8_t> pinned(mesh.quads.size(), 0);
+  if (mesh.node_kind.size() != mesh.nodes.size()) return pinned;
+  std::unordered_set<std::uint64_t> curve;
+  for (const auto& e : mesh.boundary_edges) curve.insert(edge_key(e[0], e[1]));
+  for (const auto& e : mesh.feature_edges) curve.insert(edge_key(e[0], e[1]));
+  for (std::size_t qi = 0; qi < mesh.quads.size(); ++qi) {
+    const auto& q = mesh.quads[qi];
+    for (int k = 0; k < 4 && !pinned[qi]; ++k) {
+      const std::int32_t v = q[k], next = q[(k + 1) % 4], prev = q[(k + 3) % 4];
+      if (mesh.node_kind[v] != NodeKind::corner) continue;
+      // Only acute corners: an obtuse one could be split between two quads.
+      const Vec2 p = mesh.nodes[v], en = mesh.nodes[next] - p, ep = mesh.nodes[prev] - p;
+      const double l = norm(en) * norm(ep);
+      if (!(l > 0) || dot(en, ep) <= 0.0 || cross(en, ep) / l >= below) continue;
+      pinned[qi] = curve.count(edge_key(v, next)) && curve.count(edge_key(v, prev));
+    }
+  }
+  return pinned;
+}
+
 nlohmann::json to_json(const QualityReport& q) {
   auto st = [](const Stats& s) { return nlohmann::json{{"min", s.min}, {"avg", s.avg}, {"max", s.max}, {"std", s.std}}; };
   return {{"nodes", q.nodes}, {"quads", q.quads}, {"triangles", q.triangles}, {"inverted", q.inverted},

@@ -40,6 +40,12 @@ struct QualityReport {
 /// anchors.md. non_manifold_edges and boundary_edges are over the quads too.
 QualityReport compute_quality(const QuadMesh& mesh);
 
+/// #quads: 1 for a quad with an acute corner at an input corner node (NodeKind::corner) whose two edges both lie
+/// on input curves (tagged boundary or feature edges) and whose corner scaled Jacobian is below `below`. Such a
+/// corner spans the angle the input gives (two curves crossing at 3 degrees allow no better than sin 3 degrees
+/// in any conforming mesh), so quality gates leave these quads out and report them apart.
+std::vector<std::uint8_t> quads_pinned_by_sharp_input(const QuadMesh& mesh, double below);
+
 struct DomainDistanceOptions {
   double corner_threshold_deg = 30.0;  ///< input vertices turning more than this must be mesh nodes
 };
