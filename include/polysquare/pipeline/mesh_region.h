@@ -32,9 +32,10 @@ struct MeshOptions {
   bool drop_small_parts = true;               ///< leave out (and report) polygon parts smaller than size^2
   std::size_t search_quads = 200'000;         ///< parts up to this many quads try every count of search_subregions
   std::vector<int> search_subregions{2, 3, 4, 5, 6, 8};
-  std::size_t bent_round_quads = 20'000;      ///< automatic mode retries partitions with bendable interfaces only
-                                              ///< for parts up to this many quads (smile needs it; delta_water's
-                                              ///< coastline parts took minutes there and meshed none)
+  std::size_t bent_round_quads = 5'000;       ///< automatic mode retries partitions with bendable interfaces only
+                                              ///< for parts up to this many quads (smile, 1,300, needed it once;
+                                              ///< delta_water's coastline parts spent half their search there and
+                                              ///< meshed none)
   bool split_fallback = true;    ///< a part no poly-square candidate meshes gets an unstructured all-quad mesh
                                  ///< (triangles split into three quads), reported under `fallbacks`; false: refuse
   bool keep_partition = false;   ///< return the background triangulation and its partition (for pictures)
