@@ -2,8 +2,11 @@
 
 #include <Eigen/Sparse>
 #include <Eigen/SparseCholesky>
+#include <oneapi/tbb/blocked_range.h>
+#include <oneapi/tbb/parallel_for.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <deque>
 #include <limits>
@@ -28,6 +31,10 @@ struct Energy {
   std::vector<RestTriangle> rest;
   std::vector<double> edge_scale;  // rest length / total rest length of aligned edges
   std::vector<double> rest_length; // rest length of each aligned edge
+  // Scratch of the parallel evaluation (one Energy is never evaluated from two threads at once).
+  mutable std::vector<double> values;
+  mutable std::vector<Vec2> grads;
+  static constexpr std::size_t kParallelTriangles = 8192;
 
   Energy(const DeformProblem& p, const DeformOptions& o)
       : problem(p), c_angle(o.amips_alpha * o.amips_s / 4.0), c_area((1.0 - o.amips_alpha) * o.amips_s / 2.0),
@@ -52,38 +59,78 @@ struct Energy {
     }
   }
 
+  // Per-triangle AMIPS value and gradient with respect to its edge vectors d1, d2 (false if inverted or past
+  // the overflow guard).
+  bool triangle_term(const std::vector<Vec2>& x, std::size_t t, double& val, Vec2& gd1, Vec2& gd2, bool want_grad) const {
+    const auto& tri = problem.triangles[t];
+    const RestTriangle& r = rest[t];
+    const Vec2 d1 = x[tri[1]] - x[tri[0]], d2 = x[tri[2]] - x[tri[0]];
+    // J = D * R with D = [d1 d2] (columns).
+    const double j00 = d1.x * r.r00 + d2.x * r.r10, j01 = d1.x * r.r01 + d2.x * r.r11;
+    const double j10 = d1.y * r.r00 + d2.y * r.r10, j11 = d1.y * r.r01 + d2.y * r.r11;
+    const double det = j00 * j11 - j01 * j10;
+    if (!(det > 1e-300)) return false;
+    const double fro = j00 * j00 + j01 * j01 + j10 * j10 + j11 * j11;
+    const double expo = c_angle * fro / det + c_area * (det + 1.0 / det);
+    if (expo - expo_rest > 600.0) return false;
+    // Divided by the AMIPS of a rigid motion (exp(2 c_angle + 2 c_area)): a per-triangle distortion of 1 at
+    // rest keeps the alignment weights of the paper (lambda = 5) meaningful whatever the mesh resolution.
+    val = r.weight * std::exp(expo - expo_rest);
+    if (!want_grad) return true;
+    // dE/dJ = val * (c_angle (2J/det - fro/det^2 cof) + c_area (1 - 1/det^2) cof), cof = d det / dJ.
+    const double a = val * c_angle * 2.0 / det;
+    const double b = val * (-c_angle * fro / (det * det) + c_area * (1.0 - 1.0 / (det * det)));
+    const double g00 = a * j00 + b * j11, g01 = a * j01 - b * j10;
+    const double g10 = a * j10 - b * j01, g11 = a * j11 + b * j00;
+    // dE/dD = dE/dJ * R^T.
+    gd1 = {g00 * r.r00 + g01 * r.r01, g10 * r.r00 + g11 * r.r01};
+    gd2 = {g00 * r.r10 + g01 * r.r11, g10 * r.r10 + g11 * r.r11};
+    return true;
+  }
+
   // Energy and (optionally) gradient at x. Returns +inf if any triangle is inverted or degenerate.
+  // Large meshes evaluate the triangles in parallel into per-triangle slots, then sum and scatter them in
+  // triangle order, so the result is bit-identical for any thread count.
   double eval(const std::vector<Vec2>& x, std::vector<Vec2>* grad, double* alignment_part = nullptr) const {
     if (grad) std::fill(grad->begin(), grad->end(), Vec2{});
     double e = 0.0;
-    for (std::size_t t = 0; t < problem.triangles.size(); ++t) {
-      const auto& tri = problem.triangles[t];
-      const RestTriangle& r = rest[t];
-      const Vec2 d1 = x[tri[1]] - x[tri[0]], d2 = x[tri[2]] - x[tri[0]];
-      // J = D * R with D = [d1 d2] (columns).
-      const double j00 = d1.x * r.r00 + d2.x * r.r10, j01 = d1.x * r.r01 + d2.x * r.r11;
-      const double j10 = d1.y * r.r00 + d2.y * r.r10, j11 = d1.y * r.r01 + d2.y * r.r11;
-      const double det = j00 * j11 - j01 * j10;
-      if (!(det > 1e-300)) return kInf;
-      const double fro = j00 * j00 + j01 * j01 + j10 * j10 + j11 * j11;
-      const double expo = c_angle * fro / det + c_area * (det + 1.0 / det);
-      if (expo - expo_rest > 600.0) return kInf;
-      // Divided by the AMIPS of a rigid motion (exp(2 c_angle + 2 c_area)): a per-triangle distortion of 1 at
-      // rest keeps the alignment weights of the paper (lambda = 5) meaningful whatever the mesh resolution.
-      const double val = r.weight * std::exp(expo - expo_rest);
-      e += val;
-      if (!grad) continue;
-      // dE/dJ = val * (c_angle (2J/det - fro/det^2 cof) + c_area (1 - 1/det^2) cof), cof = d det / dJ.
-      const double a = val * c_angle * 2.0 / det;
-      const double b = val * (-c_angle * fro / (det * det) + c_area * (1.0 - 1.0 / (det * det)));
-      const double g00 = a * j00 + b * j11, g01 = a * j01 - b * j10;
-      const double g10 = a * j10 - b * j01, g11 = a * j11 + b * j00;
-      // dE/dD = dE/dJ * R^T.
-      const Vec2 gd1{g00 * r.r00 + g01 * r.r01, g10 * r.r00 + g11 * r.r01};
-      const Vec2 gd2{g00 * r.r10 + g01 * r.r11, g10 * r.r10 + g11 * r.r11};
-      (*grad)[tri[1]] = (*grad)[tri[1]] + gd1;
-      (*grad)[tri[2]] = (*grad)[tri[2]] + gd2;
-      (*grad)[tri[0]] = (*grad)[tri[0]] - gd1 - gd2;
+    const std::size_t nt = problem.triangles.size();
+    if (nt >= kParallelTriangles) {
+      values.resize(nt);
+      grads.resize(grad ? 2 * nt : 0);
+      std::atomic<bool> bad{false};
+      oneapi::tbb::parallel_for(oneapi::tbb::blocked_range<std::size_t>(0, nt, 1024),
+                                [&](const oneapi::tbb::blocked_range<std::size_t>& range) {
+                                  for (std::size_t t = range.begin(); t != range.end(); ++t) {
+                                    Vec2 g1, g2;
+                                    if (!triangle_term(x, t, values[t], g1, g2, grad != nullptr)) {
+                                      bad = true;
+                                      return;
+                                    }
+                                    if (grad) { grads[2 * t] = g1; grads[2 * t + 1] = g2; }
+                                  }
+                                });
+      if (bad) return kInf;
+      for (std::size_t t = 0; t < nt; ++t) {
+        e += values[t];
+        if (!grad) continue;
+        const auto& tri = problem.triangles[t];
+        (*grad)[tri[1]] = (*grad)[tri[1]] + grads[2 * t];
+        (*grad)[tri[2]] = (*grad)[tri[2]] + grads[2 * t + 1];
+        (*grad)[tri[0]] = (*grad)[tri[0]] - grads[2 * t] - grads[2 * t + 1];
+      }
+    } else {
+      for (std::size_t t = 0; t < nt; ++t) {
+        double val;
+        Vec2 gd1, gd2;
+        if (!triangle_term(x, t, val, gd1, gd2, grad != nullptr)) return kInf;
+        e += val;
+        if (!grad) continue;
+        const auto& tri = problem.triangles[t];
+        (*grad)[tri[1]] = (*grad)[tri[1]] + gd1;
+        (*grad)[tri[2]] = (*grad)[tri[2]] + gd2;
+        (*grad)[tri[0]] = (*grad)[tri[0]] - gd1 - gd2;
+      }
     }
     double align = 0.0;
     if (with_alignment) {
