@@ -45,7 +45,9 @@ int run_mesh(const MeshArgs& args) {
   options.map.layout.straight_interfaces = !args.bend_interfaces;
   MeshResult result = mesh_region(region, options);
   const QualityReport quality = compute_quality(result.mesh);
-  const DomainDistance domain = domain_distance(result.mesh, region, {args.options.corner_threshold_deg});
+  DomainDistanceOptions measure{args.options.corner_threshold_deg, {}};
+  for (const auto& d : result.report["dropped_parts"]) measure.skip_parts.push_back(d["part"].get<int>());
+  const DomainDistance domain = domain_distance(result.mesh, region, measure);
   result.report["quality"] = to_json(quality);
   result.report["input"]["repairs"] = repairs;
   result.report["domain"] = to_json(domain);

@@ -154,7 +154,11 @@ DomainDistance domain_distance(const QuadMesh& mesh, const Region& region, const
   DomainDistance d;
   std::vector<std::array<Vec2, 2>> ring_segs, feature_segs, mesh_edges;
   double region_area = 0;
+  auto skipped = [&](const Ring& r) {
+    return std::find(options.skip_parts.begin(), options.skip_parts.end(), r.part) != options.skip_parts.end();
+  };
   for (const Ring& r : region.rings) {
+    if (skipped(r)) continue;
     double s = 0;
     for (std::size_t i = 0; i < r.points.size(); ++i) {
       ring_segs.push_back({r.points[i], r.points[(i + 1) % r.points.size()]});
@@ -200,6 +204,7 @@ DomainDistance domain_distance(const QuadMesh& mesh, const Region& region, const
   for (Vec2 p : mesh.nodes) node_points.push_back({p, p});
   const SegmentGrid nodes(node_points);
   for (const Ring& r : region.rings) {
+    if (skipped(r)) continue;
     const std::size_t n = r.points.size();
     for (std::size_t i = 0; i < n; ++i) {
       if (!sharp_turn(r.points[(i + n - 1) % n], r.points[i], r.points[(i + 1) % n], options.corner_threshold_deg)) continue;

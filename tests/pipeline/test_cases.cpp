@@ -128,6 +128,13 @@ TEST(Pipeline, PartsSmallerThanOneElementAreLeftOutAndReported) {
   ASSERT_EQ(res.report["dropped_parts"].size(), 1u);
   EXPECT_NEAR(res.report["dropped_parts"][0]["area"].get<double>(), 1.0, 1e-12);
   EXPECT_EQ(res.mesh.quads.size(), 200u);  // 20 x 10 on the rectangle
+  // Measured without the islet, the mesh covers the rest exactly and misses no sharp vertex; with it, the
+  // islet's four corners are missing and its area is lost.
+  const DomainDistance with_islet = domain_distance(res.mesh, r);
+  EXPECT_EQ(with_islet.sharp_vertices_missing, 4u);
+  const DomainDistance without = domain_distance(res.mesh, r, {30.0, {res.report["dropped_parts"][0]["part"].get<int>()}});
+  EXPECT_EQ(without.sharp_vertices_missing, 0u);
+  EXPECT_LT(std::abs(without.area_relative_change), 1e-12);
   o.drop_small_parts = false;
   EXPECT_THROW(mesh_region(r, o), MeshingError);
   std::filesystem::remove(path);

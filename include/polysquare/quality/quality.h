@@ -48,6 +48,8 @@ std::vector<std::uint8_t> quads_pinned_by_sharp_input(const QuadMesh& mesh, doub
 
 struct DomainDistanceOptions {
   double corner_threshold_deg = 30.0;  ///< input vertices turning more than this must be mesh nodes
+  std::vector<int> skip_parts;         ///< polygon parts left out of the mesh (smaller than one element): their
+                                       ///< rings count neither in the area nor as sharp vertices
 };
 struct DomainDistance {
   double boundary_max_distance = 0;  ///< max over mesh boundary nodes of the distance to the input rings
