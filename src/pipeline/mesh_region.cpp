@@ -164,9 +164,7 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
     // are only counted (they cannot do better in any conforming mesh).
     const std::vector<std::uint8_t> pinned = quads_pinned_by_sharp_input(r.mesh, options.min_scaled_jacobian);
     const QuadMetrics metrics = quad_metrics(r.mesh);
-    double& gated_sj = c.gated_sj;
-    double gated_edge_ratio = 1.0, pinned_sj = 1.0;
-    gated_sj = 1.0;
+    double gated_sj = 1.0, gated_edge_ratio = 1.0, pinned_sj = 1.0;
     std::size_t pinned_count = 0;
     for (std::size_t q = 0; q < pinned.size(); ++q) {
       if (pinned[q]) {
@@ -177,6 +175,7 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
       gated_sj = std::min(gated_sj, metrics.sj[q]);
       gated_edge_ratio = std::max(gated_edge_ratio, metrics.edge_ratio[q]);
     }
+    c.gated_sj = gated_sj;
     if (pinned_count > 0) {
       c.summary["quads_pinned_by_sharp_input"] = pinned_count;
       c.summary["pinned_min_scaled_jacobian"] = pinned_sj;
