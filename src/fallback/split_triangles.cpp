@@ -26,25 +26,15 @@ QuadMesh split_triangles(const Region& region, const RegionPart& part, const Spl
   const std::size_t nv = tri.vertices.size();
   out.nodes = tri.vertices;
   out.node_kind.assign(nv, NodeKind::interior);
-  std::vector<int> appearances(nv, 0);
-  std::vector<std::uint8_t> corner(nv, 0);
   for (const TriChain& ch : tri.chains) {
-    const int n = static_cast<int>(ch.vertices.size());
     const NodeKind kind = ch.kind == TriChain::Kind::ring ? NodeKind::boundary : NodeKind::feature;
-    for (int i = 0; i < n; ++i) {
-      const std::int32_t v = ch.vertices[i];
-      appearances[v]++;
-      // A ring wins over a feature touching it: boundary nodes slide on the boundary.
+    // A ring wins over a feature touching it: boundary nodes slide on the boundary.
+    for (const std::int32_t v : ch.vertices)
       if (out.node_kind[v] != NodeKind::boundary) out.node_kind[v] = kind;
-      if (!ch.closed && (i == 0 || i == n - 1)) corner[v] = 1;
-      else if (ch.is_input[i] && sharp_turn(tri.vertices[ch.vertices[(i + n - 1) % n]], tri.vertices[v],
-                                            tri.vertices[ch.vertices[(i + 1) % n]], options.corner_threshold_deg))
-        corner[v] = 1;
-    }
   }
-  for (std::int32_t v : tri.feature_point_vertices) corner[v] = 1;
+  const std::vector<std::uint8_t> corner = corner_vertices(tri, tri.vertices, options.corner_threshold_deg);
   for (std::size_t v = 0; v < nv; ++v)
-    if (corner[v] || appearances[v] > 1) out.node_kind[v] = NodeKind::corner;
+    if (corner[v]) out.node_kind[v] = NodeKind::corner;
 
   // One midpoint node per triangle edge, of the kind of the curve the edge lies on (interior otherwise).
   std::unordered_map<std::uint64_t, std::int32_t> midpoint;

@@ -143,26 +143,8 @@ Layout build_layout(const TriMesh& mesh, const std::vector<Vec2>& original, cons
                     const LayoutOptions& options, const std::string& part_name) {
   const std::size_t nv = mesh.vertices.size();
   Layout layout;
-  std::vector<int> appearances(nv, 0);
-  std::vector<std::uint8_t> corner(nv, 0), is_break(nv, 0);
-
-  for (const TriChain& ch : mesh.chains) {
-    const int n = static_cast<int>(ch.vertices.size());
-    for (int i = 0; i < n; ++i) {
-      const std::int32_t v = ch.vertices[i];
-      appearances[v]++;
-      const bool end = !ch.closed && (i == 0 || i == n - 1);
-      if (end) { corner[v] = 1; continue; }
-      if (!ch.is_input[i]) continue;
-      if (sharp_turn(original[ch.vertices[(i + n - 1) % n]], original[v], original[ch.vertices[(i + 1) % n]],
-                     options.corner_threshold_deg))
-        corner[v] = 1;
-    }
-  }
-  for (std::int32_t v : mesh.feature_point_vertices) corner[v] = 1;
-  for (std::size_t v = 0; v < nv; ++v)
-    if (appearances[v] > 1) corner[v] = 1;  // chains meet: a crossing or a feature ending on the boundary
-  for (std::size_t v = 0; v < nv; ++v) is_break[v] = corner[v];
+  const std::vector<std::uint8_t> corner = corner_vertices(mesh, original, options.corner_threshold_deg);
+  std::vector<std::uint8_t> is_break = corner;
 
   // Sequences labelled together: the chains of each loop (a PPM subregion's boundary made of ring pieces and
   // interfaces), so that the loop closes with +-4 quarter turns, and every other chain alone.

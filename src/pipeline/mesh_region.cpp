@@ -146,7 +146,8 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
     c.smooth = smooth_quads(r.mesh, options.smooth, &region);
     const InvariantReport inv = check_invariants(r.mesh);
     if (!inv.ok()) throw MeshingError(name + ": the mesh breaks an invariant (" + inv.first_problem + ")");
-    const QualityReport q = compute_quality(r.mesh);
+    const QuadMetrics metrics = quad_metrics(r.mesh);
+    const QualityReport q = compute_quality(r.mesh, metrics);
     c.min_sj = q.sj.min;
     c.max_edge_ratio = q.edge_ratio.max;
     c.interior_singularities = q.interior_singularities;
@@ -163,7 +164,6 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
     // The gates judge the quads the mesher controls: quads pinned by an input corner sharper than the SJ gate
     // are only counted (they cannot do better in any conforming mesh).
     const std::vector<std::uint8_t> pinned = quads_pinned_by_sharp_input(r.mesh, options.min_scaled_jacobian);
-    const QuadMetrics metrics = quad_metrics(r.mesh);
     double gated_sj = 1.0, gated_edge_ratio = 1.0, pinned_sj = 1.0;
     std::size_t pinned_count = 0;
     for (std::size_t q = 0; q < pinned.size(); ++q) {

@@ -113,12 +113,13 @@ QuadMetrics quad_metrics(const QuadMesh& mesh) {
   return m;
 }
 
-QualityReport compute_quality(const QuadMesh& mesh) {
+QualityReport compute_quality(const QuadMesh& mesh) { return compute_quality(mesh, quad_metrics(mesh)); }
+
+QualityReport compute_quality(const QuadMesh& mesh, const QuadMetrics& m) {
   QualityReport r;
   r.nodes = mesh.nodes.size();
   r.quads = mesh.quads.size();
   r.triangles = mesh.triangles.size();
-  const QuadMetrics m = quad_metrics(mesh);
   r.sj = stats_of(m.sj);
   r.eta = stats_of(m.eta);
   r.skew = stats_of(m.skew);

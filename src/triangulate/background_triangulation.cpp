@@ -311,4 +311,25 @@ TriMesh triangulate_part(const Region& region, const RegionPart& part, const Tri
   return out;
 }
 
+std::vector<std::uint8_t> corner_vertices(const TriMesh& mesh, const std::vector<Vec2>& positions,
+                                          double corner_threshold_deg) {
+  std::vector<std::uint8_t> corner(mesh.vertices.size(), 0);
+  std::vector<int> appearances(mesh.vertices.size(), 0);
+  for (const TriChain& ch : mesh.chains) {
+    const int n = static_cast<int>(ch.vertices.size());
+    for (int i = 0; i < n; ++i) {
+      const std::int32_t v = ch.vertices[i];
+      appearances[v]++;
+      if (!ch.closed && (i == 0 || i == n - 1)) corner[v] = 1;
+      else if (ch.is_input[i] && sharp_turn(positions[ch.vertices[(i + n - 1) % n]], positions[v],
+                                            positions[ch.vertices[(i + 1) % n]], corner_threshold_deg))
+        corner[v] = 1;
+    }
+  }
+  for (std::int32_t v : mesh.feature_point_vertices) corner[v] = 1;
+  for (std::size_t v = 0; v < corner.size(); ++v)
+    if (appearances[v] > 1) corner[v] = 1;  // chains meet: a crossing or a feature ending on the boundary
+  return corner;
+}
+
 }  // namespace polysquare

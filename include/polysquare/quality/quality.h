@@ -39,6 +39,8 @@ struct QualityReport {
 /// Valence counts the distinct quad edges at a vertex; triangles (from other tools) are not counted, as in
 /// anchors.md. non_manifold_edges and boundary_edges are over the quads too.
 QualityReport compute_quality(const QuadMesh& mesh);
+/// The same from per-quad metrics already computed for `mesh` (quad_metrics).
+QualityReport compute_quality(const QuadMesh& mesh, const QuadMetrics& metrics);
 
 /// #quads: 1 for a quad with an acute corner at an input corner node (NodeKind::corner) whose two edges both lie
 /// on input curves (tagged boundary or feature edges) and whose corner scaled Jacobian is below `below`. Such a

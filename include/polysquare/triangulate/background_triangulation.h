@@ -60,6 +60,12 @@ std::unordered_map<std::uint64_t, std::array<std::int32_t, 2>> edge_owners(const
 /// for every triangle after the split, the index of the triangle it came from.
 void split_constrained_interior_edges(TriMesh& mesh, std::vector<std::int32_t>* parent = nullptr);
 
+/// #V: 1 for every vertex that must be a mesh node whatever the map does: open chain ends, input vertices
+/// turning by more than `corner_threshold_deg` at `positions` (input coordinates), isolated feature points and
+/// vertices where chains meet (crossings, features ending on the boundary).
+std::vector<std::uint8_t> corner_vertices(const TriMesh& mesh, const std::vector<Vec2>& positions,
+                                          double corner_threshold_deg);
+
 /// Name of a chain for messages: "ring 2", "feature 5", "separator 1".
 std::string chain_name(const TriChain& chain);
 
