@@ -156,6 +156,9 @@ int main(int argc, char** argv) {
                        "collapse the quad at a boundary node whose single corner there is flatter than this (degrees), "
                        "leaving an interior valence-3 node; 180 = off")
       ->capture_default_str();
+  cmd_mesh->add_option("--feature-tolerance", mesh.options.feature_tolerance,
+                       "largest distance between a feature curve and the mesh edges along it, as a fraction of the size")
+      ->check(CLI::PositiveNumber)->capture_default_str();
   cmd_mesh->add_flag("--binary", mesh.binary, "write binary MSH");
   cmd_mesh->add_flag("--repair", mesh.input_options.repair,
                      "drop repeated points and clip features crossing holes instead of refusing the input (reported)");

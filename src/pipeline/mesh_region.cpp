@@ -143,7 +143,9 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
     const RefineStats refined = refine_flat_corners(r.mesh, options.refine);
     c.summary["flat_corners"] = refined.flat_corners;
     c.summary["flat_corners_collapsed"] = refined.collapsed;
-    c.smooth = smooth_quads(r.mesh, options.smooth, &region);
+    SmoothOptions smooth = options.smooth;
+    smooth.feature_tolerance = options.feature_tolerance * options.size;
+    c.smooth = smooth_quads(r.mesh, smooth, &region);
     const InvariantReport inv = check_invariants(r.mesh);
     if (!inv.ok()) throw MeshingError(name + ": the mesh breaks an invariant (" + inv.first_problem + ")");
     const QuadMetrics metrics = quad_metrics(r.mesh);
@@ -411,6 +413,7 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
                    {"amips_alpha", map.deform.amips_alpha}, {"amips_s", map.deform.amips_s},
                    {"boundary_weight", map.deform.boundary_weight}, {"feature_weight", map.deform.feature_weight},
                    {"parameterization_ratio", map.parameterization_ratio},
+                   {"feature_tolerance", options.feature_tolerance},
                    {"flat_corner_deg", options.refine.enabled ? options.refine.flat_corner_deg : 180.0}}},
       {"counts", {{"nodes", mesh.nodes.size()}, {"quads", mesh.quads.size()},
                   {"boundary_edges", mesh.boundary_edges.size()}, {"feature_edges", mesh.feature_edges.size()}}},

@@ -41,6 +41,11 @@ struct Incidence {
     for (std::size_t k = offset[v]; k < offset[v + 1]; ++k) m = std::min(m, quad_shape(mesh, quads[k]));
     return m;
   }
+  double min_sj(const QuadMesh& mesh, std::size_t v) const {
+    double m = 1.0;
+    for (std::size_t k = offset[v]; k < offset[v + 1]; ++k) m = std::min(m, quad_min_corner_sj(mesh, quads[k]));
+    return m;
+  }
   double mean_edge(const QuadMesh& mesh, std::size_t v) const {
     double len = 0.0;
     int n = 0;
@@ -70,6 +75,27 @@ struct Curve {
     const std::size_t j = std::clamp<std::size_t>(i, 1, pts.size() - 1);
     const double seg = cum[j] - cum[j - 1];
     return seg > 0 ? lerp(pts[j - 1], pts[j], (s - cum[j - 1]) / seg) : pts[j];
+  }
+  // Largest distance from the curve between arc parameters s0 < s1 (unwrapped on closed curves) to the chord
+  // joining their points: how far the mesh edge between two nodes on this curve strays from it.
+  double chord_deviation(double s0, double s1) const {
+    const Vec2 a = at(s0), b = at(s1);
+    const std::size_t n = closed ? pts.size() - 1 : pts.size();
+    const double L = length();
+    double shift = 0.0;
+    if (closed && L > 0) {
+      shift = std::floor(s0 / L) * L;
+      s0 -= shift;
+      s1 -= shift;
+    }
+    double worst = 0.0;
+    for (int lap = 0; lap < (closed ? 2 : 1); ++lap) {
+      const double base = lap * L;
+      for (auto i = static_cast<std::size_t>(std::upper_bound(cum.begin(), cum.begin() + static_cast<std::ptrdiff_t>(n), s0 - base) - cum.begin());
+           i < n && cum[i] + base < s1; ++i)
+        worst = std::max(worst, point_segment_distance(pts[i], a, b));
+    }
+    return worst;
   }
   double project(Vec2 p) const {
     double best = INFINITY, s = 0.0;
@@ -212,6 +238,8 @@ SmoothStats smooth_quads(QuadMesh& mesh, const SmoothOptions& options, const Reg
     link(mesh.boundary_edges, mesh.boundary_edge_ring, 0);
     link(mesh.feature_edges, mesh.feature_edge_curve, static_cast<int>(region->rings.size()));
   }
+  const int feature_base = region ? static_cast<int>(region->rings.size()) : 0;
+  const double tolerance = options.feature_tolerance;
   auto slides = [&](std::size_t v) {
     const NodeKind k = mesh.node_kind[v];
     return (k == NodeKind::boundary || k == NodeKind::feature) && slider[v].curve >= 0 && slider[v].prev >= 0 &&
@@ -232,7 +260,7 @@ SmoothStats smooth_quads(QuadMesh& mesh, const SmoothOptions& options, const Reg
     for_each_by_colour(search_classes, [&](std::int32_t v) {
       const bool is_inner = interior[v] != 0;
       const double before = inc.worst(mesh, v);
-      if (before >= options.worst_threshold) return;
+      if (is_inner && before >= options.worst_threshold) return;
       double best = before, step = 0.25 * inc.mean_edge(mesh, v);
       if (is_inner) {
         for (int level = 0; level < 12; ++level) {
@@ -263,11 +291,47 @@ SmoothStats smooth_quads(QuadMesh& mesh, const SmoothOptions& options, const Reg
       if (lo > hi) std::swap(lo, hi);
       if (!(lo < s && s < hi)) return;
       const double margin = 0.05 * (hi - lo);
+      // Feature nodes keep the two mesh edges beside them within the feature tolerance of the curve; a node
+      // that starts outside it first moves towards the position that balances the two edges.
+      const bool bounded = tolerance > 0 && slider[v].curve >= feature_base;
+      auto deviation = [&](double t) { return std::max(c.chord_deviation(lo, t), c.chord_deviation(t, hi)); };
+      double allowed = INFINITY;
+      bool repaired = false;
+      if (bounded) {
+        const double now = deviation(s);
+        allowed = std::max(tolerance, now);
+        if (now > tolerance) {
+          double a = lo, b = hi;  // bisection on the sign of (left deviation - right deviation)
+          for (int it = 0; it < 40; ++it) {
+            const double mid = 0.5 * (a + b);
+            (c.chord_deviation(lo, mid) < c.chord_deviation(mid, hi) ? a : b) = mid;
+          }
+          const double balanced = std::clamp(0.5 * (a + b), lo + margin, hi - margin);
+          const Vec2 old = mesh.nodes[v];
+          const double sj_before = inc.min_sj(mesh, v), floor = std::min(sj_before, options.feature_repair_min_sj);
+          for (double frac : {1.0, 0.5, 0.25}) {
+            const double cand = s + frac * (balanced - s);
+            const double dev = deviation(cand);
+            if (!(dev < now - 1e-12)) continue;
+            mesh.nodes[v] = c.at(cand);
+            if (inc.min_sj(mesh, v) >= floor) {
+              s = cand;
+              allowed = std::max(tolerance, dev);
+              best = inc.worst(mesh, v);
+              repaired = true;
+              break;
+            }
+            mesh.nodes[v] = old;
+          }
+        }
+      }
+      if (!repaired && before >= options.worst_threshold) return;
       for (int level = 0; level < 12; ++level) {
         const Vec2 old = mesh.nodes[v];
         double best_s = s;
         for (double cand : {s - step, s + step}) {
           if (cand <= lo + margin || cand >= hi - margin) continue;
+          if (bounded && deviation(cand) > allowed) continue;
           mesh.nodes[v] = c.at(cand);
           const double w = inc.worst(mesh, v);
           if (w > best + 1e-12) { best = w; best_s = cand; }
@@ -275,7 +339,7 @@ SmoothStats smooth_quads(QuadMesh& mesh, const SmoothOptions& options, const Reg
         }
         if (best_s != s) { s = best_s; mesh.nodes[v] = c.at(s); } else step *= 0.5;
       }
-      if (best > before) moved_flag[v] = curve_moved[v] = 1;
+      if (repaired || best > before) moved_flag[v] = curve_moved[v] = 1;
     });
     std::size_t moved = 0;
     for (std::size_t v = 0; v < nn; ++v) {

@@ -64,6 +64,8 @@ TEST_P(SlicedCase, HoldsEveryInvariant) {
   // 5: feature nodes on the curves.
   EXPECT_LT(d.feature_node_max_distance, 1e-9 * region.bounding_box().diagonal());
   if (!region.features.empty()) EXPECT_GT(m.feature_edges.size(), 0u);
+  // Feature curves lie on mesh edges: no point of a feature polyline farther than 0.1 h from the mesh edges.
+  EXPECT_LE(d.feature_max_distance, 0.1 * c.size) << c.name;
   EXPECT_GT(q.sj.min, c.sj_floor) << c.name;
   EXPECT_LT(q.edge_ratio.max, 10.0) << c.name;  // no collapsed edge hiding behind good angles
   // Element size follows the requested size: mean quad area within 40% of h^2.
@@ -84,6 +86,21 @@ INSTANTIATE_TEST_SUITE_P(Cases, SlicedCase,
                                            // smile: below Gmsh's 0.66 (its eyes' corners; see README)
                                            Case{"smile", 2.5, 0.5, 221}),
                          [](const auto& info) { return std::string(info.param.name); });
+
+// The smoother is what keeps smile's eye loops within tolerance: unbounded, it lengthens the chords next to the
+// loops' poly-square corners (a wider inscribed angle there) and leaves the curve 0.3 h away.
+TEST(Pipeline, FeatureToleranceBoundsTheChordsAlongFeatures) {
+  const Region r = load("smile");
+  MeshOptions o;
+  o.size = 2.5;
+  o.parts = 1;
+  o.feature_tolerance = 0.0;
+  const double loose = domain_distance(mesh_region(r, o).mesh, r).feature_max_distance;
+  EXPECT_GT(loose, 0.15 * o.size);
+  o.feature_tolerance = 0.05;
+  const double tight = domain_distance(mesh_region(r, o).mesh, r).feature_max_distance;
+  EXPECT_LE(tight, 0.05 * o.size);
+}
 
 TEST(Pipeline, LetterIIsAPerfectStructuredGrid) {
   const QuadMesh m = mesh(load("letter_I"), 2.0).mesh;

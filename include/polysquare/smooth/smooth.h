@@ -14,6 +14,12 @@ struct SmoothOptions {
   int worst_sweeps = 10;         ///< sweeps of the pattern search that maximizes the worst corner around poor nodes
   double worst_threshold = 0.9;  ///< nodes whose incident quads have a corner scaled Jacobian below this are searched
   bool slide_on_curves = true;   ///< let boundary and feature nodes slide along their input curve in the search
+  double feature_tolerance = 0;  ///< largest distance (region units) between a feature curve and the mesh edge
+                                 ///< joining two of its nodes: slides never exceed it, and nodes beside a longer
+                                 ///< chord move to even it out. 0 = unbounded. The pipeline sets it from
+                                 ///< MeshOptions::feature_tolerance.
+  double feature_repair_min_sj = 0.3;  ///< a node evening out a chord may not push the worst corner around it
+                                       ///< below this (or below its current value, if lower)
 };
 
 struct SmoothStats {
