@@ -143,6 +143,11 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
     const RefineStats refined = refine_flat_corners(r.mesh, options.refine);
     c.summary["flat_corners"] = refined.flat_corners;
     c.summary["flat_corners_collapsed"] = refined.collapsed;
+    const RefineStats loops = pillow_feature_loops(r.mesh, options.refine);
+    if (loops.feature_loops > 0) {
+      c.summary["feature_loops_flat"] = loops.feature_loops;
+      c.summary["feature_loops_pillowed"] = loops.pillowed;
+    }
     SmoothOptions smooth = options.smooth;
     smooth.feature_tolerance = options.feature_tolerance * options.size;
     c.smooth = smooth_quads(r.mesh, smooth, &region);

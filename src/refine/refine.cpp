@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <unordered_map>
 #include <vector>
 
 namespace polysquare {
@@ -109,6 +110,131 @@ RefineStats refine_flat_corners(QuadMesh& mesh, const RefineOptions& options) {
   copy_edges(mesh.boundary_edges, mesh.boundary_edge_ring, out.boundary_edges, out.boundary_edge_ring);
   copy_edges(mesh.feature_edges, mesh.feature_edge_curve, out.feature_edges, out.feature_edge_curve);
   mesh = std::move(out);
+  return st;
+}
+
+}  // namespace polysquare
+
+namespace polysquare {
+
+RefineStats pillow_feature_loops(QuadMesh& mesh, const RefineOptions& options) {
+  RefineStats st;
+  const std::size_t nn = mesh.nodes.size();
+  if (!options.enabled || mesh.node_kind.size() != nn || mesh.feature_edges.empty()) return st;
+  std::vector<std::vector<std::int32_t>> quads_of(nn);
+  for (std::size_t q = 0; q < mesh.quads.size(); ++q)
+    for (std::int32_t v : mesh.quads[q]) quads_of[v].push_back(static_cast<std::int32_t>(q));
+  std::vector<int> curve_edges(nn, 0);
+  for (const auto& e : mesh.boundary_edges) curve_edges[e[0]]++, curve_edges[e[1]]++;
+  for (const auto& e : mesh.feature_edges) curve_edges[e[0]]++, curve_edges[e[1]]++;
+  int curves = 0;
+  for (auto c : mesh.feature_edge_curve) curves = std::max(curves, c + 1);
+  std::vector<std::vector<std::array<std::int32_t, 2>>> edges_of(static_cast<std::size_t>(curves));
+  for (std::size_t e = 0; e < mesh.feature_edges.size(); ++e)
+    edges_of[static_cast<std::size_t>(mesh.feature_edge_curve[e])].push_back(mesh.feature_edges[e]);
+
+  auto at_of = [&](std::int32_t q, std::int32_t v) {
+    const auto& quad = mesh.quads[static_cast<std::size_t>(q)];
+    return static_cast<int>(std::find(quad.begin(), quad.end(), v) - quad.begin());
+  };
+  // Quads at v swept counter-clockwise from the edge towards `from` to the edge towards `to`: the side of the
+  // loop on the left of to -> v -> from... i.e. the fan between the two loop edges. Empty if the fan breaks.
+  auto fan = [&](std::int32_t v, std::int32_t from, std::int32_t to) {
+    std::vector<std::int32_t> out;
+    std::int32_t dir = from;
+    for (std::size_t guard = 0; guard <= quads_of[v].size(); ++guard) {
+      std::int32_t found = -1;
+      for (std::int32_t q : quads_of[v])
+        if (mesh.quads[static_cast<std::size_t>(q)][(at_of(q, v) + 1) % 4] == dir) found = q;
+      if (found < 0) return std::vector<std::int32_t>{};
+      out.push_back(found);
+      dir = mesh.quads[static_cast<std::size_t>(found)][(at_of(found, v) + 3) % 4];
+      if (dir == to) return out;
+    }
+    return std::vector<std::int32_t>{};
+  };
+
+  for (int c = 0; c < curves; ++c) {
+    const auto& edges = edges_of[static_cast<std::size_t>(c)];
+    if (edges.size() < 3) continue;
+    // The loop as a cycle of nodes, each with exactly the two edges of this curve and no other curve edge.
+    std::unordered_map<std::int32_t, std::vector<std::int32_t>> adj;
+    for (const auto& e : edges) adj[e[0]].push_back(e[1]), adj[e[1]].push_back(e[0]);
+    bool simple = true;
+    for (const auto& [v, a] : adj)
+      simple = simple && a.size() == 2 && curve_edges[v] == 2 && mesh.node_kind[v] != NodeKind::boundary;
+    if (!simple) continue;
+    std::vector<std::int32_t> loop{edges[0][0]};
+    for (std::int32_t prev = -1, v = edges[0][0];;) {
+      const auto& a = adj[v];
+      const std::int32_t next = a[0] != prev ? a[0] : a[1];
+      if (next == loop.front()) break;
+      loop.push_back(next);
+      prev = v;
+      v = next;
+      if (loop.size() > edges.size()) break;
+    }
+    if (loop.size() != edges.size()) continue;  // more than one cycle
+    const std::size_t n = loop.size();
+    // Side 0: left of the walk (fan from next to prev); side 1: right (fan from prev to next).
+    std::array<std::vector<std::vector<std::int32_t>>, 2> side;
+    std::array<bool, 2> flat{false, false};
+    bool ok = true;
+    for (int s = 0; s < 2 && ok; ++s) {
+      side[s].resize(n);
+      for (std::size_t i = 0; i < n && ok; ++i) {
+        const std::int32_t v = loop[i], prev = loop[(i + n - 1) % n], next = loop[(i + 1) % n];
+        side[s][i] = s == 0 ? fan(v, next, prev) : fan(v, prev, next);
+        ok = !side[s][i].empty();
+        if (ok && side[s][i].size() == 1) {
+          const Vec2 p = mesh.nodes[v];
+          const Vec2 a = mesh.nodes[s == 0 ? next : prev] - p, b = mesh.nodes[s == 0 ? prev : next] - p;
+          double deg = std::atan2(cross(a, b), dot(a, b)) * 180.0 / std::numbers::pi;
+          if (deg < 0) deg += 360.0;
+          flat[s] = flat[s] || deg > options.flat_corner_deg;
+        }
+      }
+    }
+    if (!ok || !(flat[0] || flat[1])) continue;
+    st.feature_loops++;
+    const int s = flat[0] ? 0 : 1;  // one side: the inside of a round loop (its corners are convex there)
+    // Copies placed part of the way towards the centroids of the side's quads; shallower if a quad inverts.
+    QuadMesh trial;
+    for (double t : {0.5, 0.25, 0.1}) {
+      trial = mesh;
+      std::vector<std::int32_t> copy(n);
+      for (std::size_t i = 0; i < n; ++i) {
+        Vec2 g{};
+        for (std::int32_t q : side[s][i])
+          for (std::int32_t w : mesh.quads[static_cast<std::size_t>(q)]) g = g + 0.25 * mesh.nodes[w];
+        g = (1.0 / static_cast<double>(side[s][i].size())) * g;
+        copy[i] = static_cast<std::int32_t>(trial.nodes.size());
+        trial.nodes.push_back(lerp(mesh.nodes[loop[i]], g, t));
+        trial.node_kind.push_back(NodeKind::interior);
+        for (std::int32_t q : side[s][i]) trial.quads[static_cast<std::size_t>(q)][at_of(q, loop[i])] = copy[i];
+      }
+      for (std::size_t i = 0; i < n; ++i) {
+        const std::size_t j = (i + 1) % n;
+        // The side's quad on edge i -> j: first of j's fan on the right side, first of i's fan on the left.
+        const std::int32_t beside = s == 0 ? side[s][i].front() : side[s][j].front();
+        trial.quads.push_back(s == 0 ? std::array<std::int32_t, 4>{loop[i], loop[j], copy[j], copy[i]}
+                                     : std::array<std::int32_t, 4>{loop[j], loop[i], copy[i], copy[j]});
+        if (!trial.quad_part.empty()) trial.quad_part.push_back(trial.quad_part[static_cast<std::size_t>(beside)]);
+      }
+      bool valid = true;
+      for (std::size_t q = 0; q < trial.quads.size() && valid; ++q) {
+        const auto& quad = trial.quads[q];
+        for (int k = 0; k < 4 && valid; ++k)
+          valid = cross(trial.nodes[quad[(k + 1) % 4]] - trial.nodes[quad[k]],
+                        trial.nodes[quad[(k + 3) % 4]] - trial.nodes[quad[k]]) > 0.0;
+      }
+      if (valid) {
+        mesh = std::move(trial);
+        st.pillowed++;
+        break;
+      }
+    }
+  }
   return st;
 }
 
