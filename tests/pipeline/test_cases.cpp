@@ -34,6 +34,16 @@ MeshResult mesh(const Region& r, double size, int threads = 0) {
   return mesh_region(r, o);
 }
 
+// One poly-square per part, without the stage 8 templates and without the quality gate: the map's raw corners.
+MeshOptions raw_single_map(double size) {
+  MeshOptions o;
+  o.size = size;
+  o.parts = 1;
+  o.min_scaled_jacobian = 0.0;
+  o.refine.enabled = false;
+  return o;
+}
+
 }  // namespace
 
 class SlicedCase : public ::testing::TestWithParam<Case> {};
@@ -92,11 +102,7 @@ INSTANTIATE_TEST_SUITE_P(Cases, SlicedCase,
 // template, which takes those corners away.)
 TEST(Pipeline, FeatureToleranceBoundsTheChordsAlongFeatures) {
   const Region r = load("smile");
-  MeshOptions o;
-  o.size = 2.5;
-  o.parts = 1;
-  o.refine.enabled = false;
-  o.min_scaled_jacobian = 0.0;
+  MeshOptions o = raw_single_map(2.5);
   o.feature_tolerance = 0.0;
   const double loose = domain_distance(mesh_region(r, o).mesh, r).feature_max_distance;
   EXPECT_GT(loose, 0.15 * o.size);
@@ -163,11 +169,7 @@ TEST(Pipeline, PartsSmallerThanOneElementAreLeftOutAndReported) {
 TEST(Pipeline, PillowingAFeatureLoopSplitsItsFlatCorners) {
   // mechanical_part's circle gets four poly-square corners, each a node with one quad inside the circle.
   const Region region = load("mechanical_part");
-  MeshOptions o;
-  o.size = 3.0;
-  o.parts = 1;
-  o.min_scaled_jacobian = 0.0;
-  o.refine.enabled = false;
+  MeshOptions o = raw_single_map(3.0);
   const MeshResult raw = mesh_region(region, o);
   QuadMesh m = raw.mesh;
   const std::size_t loop_edges = m.feature_edges.size();
@@ -198,11 +200,7 @@ TEST(Pipeline, FlatCornerTemplateRaisesTheWorstQuadOnDiscs) {
   // A disc meshed as one poly-square has four corners on its smooth rim; collapsing the quad at each (paper
   // Sec. 5.3, thinnest triangle patch) trades a near-180-degree corner for an interior valence-3 node.
   const Region region = load("turtle_shell");
-  MeshOptions o;
-  o.size = 2.5;
-  o.parts = 1;
-  o.min_scaled_jacobian = 0.0;
-  o.refine.enabled = false;
+  MeshOptions o = raw_single_map(2.5);
   const MeshResult raw = mesh_region(region, o);
   o.refine.enabled = true;
   const MeshResult refined = mesh_region(region, o);
