@@ -1,12 +1,16 @@
 // Fallback of stages 4-6 for a polygon part that no poly-square candidate meshes (convoluted coastline parts):
-// an unstructured all-quad mesh made by splitting every triangle of a quality triangulation into three quads
-// (corner, two edge midpoints, centroid). It holds every invariant (conforming, boundary and feature curves
-// chains of edges, sharp vertices as nodes) but is not semi-structured: interior nodes have the triangulation's
-// valences. The pipeline reports every part meshed this way.
+// an unstructured all-quad mesh from a quality triangulation. Triangle pairs that make good quads are merged
+// first; then every quad is split into four and every remaining triangle into three (corners, edge midpoints,
+// centre). It holds every invariant (conforming, boundary and feature curves chains of edges, sharp vertices as
+// nodes) but is not semi-structured. The pipeline reports every part meshed this way.
 #pragma once
 
 #include "polysquare/core/quad_mesh.h"
 #include "polysquare/core/region.h"
+#include <cstdint>
+#include <utility>
+#include <vector>
+
 #include "polysquare/triangulate/background_triangulation.h"
 
 namespace polysquare {
@@ -18,9 +22,21 @@ struct SplitOptions {
                                      ///< angle; the worst quad corner is the worst triangle angle; tighter bounds
                                      ///< refine finely spaced coastlines far below h)
   std::size_t max_triangles = 20'000'000;  ///< refuse larger triangulations
+  double pair_min_sj = 0.3;          ///< two triangles sharing an interior edge are first merged into a quad
+                                     ///< whose worst corner is at least this (best first, greedy); the quad is
+                                     ///< split into four. Cuts the singular nodes: a vertex keeps about four
+                                     ///< cells instead of six. > 1 = no pairs (every triangle split in three)
 };
 
-/// Quad mesh of `part` from a triangulation with edges of about 2 h (each split in two), node kinds set for
+/// The triangulation the fallback splits: curves at 2 h, interior edges up to 3.5 h, SplitOptions' shape bound.
+TriangulationOptions split_triangulation_options(const SplitOptions& options);
+
+/// Greedy matching of the triangles of `tri` into quads across interior edges that are not on a curve, best
+/// worst-corner first, pairs below `min_sj` left out: partner triangle of each triangle (-1 if alone), pairs.
+std::pair<std::vector<std::int32_t>, std::size_t> pair_triangles(const TriMesh& tri, double min_sj);
+
+/// Quad mesh of `part` from a triangulation with edges of about 2 h (each split in two; triangle pairs merged
+/// into quads first, see SplitOptions::pair_min_sj), node kinds set for
 /// smoothing (ring nodes boundary, feature nodes feature, sharp input vertices, curve ends and meetings corner).
 /// Throws MeshingError for a part smaller than one element.
 QuadMesh split_triangles(const Region& region, const RegionPart& part, const SplitOptions& options);
