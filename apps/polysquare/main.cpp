@@ -68,6 +68,12 @@ int run_mesh(const MeshArgs& args) {
   for (const auto& part : result.report["candidates"]) {
     const bool explicit_parts = args.options.parts > 0;
     for (const auto& c : part) {
+      if (c.contains("chosen") && c.contains("quads_pinned_by_sharp_input"))
+        std::cerr << "warning: part " << c["part"] << ": " << c["quads_pinned_by_sharp_input"]
+                  << " quads lie in input corners sharper than the --min-sj gate and are left out of it (scaled "
+                     "Jacobian min "
+                  << c["pinned_min_scaled_jacobian"] << " at (" << c["pinned_worst_at"][0] << ", "
+                  << c["pinned_worst_at"][1] << "); the others' min is " << c["unpinned_min_scaled_jacobian"] << ")\n";
       if (c.contains("chosen") && c.contains("fallback")) {
         std::cerr << "warning: part " << c["part"] << ": none of " << part.size() - 1
                   << " poly-square candidates meshed it; meshed unstructured by splitting triangles into quads ("

@@ -172,12 +172,12 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
     c.summary["mean_area_over_size_squared"] = mean_area;
     // The gates judge the quads the mesher controls: quads pinned by an input corner sharper than the SJ gate
     // are only counted (they cannot do better in any conforming mesh).
-    const std::vector<std::uint8_t> pinned = quads_pinned_by_sharp_input(r.mesh, options.min_scaled_jacobian);
+    const std::vector<std::uint8_t> pinned = quads_pinned_by_sharp_input(r.mesh, options.min_scaled_jacobian, options.size);
     double gated_sj = 1.0, gated_edge_ratio = 1.0, pinned_sj = 1.0;
-    std::size_t pinned_count = 0;
+    std::size_t pinned_count = 0, pinned_worst = 0;
     for (std::size_t q = 0; q < pinned.size(); ++q) {
       if (pinned[q]) {
-        ++pinned_count;
+        if (pinned_count++ == 0 || metrics.sj[q] < pinned_sj) pinned_worst = q;
         pinned_sj = std::min(pinned_sj, metrics.sj[q]);
         continue;
       }
@@ -188,6 +188,8 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
     if (pinned_count > 0) {
       c.summary["quads_pinned_by_sharp_input"] = pinned_count;
       c.summary["pinned_min_scaled_jacobian"] = pinned_sj;
+      const Vec2 p = r.mesh.nodes[r.mesh.quads[pinned_worst][0]];
+      c.summary["pinned_worst_at"] = {p.x, p.y};
       c.summary["unpinned_min_scaled_jacobian"] = gated_sj;
     }
     // Where the refused figure is.

@@ -216,12 +216,17 @@ DomainDistance domain_distance(const QuadMesh& mesh, const Region& region, const
   return d;
 }
 
-std::vector<std::uint8_t> quads_pinned_by_sharp_input(const QuadMesh& mesh, double below) {
+std::vector<std::uint8_t> quads_pinned_by_sharp_input(const QuadMesh& mesh, double below, double reach) {
   std::vector<std::uint8_t> pinned(mesh.quads.size(), 0);
   if (mesh.node_kind.size() != mesh.nodes.size()) return pinned;
   std::unordered_set<std::uint64_t> curve;
-  for (const auto& e : mesh.boundary_edges) curve.insert(edge_key(e[0], e[1]));
-  for (const auto& e : mesh.feature_edges) curve.insert(edge_key(e[0], e[1]));
+  std::vector<std::vector<std::int32_t>> along(mesh.nodes.size());  // curve neighbours of corner nodes
+  for (const auto* edges : {&mesh.boundary_edges, &mesh.feature_edges})
+    for (const auto& e : *edges) {
+      curve.insert(edge_key(e[0], e[1]));
+      for (int s = 0; s < 2; ++s)
+        if (mesh.node_kind[e[s]] == NodeKind::corner) along[e[s]].push_back(e[1 - s]);
+    }
   for (std::size_t qi = 0; qi < mesh.quads.size(); ++qi) {
     const auto& q = mesh.quads[qi];
     for (int k = 0; k < 4 && !pinned[qi]; ++k) {
@@ -232,6 +237,52 @@ std::vector<std::uint8_t> quads_pinned_by_sharp_input(const QuadMesh& mesh, doub
       const double l = norm(en) * norm(ep);
       if (!(l > 0) || dot(en, ep) <= 0.0 || cross(en, ep) / l >= below) continue;
       pinned[qi] = curve.count(edge_key(v, next)) && curve.count(edge_key(v, prev));
+    }
+  }
+  if (!(reach > 0)) return pinned;
+  // Inside a wedge between two curves meeting at less than asin(below), within `reach` of its tip, the gap is
+  // narrower than below * reach: the quads there (a river meeting the shoreline at 3 degrees) span it whatever
+  // the mesher does. Each wedge is walked from its tip through the quads whose centre lies inside it.
+  std::vector<std::vector<std::int32_t>> quads_of(mesh.nodes.size());
+  for (std::size_t qi = 0; qi < mesh.quads.size(); ++qi)
+    for (auto v : mesh.quads[qi]) quads_of[v].push_back(static_cast<std::int32_t>(qi));
+  auto centre = [&](std::int32_t qi) {
+    const auto& q = mesh.quads[static_cast<std::size_t>(qi)];
+    return 0.25 * (mesh.nodes[q[0]] + mesh.nodes[q[1]] + mesh.nodes[q[2]] + mesh.nodes[q[3]]);
+  };
+  std::vector<std::uint8_t> seen(mesh.quads.size(), 0);
+  for (std::size_t v = 0; v < mesh.nodes.size(); ++v) {
+    if (along[v].size() < 2) continue;
+    const Vec2 tip = mesh.nodes[v];
+    std::vector<double> dirs;
+    for (auto w : along[v]) dirs.push_back(std::atan2(mesh.nodes[w].y - tip.y, mesh.nodes[w].x - tip.x));
+    std::sort(dirs.begin(), dirs.end());
+    for (std::size_t i = 0; i < dirs.size(); ++i) {
+      const double from = dirs[i];
+      double gap = (i + 1 < dirs.size() ? dirs[i + 1] : dirs[0] + 2 * std::numbers::pi) - from;
+      if (!(gap > 0) || gap >= 0.5 * std::numbers::pi || std::sin(gap) >= below) continue;
+      auto inside = [&](std::int32_t qi) {
+        const Vec2 c = centre(qi) - tip;
+        if (norm(c) > reach) return false;
+        double a = std::atan2(c.y, c.x) - from;
+        a -= 2 * std::numbers::pi * std::floor(a / (2 * std::numbers::pi));
+        return a > 0 && a < gap;
+      };
+      std::vector<std::int32_t> stack, visited;
+      for (auto qi : quads_of[v])
+        if (inside(qi)) stack.push_back(qi);
+      while (!stack.empty()) {
+        const std::int32_t qi = stack.back();
+        stack.pop_back();
+        if (seen[static_cast<std::size_t>(qi)]) continue;
+        seen[static_cast<std::size_t>(qi)] = 1;
+        visited.push_back(qi);
+        pinned[static_cast<std::size_t>(qi)] = 1;
+        for (auto w : mesh.quads[static_cast<std::size_t>(qi)])
+          for (auto qj : quads_of[w])
+            if (!seen[static_cast<std::size_t>(qj)] && inside(qj)) stack.push_back(qj);
+      }
+      for (auto qi : visited) seen[static_cast<std::size_t>(qi)] = 0;
     }
   }
   return pinned;

@@ -36,3 +36,41 @@ TEST(PinnedCorners, OnlyAcuteInputCornersBetweenTwoCurvesBelowTheGate) {
   m = wedge(170.0);  // obtuse and flat: sin 170 deg = 0.17, but two quads could split it
   EXPECT_EQ(quads_pinned_by_sharp_input(m, 0.2), std::vector<std::uint8_t>{0});
 }
+
+TEST(PinnedCorners, QuadsInsideAThinWedgeWithinReachOfItsTip) {
+  // Two curves leave node 0 three degrees apart (a river meeting a shoreline); a strip of quads spans the gap,
+  // and one quad lies outside the wedge, below the first curve.
+  const double a = 3.0 * std::numbers::pi / 180.0;
+  QuadMesh m;
+  m.nodes.push_back({0, 0});
+  m.node_kind.push_back(NodeKind::corner);
+  for (int i = 1; i <= 6; ++i) {
+    m.nodes.push_back({static_cast<double>(i), 0.0});                   // a_i = node 2i - 1
+    m.nodes.push_back({i * std::cos(a), i * std::sin(a)});              // b_i = node 2i
+    m.node_kind.insert(m.node_kind.end(), {NodeKind::feature, NodeKind::boundary});
+  }
+  auto A = [](int i) { return 2 * i - 1; };
+  auto B = [](int i) { return 2 * i; };
+  m.nodes.push_back({1.03, 0.027});  // beyond the chord a1 b1: the tip quad is convex
+  m.node_kind.push_back(NodeKind::interior);
+  const std::int32_t c = static_cast<std::int32_t>(m.nodes.size()) - 1;
+  m.quads.push_back({0, A(1), c, B(1)});
+  for (int i = 1; i < 6; ++i) m.quads.push_back({A(i), A(i + 1), B(i + 1), B(i)});
+  m.nodes.push_back({0.2, -1});
+  m.nodes.push_back({1, -1});
+  m.node_kind.insert(m.node_kind.end(), {NodeKind::interior, NodeKind::interior});
+  m.quads.push_back({0, c + 1, c + 2, A(1)});
+  m.feature_edges.push_back({0, A(1)});
+  m.boundary_edges.push_back({0, B(1)});
+  for (int i = 1; i < 6; ++i) {
+    m.feature_edges.push_back({A(i), A(i + 1)});
+    m.boundary_edges.push_back({B(i), B(i + 1)});
+  }
+  m.feature_edge_curve.assign(m.feature_edges.size(), 0);
+  m.boundary_edge_ring.assign(m.boundary_edges.size(), 0);
+  // Without reach only the tip quad (its 3-degree corner); with reach 3 also the strip quads centred at x = 1.5
+  // and 2.5; never the quad outside the wedge, nor any when the wedge is wider than asin(below).
+  EXPECT_EQ(quads_pinned_by_sharp_input(m, 0.2), (std::vector<std::uint8_t>{1, 0, 0, 0, 0, 0, 0}));
+  EXPECT_EQ(quads_pinned_by_sharp_input(m, 0.2, 3.0), (std::vector<std::uint8_t>{1, 1, 1, 0, 0, 0, 0}));
+  EXPECT_EQ(quads_pinned_by_sharp_input(m, 0.02, 3.0), (std::vector<std::uint8_t>(7, 0)));
+}

@@ -45,8 +45,11 @@ QualityReport compute_quality(const QuadMesh& mesh, const QuadMetrics& metrics);
 /// #quads: 1 for a quad with an acute corner at an input corner node (NodeKind::corner) whose two edges both lie
 /// on input curves (tagged boundary or feature edges) and whose corner scaled Jacobian is below `below`. Such a
 /// corner spans the angle the input gives (two curves crossing at 3 degrees allow no better than sin 3 degrees
-/// in any conforming mesh), so quality gates leave these quads out and report them apart.
-std::vector<std::uint8_t> quads_pinned_by_sharp_input(const QuadMesh& mesh, double below);
+/// in any conforming mesh), so quality gates leave these quads out and report them apart. With `reach` > 0, also
+/// every quad whose centre lies inside such a wedge (two curves at a corner node, less than asin(below) apart,
+/// no other curve between them) within `reach` of its tip, reached from the tip through such quads: the wedge is
+/// narrower than below * reach there, so at element size `reach` the quads must span it.
+std::vector<std::uint8_t> quads_pinned_by_sharp_input(const QuadMesh& mesh, double below, double reach = 0.0);
 
 struct DomainDistanceOptions {
   double corner_threshold_deg = 30.0;  ///< input vertices turning more than this must be mesh nodes
