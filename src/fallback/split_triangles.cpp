@@ -12,7 +12,7 @@ namespace polysquare {
 namespace {
 
 // The counter-clockwise quad made of triangle t and its neighbour u across their shared edge.
-std::vector<std::int32_t> quad_of_pair(const TriMesh& tri, std::int32_t t, std::int32_t u) {
+std::array<std::int32_t, 4> quad_of_pair(const TriMesh& tri, std::int32_t t, std::int32_t u) {
   const auto& a = tri.triangles[static_cast<std::size_t>(t)];
   const auto& b = tri.triangles[static_cast<std::size_t>(u)];
   for (int i = 0; i < 3; ++i) {
@@ -20,18 +20,7 @@ std::vector<std::int32_t> quad_of_pair(const TriMesh& tri, std::int32_t t, std::
     for (int j = 0; j < 3; ++j)
       if (b[j] == q && b[(j + 1) % 3] == p) return {p, b[(j + 2) % 3], q, w};
   }
-  return {};
-}
-
-double worst_corner_sj(const TriMesh& tri, const std::vector<std::int32_t>& quad) {
-  double worst = 1.0;
-  for (std::size_t k = 0; k < 4; ++k) {
-    const Vec2 p = tri.vertices[quad[k]];
-    const Vec2 en = tri.vertices[quad[(k + 1) % 4]] - p, ep = tri.vertices[quad[(k + 3) % 4]] - p;
-    const double l = norm(en) * norm(ep);
-    worst = std::min(worst, l > 0 ? cross(en, ep) / l : -1.0);
-  }
-  return worst;
+  return {-1, -1, -1, -1};  // not neighbours: callers pass the two owners of an edge
 }
 
 }  // namespace
@@ -51,7 +40,8 @@ std::pair<std::vector<std::int32_t>, std::size_t> pair_triangles(const TriMesh& 
   for (const auto& [key, owners] : edge_owners(tri)) {
     if (owners[1] < 0 || constrained.count(key)) continue;  // never merge across a boundary or feature curve
     const std::int32_t t = std::min(owners[0], owners[1]), u = std::max(owners[0], owners[1]);
-    const double sj = worst_corner_sj(tri, quad_of_pair(tri, t, u));
+    const auto q = quad_of_pair(tri, t, u);
+    const double sj = quad_min_sj(tri.vertices[q[0]], tri.vertices[q[1]], tri.vertices[q[2]], tri.vertices[q[3]]);
     if (sj >= min_sj) cands.push_back({sj, t, u});
   }
   // Best quads first; ties by triangle index, so the matching does not depend on the hash map's order.
@@ -136,7 +126,10 @@ QuadMesh split_triangles(const Region& region, const RegionPart& part, const Spl
   for (std::size_t t = 0; t < tri.triangles.size(); ++t) {
     if (pair[t] >= 0 && pair[t] < static_cast<std::int32_t>(t)) continue;  // made with its partner
     std::vector<std::int32_t> cell(tri.triangles[t].begin(), tri.triangles[t].end());
-    if (pair[t] >= 0) cell = quad_of_pair(tri, static_cast<std::int32_t>(t), pair[t]);
+    if (pair[t] >= 0) {
+      const auto q = quad_of_pair(tri, static_cast<std::int32_t>(t), pair[t]);
+      cell.assign(q.begin(), q.end());
+    }
     const std::size_t k = cell.size();
     Vec2 centre{};
     for (auto v : cell) centre = centre + tri.vertices[v];

@@ -113,10 +113,6 @@ RefineStats refine_flat_corners(QuadMesh& mesh, const RefineOptions& options) {
   return st;
 }
 
-}  // namespace polysquare
-
-namespace polysquare {
-
 RefineStats pillow_feature_loops(QuadMesh& mesh, const RefineOptions& options) {
   RefineStats st;
   const std::size_t nn = mesh.nodes.size();
@@ -188,9 +184,7 @@ RefineStats pillow_feature_loops(QuadMesh& mesh, const RefineOptions& options) {
         ok = !side[s][i].empty();
         if (ok && side[s][i].size() == 1) {
           const Vec2 p = mesh.nodes[v];
-          const Vec2 a = mesh.nodes[s == 0 ? next : prev] - p, b = mesh.nodes[s == 0 ? prev : next] - p;
-          double deg = std::atan2(cross(a, b), dot(a, b)) * 180.0 / std::numbers::pi;
-          if (deg < 0) deg += 360.0;
+          const double deg = corner_angle_deg(mesh.nodes[s == 0 ? next : prev] - p, mesh.nodes[s == 0 ? prev : next] - p);
           flat[s] = flat[s] || deg > options.flat_corner_deg;
         }
       }
@@ -199,40 +193,60 @@ RefineStats pillow_feature_loops(QuadMesh& mesh, const RefineOptions& options) {
     st.feature_loops++;
     const int s = flat[0] ? 0 : 1;  // one side: the inside of a round loop (its corners are convex there)
     // Copies placed part of the way towards the centroids of the side's quads; shallower if a quad inverts.
-    QuadMesh trial;
+    // Only the side's quads and the new layer change, so only they are checked before the mesh is touched.
+    std::vector<Vec2> centroid(n);
+    std::unordered_map<std::int32_t, std::int32_t> copy_of;  // loop node -> index into loop
+    for (std::size_t i = 0; i < n; ++i) {
+      Vec2 g{};
+      for (std::int32_t q : side[s][i])
+        for (std::int32_t w : mesh.quads[static_cast<std::size_t>(q)]) g = g + 0.25 * mesh.nodes[w];
+      centroid[i] = (1.0 / static_cast<double>(side[s][i].size())) * g;
+      copy_of[loop[i]] = static_cast<std::int32_t>(i);
+    }
+    std::vector<std::int32_t> changed;  // the side's quads, each once
+    for (const auto& fan_quads : side[s]) changed.insert(changed.end(), fan_quads.begin(), fan_quads.end());
+    std::sort(changed.begin(), changed.end());
+    changed.erase(std::unique(changed.begin(), changed.end()), changed.end());
     for (double t : {0.5, 0.25, 0.1}) {
-      trial = mesh;
-      std::vector<std::int32_t> copy(n);
-      for (std::size_t i = 0; i < n; ++i) {
-        Vec2 g{};
-        for (std::int32_t q : side[s][i])
-          for (std::int32_t w : mesh.quads[static_cast<std::size_t>(q)]) g = g + 0.25 * mesh.nodes[w];
-        g = (1.0 / static_cast<double>(side[s][i].size())) * g;
-        copy[i] = static_cast<std::int32_t>(trial.nodes.size());
-        trial.nodes.push_back(lerp(mesh.nodes[loop[i]], g, t));
-        trial.node_kind.push_back(NodeKind::interior);
-        for (std::int32_t q : side[s][i]) trial.quads[static_cast<std::size_t>(q)][at_of(q, loop[i])] = copy[i];
+      std::vector<Vec2> copy(n);
+      for (std::size_t i = 0; i < n; ++i) copy[i] = lerp(mesh.nodes[loop[i]], centroid[i], t);
+      // A side quad sees every loop node of its own through the copies.
+      auto moved = [&](std::int32_t v) {
+        const auto it = copy_of.find(v);
+        return it == copy_of.end() ? mesh.nodes[v] : copy[static_cast<std::size_t>(it->second)];
+      };
+      bool valid = true;
+      for (std::size_t k = 0; k < changed.size() && valid; ++k) {
+        const auto& q = mesh.quads[static_cast<std::size_t>(changed[k])];
+        valid = quad_min_sj(moved(q[0]), moved(q[1]), moved(q[2]), moved(q[3])) > 0.0;
       }
+      for (std::size_t i = 0; i < n && valid; ++i) {
+        const std::size_t j = (i + 1) % n;
+        const Vec2 a = mesh.nodes[loop[i]], b = mesh.nodes[loop[j]];
+        valid = s == 0 ? quad_min_sj(a, b, copy[j], copy[i]) > 0.0 : quad_min_sj(b, a, copy[i], copy[j]) > 0.0;
+      }
+      if (!valid) continue;
+      const auto first = static_cast<std::int32_t>(mesh.nodes.size());
+      for (std::size_t i = 0; i < n; ++i) {
+        mesh.nodes.push_back(copy[i]);
+        mesh.node_kind.push_back(NodeKind::interior);
+      }
+      for (std::int32_t q : changed)
+        for (auto& v : mesh.quads[static_cast<std::size_t>(q)]) {
+          const auto it = copy_of.find(v);
+          if (it != copy_of.end()) v = first + it->second;
+        }
       for (std::size_t i = 0; i < n; ++i) {
         const std::size_t j = (i + 1) % n;
-        // The side's quad on edge i -> j: first of j's fan on the right side, first of i's fan on the left.
+        const std::int32_t ci = first + static_cast<std::int32_t>(i), cj = first + static_cast<std::int32_t>(j);
+        // The side's quad on edge i -> j: first of i's fan on the left side, first of j's fan on the right.
         const std::int32_t beside = s == 0 ? side[s][i].front() : side[s][j].front();
-        trial.quads.push_back(s == 0 ? std::array<std::int32_t, 4>{loop[i], loop[j], copy[j], copy[i]}
-                                     : std::array<std::int32_t, 4>{loop[j], loop[i], copy[i], copy[j]});
-        if (!trial.quad_part.empty()) trial.quad_part.push_back(trial.quad_part[static_cast<std::size_t>(beside)]);
+        mesh.quads.push_back(s == 0 ? std::array<std::int32_t, 4>{loop[i], loop[j], cj, ci}
+                                    : std::array<std::int32_t, 4>{loop[j], loop[i], ci, cj});
+        if (!mesh.quad_part.empty()) mesh.quad_part.push_back(mesh.quad_part[static_cast<std::size_t>(beside)]);
       }
-      bool valid = true;
-      for (std::size_t q = 0; q < trial.quads.size() && valid; ++q) {
-        const auto& quad = trial.quads[q];
-        for (int k = 0; k < 4 && valid; ++k)
-          valid = cross(trial.nodes[quad[(k + 1) % 4]] - trial.nodes[quad[k]],
-                        trial.nodes[quad[(k + 3) % 4]] - trial.nodes[quad[k]]) > 0.0;
-      }
-      if (valid) {
-        mesh = std::move(trial);
-        st.pillowed++;
-        break;
-      }
+      st.pillowed++;
+      break;
     }
   }
   return st;

@@ -153,14 +153,7 @@ struct Slider {
 
 double quad_min_corner_sj(const QuadMesh& mesh, std::size_t q) {
   const auto& quad = mesh.quads[q];
-  double mn = 1.0;
-  for (int k = 0; k < 4; ++k) {
-    const Vec2 p = mesh.nodes[quad[k]];
-    const Vec2 e_next = mesh.nodes[quad[(k + 1) % 4]] - p, e_prev = mesh.nodes[quad[(k + 3) % 4]] - p;
-    const double l = norm(e_next) * norm(e_prev);
-    mn = std::min(mn, l > 0 ? cross(e_next, e_prev) / l : -1.0);
-  }
-  return mn;
+  return quad_min_sj(mesh.nodes[quad[0]], mesh.nodes[quad[1]], mesh.nodes[quad[2]], mesh.nodes[quad[3]]);
 }
 
 SmoothStats smooth_quads(QuadMesh& mesh, const SmoothOptions& options, const Region* region) {

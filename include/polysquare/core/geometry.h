@@ -1,6 +1,7 @@
 // Small 2D vector type and predicates shared by every stage.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <utility>
@@ -34,6 +35,18 @@ inline double distance(Vec2 a, Vec2 b) { return norm(a - b); }
 inline bool sharp_turn(Vec2 prev, Vec2 at, Vec2 next, double threshold_deg) {
   const Vec2 u = at - prev, w = next - at;
   return dot(u, w) < std::cos(threshold_deg * 3.14159265358979323846 / 180.0) * norm(u) * norm(w);
+}
+
+/// Scaled Jacobian of the corner at p of a counter-clockwise polygon whose neighbours of p are prev and next:
+/// sin of the angle from p->next to p->prev, negative when the corner is inverted, -1 for a zero-length edge.
+inline double corner_sj(Vec2 prev, Vec2 p, Vec2 next) {
+  const Vec2 en = next - p, ep = prev - p;
+  const double l = norm(en) * norm(ep);
+  return l > 0 ? cross(en, ep) / l : -1.0;
+}
+/// Worst corner_sj of the counter-clockwise quad a b c d (the Verdict scaled Jacobian of the quad).
+inline double quad_min_sj(Vec2 a, Vec2 b, Vec2 c, Vec2 d) {
+  return std::min(std::min(corner_sj(d, a, b), corner_sj(a, b, c)), std::min(corner_sj(b, c, d), corner_sj(c, d, a)));
 }
 
 inline Vec2 lerp(Vec2 a, Vec2 b, double t) { return {a.x + t * (b.x - a.x), a.y + t * (b.y - a.y)}; }

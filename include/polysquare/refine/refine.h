@@ -32,10 +32,6 @@ struct RefineStats {
 /// Deterministic: candidates in node order.
 RefineStats refine_flat_corners(QuadMesh& mesh, const RefineOptions& options);
 
-}  // namespace polysquare
-
-namespace polysquare {
-
 /// Second template, for closed feature loops (smile's eyes, mechanical_part's circle). A poly-square puts four
 /// corners on a loop; on a round loop each leaves a node with one quad on one side, flat there (150 degrees on
 /// smile's eyes, so SJ 0.5), and the boundary collapse cannot be used because the loop nodes carry quads on both
