@@ -49,6 +49,8 @@ int run_mesh(const MeshArgs& args) {
   for (const auto& d : result.report["dropped_parts"]) measure.skip_parts.push_back(d["part"].get<int>());
   const DomainDistance domain = domain_distance(result.mesh, region, measure);
   result.report["quality"] = to_json(quality);
+  result.report["summary"]["sj_min"] = quality.sj.min;
+  result.report["summary"]["interior_singularities"] = quality.interior_singularities;
   result.report["input"]["repairs"] = repairs;
   result.report["domain"] = to_json(domain);
   // Outputs are written only after the whole mesh passed its checks, each atomically.
@@ -64,6 +66,14 @@ int run_mesh(const MeshArgs& args) {
   for (const auto& d : result.report["dropped_parts"])
     std::cerr << "warning: part " << d["part"] << " left out: its area " << d["area"] << " is less than one element, at ("
               << d["at"][0] << ", " << d["at"][1] << ")\n";
+  for (const auto& u : result.report["unstructured"])
+    if (u["meshed_by"] == "patch")
+      std::cerr << "warning: part " << u["part"] << ": subregion " << u["subregion"] << " at (" << u["at"][0] << ", "
+                << u["at"][1] << ") is an unstructured patch of " << u["quads"] << " quads: "
+                << u["reason"].get<std::string>() << "\n";
+  std::cerr << "structured fraction " << result.report["summary"]["structured_fraction"] << " ("
+            << result.report["summary"]["unstructured_subregions"] << " of " << result.report["summary"]["subregions"]
+            << " subregions unstructured)\n";
   // Which candidate each part kept, and why the explicitly requested one was not kept.
   for (const auto& part : result.report["candidates"]) {
     const bool explicit_parts = args.options.parts > 0;
@@ -165,6 +175,8 @@ int main(int argc, char** argv) {
   cmd_mesh->add_option("--feature-tolerance", mesh.options.feature_tolerance,
                        "largest distance between a feature curve and the mesh edges along it, as a fraction of the size")
       ->check(CLI::PositiveNumber)->capture_default_str();
+  cmd_mesh->add_option("--straighten-separators", mesh.options.map.separator_straightening,
+                       "smoothing sweeps over the separators' zig-zag before mapping (0 = keep triangle edges)");
   cmd_mesh->add_flag("--binary", mesh.binary, "write binary MSH");
   cmd_mesh->add_flag("--repair", mesh.input_options.repair,
                      "drop repeated points and clip features crossing holes instead of refusing the input (reported)");

@@ -9,9 +9,7 @@
 #include "polysquare/core/error.h"
 
 namespace polysquare {
-namespace {
 
-// The counter-clockwise quad made of triangle t and its neighbour u across their shared edge.
 std::array<std::int32_t, 4> quad_of_pair(const TriMesh& tri, std::int32_t t, std::int32_t u) {
   const auto& a = tri.triangles[static_cast<std::size_t>(t)];
   const auto& b = tri.triangles[static_cast<std::size_t>(u)];
@@ -23,7 +21,6 @@ std::array<std::int32_t, 4> quad_of_pair(const TriMesh& tri, std::int32_t t, std
   return {-1, -1, -1, -1};  // not neighbours: callers pass the two owners of an edge
 }
 
-}  // namespace
 
 std::pair<std::vector<std::int32_t>, std::size_t> pair_triangles(const TriMesh& tri, double min_sj) {
   std::vector<std::int32_t> partner(tri.triangles.size(), -1);
@@ -57,6 +54,39 @@ std::pair<std::vector<std::int32_t>, std::size_t> pair_triangles(const TriMesh& 
     ++pairs;
   }
   return {partner, pairs};
+}
+
+void split_cells(const TriMesh& tri, double pair_min_sj, QuadMesh& out,
+                 std::unordered_map<std::uint64_t, std::int32_t>& midpoint) {
+  auto mid = [&](std::int32_t a, std::int32_t b) {
+    auto [it, inserted] = midpoint.try_emplace(edge_key(a, b), static_cast<std::int32_t>(out.nodes.size()));
+    if (inserted) {
+      out.nodes.push_back(0.5 * (tri.vertices[a] + tri.vertices[b]));
+      out.node_kind.push_back(NodeKind::interior);
+    }
+    return it->second;
+  };
+  // Cells: triangle pairs merged into quads where the quad is good, the other triangles alone. Then every cell
+  // is split at its edge midpoints and centre (a quad into four, a triangle into three), all edges shared.
+  const auto [pair, paired] = pair_triangles(tri, pair_min_sj);
+  for (std::size_t t = 0; t < tri.triangles.size(); ++t) {
+    if (pair[t] >= 0 && pair[t] < static_cast<std::int32_t>(t)) continue;  // made with its partner
+    std::vector<std::int32_t> cell(tri.triangles[t].begin(), tri.triangles[t].end());
+    if (pair[t] >= 0) {
+      const auto q = quad_of_pair(tri, static_cast<std::int32_t>(t), pair[t]);
+      cell.assign(q.begin(), q.end());
+    }
+    const std::size_t k = cell.size();
+    Vec2 centre{};
+    for (auto v : cell) centre = centre + tri.vertices[v];
+    const std::int32_t g = static_cast<std::int32_t>(out.nodes.size());
+    out.nodes.push_back((1.0 / static_cast<double>(k)) * centre);
+    out.node_kind.push_back(NodeKind::interior);
+    std::vector<std::int32_t> m(k);
+    for (std::size_t i = 0; i < k; ++i) m[i] = mid(cell[i], cell[(i + 1) % k]);
+    for (std::size_t i = 0; i < k; ++i) out.quads.push_back({cell[i], m[i], g, m[(i + k - 1) % k]});
+  }
+  out.quad_part.resize(out.quads.size(), 0);
 }
 
 TriangulationOptions split_triangulation_options(const SplitOptions& options) {
@@ -120,26 +150,7 @@ QuadMesh split_triangles(const Region& region, const RegionPart& part, const Spl
       tags.push_back(ch.index);
     }
   }
-  // Cells: triangle pairs merged into quads where the quad is good, the other triangles alone. Then every cell
-  // is split at its edge midpoints and centre (a quad into four, a triangle into three), all edges shared.
-  const auto [pair, paired] = pair_triangles(tri, options.pair_min_sj);
-  for (std::size_t t = 0; t < tri.triangles.size(); ++t) {
-    if (pair[t] >= 0 && pair[t] < static_cast<std::int32_t>(t)) continue;  // made with its partner
-    std::vector<std::int32_t> cell(tri.triangles[t].begin(), tri.triangles[t].end());
-    if (pair[t] >= 0) {
-      const auto q = quad_of_pair(tri, static_cast<std::int32_t>(t), pair[t]);
-      cell.assign(q.begin(), q.end());
-    }
-    const std::size_t k = cell.size();
-    Vec2 centre{};
-    for (auto v : cell) centre = centre + tri.vertices[v];
-    const std::int32_t g = static_cast<std::int32_t>(out.nodes.size());
-    out.nodes.push_back((1.0 / static_cast<double>(k)) * centre);
-    out.node_kind.push_back(NodeKind::interior);
-    std::vector<std::int32_t> m(k);
-    for (std::size_t i = 0; i < k; ++i) m[i] = mid(cell[i], cell[(i + 1) % k], NodeKind::interior);
-    for (std::size_t i = 0; i < k; ++i) out.quads.push_back({cell[i], m[i], g, m[(i + k - 1) % k]});
-  }
+  split_cells(tri, options.pair_min_sj, out, midpoint);
   out.quad_part.assign(out.quads.size(), 0);
   return out;
 }

@@ -71,6 +71,22 @@ struct TriangleLocator {
 
 }  // namespace
 
+std::vector<Vec2> spread_along(const std::vector<Vec2>& measure, const std::vector<Vec2>& place, long long n) {
+  std::vector<double> cum(measure.size(), 0.0);
+  for (std::size_t e = 1; e < measure.size(); ++e) cum[e] = cum[e - 1] + distance(measure[e - 1], measure[e]);
+  std::vector<Vec2> out(static_cast<std::size_t>(n) + 1);
+  out.front() = place.front();
+  out.back() = place.back();
+  std::size_t e = 0;
+  for (long long k = 1; k < n; ++k) {
+    const double t = static_cast<double>(k) * cum.back() / static_cast<double>(n);
+    while (e + 1 < cum.size() - 1 && cum[e + 1] < t) ++e;
+    const double tau = std::clamp((t - cum[e]) / (cum[e + 1] - cum[e]), 0.0, 1.0);
+    out[static_cast<std::size_t>(k)] = lerp(place[e], place[e + 1], tau);
+  }
+  return out;
+}
+
 void polysquare_targets(const TriMesh& mesh, const std::vector<Vec2>& original, const std::vector<Vec2>& deformed,
                         const Layout& layout, std::vector<Vec2>& targets, std::vector<std::uint8_t>& mask) {
   targets = deformed;
@@ -118,28 +134,26 @@ QuadMesh extract_quads(const TriMesh& mesh, const std::vector<Vec2>& original, c
   for (const LayoutSegment& s : layout.segments) {
     const TriChain& ch = mesh.chains[s.chain];
     const int n = static_cast<int>(ch.vertices.size());
-    const auto cum = cumulative(ch, s, ch.interface >= 0 ? original : snapped);
     const auto la = layout.lattice[s.break_a], lb = layout.lattice[s.break_b];
     const long long len = std::llabs(lb[0] - la[0]) + std::llabs(lb[1] - la[1]);
     const long long di = (lb[0] > la[0]) - (lb[0] < la[0]), dj = (lb[1] > la[1]) - (lb[1] < la[1]);
     const bool ring = ch.kind == TriChain::Kind::ring, separator = ch.kind == TriChain::Kind::separator;
     // Separators are inside the mesh: their nodes are interior (smoothing moves them), and no edge is tagged.
     const NodeKind line_kind = ring ? NodeKind::boundary : (separator ? NodeKind::interior : NodeKind::feature);
+    std::vector<Vec2> measure, place;
+    for (int e = 0; e <= s.count; ++e) {
+      const std::int32_t v = ch.vertices[(s.first + e) % n];
+      measure.push_back(ch.interface >= 0 ? original[v] : snapped[v]);
+      place.push_back(original[v]);
+    }
+    const std::vector<Vec2> points = spread_along(measure, place, len);
     std::int32_t prev = -1;
-    std::size_t e = 0;
     for (long long k = 0; k <= len; ++k) {
-      Vec2 p;
+      const Vec2 p = points[static_cast<std::size_t>(k)];
       NodeKind kind = line_kind;
       if (k == 0 || k == len) {
         const int b = k == 0 ? s.break_a : s.break_b;
-        p = original[layout.break_vertex[b]];
         if (layout.break_is_corner[b] && !separator) kind = NodeKind::corner;
-      } else {
-        const double t = static_cast<double>(k) * cum.back() / static_cast<double>(len);
-        while (e + 1 < cum.size() - 1 && cum[e + 1] < t) ++e;
-        const double tau = std::clamp((t - cum[e]) / (cum[e + 1] - cum[e]), 0.0, 1.0);
-        p = lerp(original[ch.vertices[(s.first + static_cast<int>(e)) % n]],
-                 original[ch.vertices[(s.first + static_cast<int>(e) + 1) % n]], tau);
       }
       const std::int32_t id = add_node(la[0] + k * di, la[1] + k * dj, p, kind);
       if (prev >= 0 && !separator) {

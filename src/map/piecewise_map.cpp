@@ -11,6 +11,7 @@
 #include <unordered_map>
 
 #include "polysquare/core/error.h"
+#include "polysquare/fallback/patch.h"
 #include "polysquare/map/extract.h"
 #include "polysquare/map/layout.h"
 #include "polysquare/map/quantize.h"
@@ -223,6 +224,218 @@ Subregion cut_subregion(const TriMesh& tri, const std::vector<std::int32_t>& tp,
   return sub;
 }
 
+// An interface side by its global end vertices and the vertex after the smaller end (two interfaces between the
+// same junctions differ there).
+using SideKey = std::tuple<std::int32_t, std::int32_t, std::int32_t>;
+
+// The given nodes of the patch that repairs subregion `sub`: its boundary loops and inner feature curves cut
+// into pieces (at sharp vertices, curve meetings and the mapped neighbours' side ends), each with its element
+// count: a mapped neighbour's count on its interfaces, length / h elsewhere (even on inner features, which the
+// patch splits in pairs). Ring pieces absorb the parity: between two anchors (ends of inner features) a loop
+// must have an even count.
+PatchInput patch_input(const Subregion& sub, const std::vector<std::uint8_t>& is_patch,
+                       const std::map<SideKey, long long>& side_count, double h, double corner_deg,
+                       const std::string& where) {
+  const TriMesh& m = sub.mesh;
+  const std::vector<std::uint8_t> corner = corner_vertices(m, m.vertices, corner_deg);
+  auto gv = [&](std::int32_t v) { return sub.global_vertex[static_cast<std::size_t>(v)]; };
+  struct Piece {
+    std::vector<std::int32_t> verts;  // chain vertices, first and last are ends
+    long long n = 1;
+    bool adjustable = false;
+    PatchEdgeRole role = PatchEdgeRole::none;
+    int tag = -1;
+    double length = 0;
+  };
+  auto length_of = [&](const std::vector<std::int32_t>& verts) {
+    double l = 0.0;
+    // Summed from the end with the smaller global index, so both patches of a shared interface agree.
+    if (gv(verts.front()) <= gv(verts.back()))
+      for (std::size_t i = 1; i < verts.size(); ++i) l += distance(m.vertices[verts[i - 1]], m.vertices[verts[i]]);
+    else
+      for (std::size_t i = verts.size() - 1; i > 0; --i) l += distance(m.vertices[verts[i - 1]], m.vertices[verts[i]]);
+    return l;
+  };
+  // Pieces of one chain (vertices in chain order; closed chains repeat the first vertex at the end).
+  auto pieces_of = [&](const TriChain& ch, bool inner_feature) {
+    std::vector<std::int32_t> verts = ch.vertices;
+    if (ch.closed) {
+      // Start at a sharp vertex when there is one, so a closed chain's pieces end there.
+      std::size_t s = 0;
+      for (std::size_t i = 0; i < verts.size(); ++i)
+        if (corner[static_cast<std::size_t>(verts[i])]) { s = i; break; }
+      std::rotate(verts.begin(), verts.begin() + static_cast<std::ptrdiff_t>(s), verts.end());
+      verts.push_back(verts.front());
+    }
+    // Counts of an interface come from the quantization when its other side was quantized (the neighbour is
+    // mapped, or was patched only after quantization); otherwise both patches take an even count.
+    const bool mapped_side = ch.interface >= 0 && !is_patch[static_cast<std::size_t>(ch.interface)];
+    const bool interface = ch.interface >= 0;
+    std::vector<Piece> out;
+    std::size_t i = 0;
+    while (i + 1 < verts.size()) {
+      std::size_t j = i + 1;
+      long long count = -1;
+      if (interface) {
+        for (; j < verts.size(); ++j) {
+          const std::int32_t a = gv(verts[i]), b = gv(verts[j]);
+          const SideKey key{std::min(a, b), std::max(a, b), a < b ? gv(verts[i + 1]) : gv(verts[j - 1])};
+          if (auto it = side_count.find(key); it != side_count.end()) { count = it->second; break; }
+        }
+        if (count < 0 && !mapped_side) {
+          j = verts.size() - 1;  // neither side quantized: one piece, an even count
+        } else if (count < 0)
+          throw MeshingError(where + ": no element count for its interface with subregion " +
+                             std::to_string(ch.interface) + " at " + at_text(m.vertices[verts[i]]));
+      } else {
+        // Ring pieces also end at every input vertex: the patch's coarse triangulation then follows the input
+        // polyline itself, and its edges cannot cut across a convoluted shoreline.
+        const bool ring = ch.kind == TriChain::Kind::ring;
+        while (j + 1 < verts.size() && !corner[static_cast<std::size_t>(verts[j])] &&
+               !(ring && ch.is_input.size() == ch.vertices.size() && ch.is_input[static_cast<std::size_t>(
+                     std::find(ch.vertices.begin(), ch.vertices.end(), verts[j]) - ch.vertices.begin())]))
+          ++j;
+      }
+      Piece pc;
+      pc.verts.assign(verts.begin() + static_cast<std::ptrdiff_t>(i), verts.begin() + static_cast<std::ptrdiff_t>(j) + 1);
+      pc.length = length_of(pc.verts);
+      pc.role = ch.kind == TriChain::Kind::ring ? PatchEdgeRole::boundary
+                                                 : (ch.kind == TriChain::Kind::feature ? PatchEdgeRole::feature : PatchEdgeRole::none);
+      pc.tag = ch.index;
+      if (count >= 0) {
+        pc.n = count;
+      } else if (inner_feature || ch.kind == TriChain::Kind::ring || interface) {
+        pc.n = 2 * std::max(1LL, std::llround(pc.length / (2.0 * h)));  // even: its ends stay coarse vertices
+        pc.adjustable = ch.kind == TriChain::Kind::ring;
+      } else {
+        pc.n = std::max(1LL, std::llround(pc.length / h));
+      }
+      out.push_back(std::move(pc));
+      i = j;
+    }
+    return out;
+  };
+
+  std::vector<std::uint8_t> in_loop(m.chains.size(), 0);
+  std::vector<std::vector<Piece>> loops, inner;
+  for (const auto& loop : m.loops) {
+    loops.emplace_back();
+    for (int c : loop) {
+      in_loop[static_cast<std::size_t>(c)] = 1;
+      for (Piece& pc : pieces_of(m.chains[static_cast<std::size_t>(c)], false)) loops.back().push_back(std::move(pc));
+    }
+  }
+  for (std::size_t c = 0; c < m.chains.size(); ++c) {
+    if (in_loop[c]) continue;
+    const TriChain& ch = m.chains[c];
+    if (ch.kind == TriChain::Kind::ring) loops.push_back(pieces_of(ch, false));  // a whole ring inside
+    else inner.push_back(pieces_of(ch, true));
+  }
+  // Anchors: ends of inner feature pieces. Between two anchors along a loop the count must be even.
+  std::set<std::int32_t> anchors;
+  for (const auto& pieces : inner)
+    for (const Piece& pc : pieces) {
+      anchors.insert(pc.verts.front());
+      anchors.insert(pc.verts.back());
+    }
+  // Every run of fixed pieces (interfaces) with an odd count is evened out by the ring piece right after it
+  // (or before it), so that ring pieces keep starting on coarse vertices. Anchors (ends of inner features) start
+  // new runs: between two of them the count must be even.
+  for (auto& pieces : loops) {
+    const std::size_t np = pieces.size();
+    std::size_t start = 0;  // a run may not wrap past a loop start that is an adjustable piece or an anchor
+    for (std::size_t k = 0; k < np; ++k)
+      if (pieces[k].adjustable || anchors.count(pieces[k].verts.front())) { start = k; break; }
+    long long run = 0;
+    std::size_t run_begin = start;
+    for (std::size_t step = 0; step <= np; ++step) {
+      const std::size_t k = (start + step) % np;
+      const bool boundary = step == np || pieces[k].adjustable || anchors.count(pieces[k].verts.front());
+      if (boundary && run % 2 != 0) {
+        // Even out with the adjustable piece at k, or the one before the run.
+        const std::size_t before = (run_begin + np - 1) % np;
+        std::size_t fix = np;
+        if (step < np && pieces[k].adjustable) fix = k;
+        else if (pieces[before].adjustable) fix = before;
+        if (fix == np)
+          throw MeshingError(where + ": an odd number of interface elements between " +
+                             at_text(m.vertices[pieces[run_begin].verts.front()]) + " and " +
+                             at_text(m.vertices[pieces[(k + np - 1) % np].verts.back()]) +
+                             " and no boundary piece next to them to even it out");
+        Piece& pc = pieces[fix];
+        pc.n = pc.n + 1 <= std::llround(pc.length / h) + 1 || pc.n == 1 ? pc.n + 1 : pc.n - 1;
+        run = 0;
+      }
+      if (step == np) break;
+      if (boundary) {
+        run = 0;
+        run_begin = (k + 1) % np;
+        if (!pieces[k].adjustable) { run = pieces[k].n; run_begin = k; }  // an anchored interface opens a run
+      } else {
+        run += pieces[k].n;
+      }
+    }
+  }
+
+  PatchInput in;
+  std::unordered_map<std::int32_t, std::int32_t> node_of;
+  auto kind_of = [](PatchEdgeRole r) {
+    return r == PatchEdgeRole::boundary ? NodeKind::boundary : (r == PatchEdgeRole::feature ? NodeKind::feature : NodeKind::interior);
+  };
+  auto end_node = [&](std::int32_t v, PatchEdgeRole role) {
+    auto [it, inserted] = node_of.try_emplace(v, static_cast<std::int32_t>(in.nodes.size()));
+    NodeKind kind = corner[static_cast<std::size_t>(v)] && role != PatchEdgeRole::none ? NodeKind::corner : kind_of(role);
+    if (inserted) {
+      in.nodes.push_back(m.vertices[static_cast<std::size_t>(v)]);
+      in.kind.push_back(kind);
+    } else if (static_cast<int>(kind) > static_cast<int>(in.kind[static_cast<std::size_t>(it->second)])) {
+      in.kind[static_cast<std::size_t>(it->second)] = kind;
+    }
+    return it->second;
+  };
+  auto add_curve = [&](const std::vector<Piece>& pieces, bool closed, bool loop) {
+    PatchCurve c;
+    c.closed = closed;
+    c.loop = loop;
+    for (const Piece& pc : pieces) {
+      std::vector<Vec2> pts;
+      for (std::int32_t v : pc.verts) pts.push_back(m.vertices[static_cast<std::size_t>(v)]);
+      const std::vector<Vec2> spread = spread_along(pts, pts, pc.n);
+      if (c.nodes.empty()) c.nodes.push_back(end_node(pc.verts.front(), pc.role));
+      for (long long k = 1; k < pc.n; ++k) {
+        c.nodes.push_back(static_cast<std::int32_t>(in.nodes.size()));
+        in.nodes.push_back(spread[static_cast<std::size_t>(k)]);
+        in.kind.push_back(kind_of(pc.role));
+      }
+      c.nodes.push_back(end_node(pc.verts.back(), pc.role));
+      for (long long k = 0; k < pc.n; ++k) {
+        c.role.push_back(pc.role);
+        c.tag.push_back(pc.tag);
+      }
+    }
+    if (closed) c.nodes.pop_back();  // the last end is the first node again
+    in.curves.push_back(std::move(c));
+  };
+  for (const auto& pieces : loops) add_curve(pieces, true, true);
+  for (std::size_t k = 0, c = 0; c < m.chains.size(); ++c) {
+    if (in_loop[c] || m.chains[c].kind == TriChain::Kind::ring) continue;
+    const auto& pieces = inner[k++];
+    // Each inner piece is its own curve, so its ends are anchors; a closed feature without sharp vertices is one.
+    if (m.chains[c].closed && pieces.size() == 1) add_curve(pieces, true, false);
+    else
+      for (const Piece& pc : pieces) add_curve({pc}, false, false);
+  }
+  for (std::int32_t v : m.feature_point_vertices) {
+    auto [it, inserted] = node_of.try_emplace(v, static_cast<std::int32_t>(in.nodes.size()));
+    if (inserted) {
+      in.nodes.push_back(m.vertices[static_cast<std::size_t>(v)]);
+      in.kind.push_back(NodeKind::corner);
+    }
+    in.points.push_back(it->second);
+  }
+  return in;
+}
+
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
@@ -325,8 +538,23 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
   const std::size_t n = subs.size();
   std::vector<MappedMesh> mapped(n);
   std::vector<Layout> layouts(n);
+  // failure[p]: why subregion p's map failed (empty while it maps). A failure stays local: the subregion is
+  // left out of the joint quantization and repaired by an unstructured patch that takes its neighbours' nodes.
+  std::vector<std::string> failure(n);
   auto sub_name = [&](std::size_t p) { return name + ": subregion " + std::to_string(p); };
-  for_each_subregion(n, [&](std::size_t p) {
+  for (int p : options.patch_subregions)
+    if (p >= 0 && static_cast<std::size_t>(p) < n) failure[static_cast<std::size_t>(p)] = sub_name(static_cast<std::size_t>(p)) + ": a patch was requested";
+  auto each_mapped = [&](auto&& f) {
+    for_each_subregion(n, [&](std::size_t p) {
+      if (!failure[p].empty()) return;
+      try {
+        f(p);
+      } catch (const MeshingError& e) {
+        failure[p] = e.what();
+      }
+    });
+  };
+  each_mapped([&](std::size_t p) {
     mapped[p] = deform_mesh(subs[p].mesh, options, true);
     layouts[p] = build_layout(subs[p].mesh, subs[p].mesh.vertices, mapped[p].x, options.layout, sub_name(p));
   });
@@ -335,10 +563,11 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
     // other side too, so the two sides split it into the same segments.
     std::set<std::int32_t> interface_breaks;
     for (std::size_t p = 0; p < n; ++p)
-      for (std::int32_t v : layouts[p].break_vertex)
-        if (subs[p].global_vertex[static_cast<std::size_t>(v)] >= 0)
-          interface_breaks.insert(subs[p].global_vertex[static_cast<std::size_t>(v)]);
-    for_each_subregion(n, [&](std::size_t p) {
+      if (failure[p].empty())
+        for (std::int32_t v : layouts[p].break_vertex)
+          if (subs[p].global_vertex[static_cast<std::size_t>(v)] >= 0)
+            interface_breaks.insert(subs[p].global_vertex[static_cast<std::size_t>(v)]);
+    each_mapped([&](std::size_t p) {
       const TriMesh& m = subs[p].mesh;
       std::vector<std::uint8_t> extra(m.vertices.size(), 0);
       for (const TriChain& ch : m.chains)
@@ -348,11 +577,10 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
       add_straight_breaks(layouts[p], m, mapped[p].x, extra, sub_name(p));
     });
   }
-  for_each_subregion(n, [&](std::size_t p) {
-    straighten_to_labels(mapped[p], layouts[p], subs[p].mesh, options);
-  });
+  each_mapped([&](std::size_t p) { straighten_to_labels(mapped[p], layouts[p], subs[p].mesh, options); });
   st.seconds_deform = seconds_since(t0);
   for (std::size_t p = 0; p < n; ++p) {
+    if (!failure[p].empty()) continue;
     st.deform.iterations += mapped[p].stats.iterations;
     st.deform.energy_before += mapped[p].stats.energy_before;
     st.deform.energy_after += mapped[p].stats.energy_after;
@@ -363,69 +591,168 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
   // The two sides of an interface: segments with the same end vertices and the same first edge from the
   // smaller end (two interfaces between the same junctions differ there).
   t0 = std::chrono::steady_clock::now();
-  std::map<std::tuple<std::int32_t, std::int32_t, std::int32_t>, std::pair<std::size_t, int>> open;
+  auto side_key = [&](std::size_t p, const TriChain& ch, int first, int count) {
+    const int cn = static_cast<int>(ch.vertices.size());
+    auto gv = [&](int i) { return subs[p].global_vertex[static_cast<std::size_t>(ch.vertices[(first + i) % cn])]; };
+    const std::int32_t a = gv(0), b = gv(count);
+    return SideKey{std::min(a, b), std::max(a, b), a < b ? gv(1) : gv(count - 1)};
+  };
   std::vector<SegmentCoupling> couplings;
-  for (std::size_t p = 0; p < n; ++p) {
-    const Subregion& sub = subs[p];
-    for (std::size_t k = 0; k < layouts[p].segments.size(); ++k) {
-      const LayoutSegment& s = layouts[p].segments[k];
-      const TriChain& ch = sub.mesh.chains[static_cast<std::size_t>(s.chain)];
-      if (ch.interface < 0) continue;
-      const int cn = static_cast<int>(ch.vertices.size());
-      auto gv = [&](int i) { return sub.global_vertex[static_cast<std::size_t>(ch.vertices[(s.first + i) % cn])]; };
-      const std::int32_t a = gv(0), b = gv(s.count);
-      const std::int32_t second = a < b ? gv(1) : gv(s.count - 1);
-      const auto key = std::make_tuple(std::min(a, b), std::max(a, b), second);
-      auto [it, inserted] = open.try_emplace(key, p, static_cast<int>(k));
-      if (inserted) continue;
-      couplings.push_back({it->second.first, it->second.second, p, static_cast<int>(k)});
-      open.erase(it);
+  for (bool again = true; again;) {
+    again = false;
+    couplings.clear();
+    std::map<SideKey, std::pair<std::size_t, int>> open;
+    for (std::size_t p = 0; p < n && !again; ++p) {
+      if (!failure[p].empty()) continue;
+      for (std::size_t k = 0; k < layouts[p].segments.size(); ++k) {
+        const LayoutSegment& s = layouts[p].segments[k];
+        const TriChain& ch = subs[p].mesh.chains[static_cast<std::size_t>(s.chain)];
+        if (ch.interface < 0 || !failure[static_cast<std::size_t>(ch.interface)].empty()) continue;
+        auto [it, inserted] = open.try_emplace(side_key(p, ch, s.first, s.count), p, static_cast<int>(k));
+        if (inserted) continue;
+        couplings.push_back({it->second.first, it->second.second, p, static_cast<int>(k)});
+        open.erase(it);
+      }
+    }
+    if (!open.empty()) {  // a side its mapped neighbour splits differently: that subregion is repaired instead
+      const auto& [key, ps] = *open.begin();
+      failure[ps.first] = sub_name(ps.first) + ": its interface at " + at_text(tri.vertices[std::get<0>(key)]) +
+                          " is split differently by its neighbour";
+      again = true;
     }
   }
-  if (!open.empty()) {
-    const auto& [key, ps] = *open.begin();
-    throw MeshingError(name + ": the interface of subregion " + std::to_string(ps.first) + " at " +
-                       at_text(tri.vertices[std::get<0>(key)]) + " is split differently by its neighbour");
-  }
-  std::vector<Layout*> lp;
-  std::vector<const std::vector<Vec2>*> dp;
-  for (std::size_t p = 0; p < n; ++p) {
-    lp.push_back(&layouts[p]);
-    dp.push_back(&mapped[p].x);
-  }
-  try {
-    st.quantize = quantize_layouts(lp, dp, couplings, options.quantize, name);
-  } catch (const MeshingError& joint) {
-    // Name the subregion that cannot close on its own; if each can, the interfaces cannot agree.
+  // One integer program for all mapped subregions. When it has no solution, the subregions that cannot close
+  // alone are repaired; if they all can, subregions are added one at a time and the one that makes the program
+  // infeasible is repaired (its neighbours keep their maps).
+  auto solve = [&](const std::vector<std::size_t>& members) {
+    std::vector<std::int32_t> index(n, -1);
+    std::vector<Layout*> lp;
+    std::vector<const std::vector<Vec2>*> dp;
+    for (std::size_t p : members) {
+      index[p] = static_cast<std::int32_t>(lp.size());
+      lp.push_back(&layouts[p]);
+      dp.push_back(&mapped[p].x);
+    }
+    std::vector<SegmentCoupling> local;
+    for (const SegmentCoupling& c : couplings)
+      if (index[c.layout_a] >= 0 && index[c.layout_b] >= 0)
+        local.push_back({static_cast<std::size_t>(index[c.layout_a]), c.segment_a,
+                         static_cast<std::size_t>(index[c.layout_b]), c.segment_b});
+    // A subregion to be patched whose loop is all interfaces with mapped subregions cannot even out its own
+    // count: the quantization must give it an even one.
+    std::vector<EvenGroup> even;
     for (std::size_t p = 0; p < n; ++p) {
+      if (failure[p].empty() || subs[p].mesh.loops.size() != 1) continue;
+      bool fixed = true;  // interfaces all round (those with other patches get even counts)
+      for (const TriChain& ch : subs[p].mesh.chains) fixed = fixed && ch.interface >= 0;
+      if (!fixed) continue;
+      EvenGroup g;
+      for (const TriChain& ch : subs[p].mesh.chains) {
+        const auto q = static_cast<std::size_t>(ch.interface);
+        if (index[q] < 0) continue;
+        for (std::size_t k = 0; k < layouts[q].segments.size(); ++k)
+          if (subs[q].mesh.chains[static_cast<std::size_t>(layouts[q].segments[k].chain)].interface == static_cast<int>(p))
+            g.push_back({static_cast<std::size_t>(index[q]), static_cast<int>(k)});
+      }
+      std::sort(g.begin(), g.end());
+      g.erase(std::unique(g.begin(), g.end()), g.end());
+      if (!g.empty()) even.push_back(std::move(g));
+    }
+    return quantize_layouts(lp, dp, local, options.quantize, name, even);
+  };
+  auto members_now = [&] {
+    std::vector<std::size_t> m;
+    for (std::size_t p = 0; p < n; ++p)
+      if (failure[p].empty()) m.push_back(p);
+    return m;
+  };
+  try {
+    if (!members_now().empty()) st.quantize = solve(members_now());
+  } catch (const MeshingError& joint) {
+    for (std::size_t p : members_now()) {
       Layout alone = layouts[p];
       try {
         quantize_layout(alone, mapped[p].x, options.quantize, sub_name(p));
       } catch (const MeshingError& e) {
-        throw MeshingError(std::string(e.what()) + " [" + std::to_string(layouts[p].segments.size()) + " sides]");
+        failure[p] = std::string(e.what()) + " [" + std::to_string(layouts[p].segments.size()) + " sides]";
       }
     }
-    throw MeshingError(std::string(joint.what()) + ": every subregion closes alone, but not with equal counts on both "
-                       "sides of every interface");
+    try {
+      if (!members_now().empty()) st.quantize = solve(members_now());
+    } catch (const MeshingError&) {
+      std::vector<std::size_t> kept;
+      for (std::size_t p : members_now()) {
+        kept.push_back(p);
+        try {
+          st.quantize = solve(kept);
+        } catch (const MeshingError&) {
+          kept.pop_back();
+          failure[p] = sub_name(p) + ": its sides cannot take the counts its neighbours need (" + joint.what() + ")";
+        }
+      }
+      if (!kept.empty()) st.quantize = solve(kept);  // the last solve may have been a failed one
+    }
   }
+  std::vector<std::uint8_t> quantized(n, 0);
+  for (std::size_t p = 0; p < n; ++p) quantized[p] = failure[p].empty();
   for (std::size_t p = 0; p < n; ++p)
-    if (const std::string problem = check_layout(layouts[p]); !problem.empty())
-      throw MeshingError(sub_name(p) + ": the quantized poly-square is not valid: " + problem);
+    if (failure[p].empty())
+      if (const std::string problem = check_layout(layouts[p]); !problem.empty())
+        failure[p] = sub_name(p) + ": the quantized poly-square is not valid: " + problem;
   st.seconds_quantize = seconds_since(t0);
 
   t0 = std::chrono::steady_clock::now();
   std::vector<QuadMesh> meshes(n);
   std::vector<std::size_t> side_nodes(n, 0);
-  for_each_subregion(n, [&](std::size_t p) {
+  each_mapped([&](std::size_t p) {
     snap_to_layout(subs[p].mesh, mapped[p], layouts[p], options, sub_name(p));
     meshes[p] = extract_quads(subs[p].mesh, subs[p].mesh.vertices, mapped[p].x, layouts[p], sub_name(p), nullptr,
                               &side_nodes[p]);
   });
   st.seconds_snap = seconds_since(t0);
+
+  // Repairs: every failed subregion becomes an unstructured patch on the nodes its mapped neighbours made.
   t0 = std::chrono::steady_clock::now();
+  std::map<SideKey, long long> side_count;  // element count of every quantized interface segment
+  for (std::size_t p = 0; p < n; ++p) {
+    if (!quantized[p]) continue;
+    for (const LayoutSegment& s : layouts[p].segments) {
+      const TriChain& ch = subs[p].mesh.chains[static_cast<std::size_t>(s.chain)];
+      if (ch.interface < 0) continue;
+      const auto la = layouts[p].lattice[s.break_a], lb = layouts[p].lattice[s.break_b];
+      side_count[side_key(p, ch, s.first, s.count)] = std::llabs(lb[0] - la[0]) + std::llabs(lb[1] - la[1]);
+    }
+  }
+  std::vector<std::uint8_t> is_patch(n, 0);
+  for (std::size_t p = 0; p < n; ++p) is_patch[p] = !failure[p].empty();
+  std::vector<std::string> patch_error(n);
+  for_each_subregion(n, [&](std::size_t p) {
+    if (!is_patch[p]) return;
+    try {
+      const PatchInput in = patch_input(subs[p], is_patch, side_count, options.size, options.layout.corner_threshold_deg,
+                                        sub_name(p));
+      PatchOptions po;
+      po.size = options.size;
+      meshes[p] = mesh_patch(in, po);
+      side_nodes[p] = in.nodes.size();
+    } catch (const MeshingError& e) {
+      patch_error[p] = sub_name(p) + ": its map failed (" + failure[p] + ") and so did its repair: " + e.what();
+    }
+  });
+  for (const std::string& e : patch_error)
+    if (!e.empty()) throw MeshingError(e);
   QuadMesh out = stitch_quad_meshes(meshes, side_nodes, 1e-6 * options.size);
   st.seconds_extract = seconds_since(t0);
   st.separators = couplings.size();
+  st.subregions.assign(n, {});
+  for (std::size_t p = 0; p < n; ++p) {
+    SubregionStats& s = st.subregions[p];
+    s.subregion = static_cast<int>(p);
+    s.mapped = failure[p].empty();
+    s.reason = failure[p];
+    s.quads = meshes[p].quads.size();
+    s.at = subs[p].mesh.vertices.empty() ? Vec2{} : subs[p].mesh.vertices.front();
+  }
   return out;
 }
 

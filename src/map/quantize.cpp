@@ -62,13 +62,13 @@ struct JointProblem {
 };
 
 void solve_joint(JointProblem& jp, const std::vector<SegmentCoupling>& couplings,
-                 const std::vector<Separation>& separations, const QuantizeOptions& options,
-                 const std::string& part_name, QuantizeStats& stats) {
+                 const std::vector<EvenGroup>& even_groups, const std::vector<Separation>& separations,
+                 const QuantizeOptions& options, const std::string& part_name, QuantizeStats& stats) {
   const std::lock_guard<std::mutex> lock(glpk_mutex);
   std::unique_ptr<glp_prob, void (*)(glp_prob*)> lp(glp_create_prob(), glp_delete_prob);
   glp_prob* P = lp.get();
   glp_set_obj_dir(P, GLP_MIN);
-  const bool integer = !couplings.empty();
+  const bool integer = !couplings.empty() || !even_groups.empty();
   std::vector<int> ia{0}, ja{0};
   std::vector<double> ar{0.0};
   auto add_row = [&](std::initializer_list<std::pair<int, double>> terms, int type, double lo, double hi) {
@@ -137,6 +137,22 @@ void solve_joint(JointProblem& jp, const std::vector<SegmentCoupling>& couplings
     const int sa = col(c.layout_a, label_axis(s.label), s.break_a), sb = col(c.layout_a, label_axis(s.label), s.break_b);
     const int ta = col(c.layout_b, label_axis(t.label), t.break_a), tb = col(c.layout_b, label_axis(t.label), t.break_b);
     add_row({{sb, ss}, {sa, -ss}, {tb, -st}, {ta, st}}, GLP_FX, 0.0, 0.0);
+  }
+  for (const EvenGroup& g : even_groups) {
+    // sum of the counts - 2 m = 0, m integer.
+    const int m = glp_add_cols(P, 1);
+    glp_set_col_bnds(P, m, GLP_LO, 0.0, 0.0);
+    glp_set_col_kind(P, m, GLP_IV);
+    const int row = glp_add_rows(P, 1);
+    glp_set_row_bnds(P, row, GLP_FX, 0.0, 0.0);
+    ia.push_back(row); ja.push_back(m); ar.push_back(-2.0);
+    for (const auto& [l, k] : g) {
+      const LayoutSegment& s = jp.layouts[l]->segments[static_cast<std::size_t>(k)];
+      const double sg = label_sign(s.label);
+      const int axis = label_axis(s.label);
+      ia.push_back(row); ja.push_back(col(l, axis, s.break_b)); ar.push_back(sg);
+      ia.push_back(row); ja.push_back(col(l, axis, s.break_a)); ar.push_back(-sg);
+    }
   }
   for (const Separation& sep : separations)
     add_row({{col(sep.layout, sep.axis, sep.hi), 1.0}, {col(sep.layout, sep.axis, sep.lo), -1.0}}, GLP_LO, 1.0, 0.0);
@@ -210,7 +226,7 @@ bool best_separation(const Layout& layout, const std::vector<Vec2>& deformed, co
 
 QuantizeStats quantize_layouts(const std::vector<Layout*>& layouts, const std::vector<const std::vector<Vec2>*>& deformed,
                                const std::vector<SegmentCoupling>& couplings, const QuantizeOptions& options,
-                               const std::string& part_name) {
+                               const std::string& part_name, const std::vector<EvenGroup>& even_groups) {
   {
     const std::lock_guard<std::mutex> lock(glpk_mutex);
     glp_term_out(GLP_OFF);
@@ -229,7 +245,7 @@ QuantizeStats quantize_layouts(const std::vector<Layout*>& layouts, const std::v
   QuantizeStats stats;
   for (int round = 0;; ++round) {
     stats = QuantizeStats{};
-    solve_joint(jp, couplings, separations, options, part_name, stats);
+    solve_joint(jp, couplings, even_groups, separations, options, part_name, stats);
     if (round >= options.max_separation_rounds) break;
     std::size_t added = 0;
     for (std::size_t l = 0; l < layouts.size(); ++l) {

@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <optional>
+#include <set>
 #include <sstream>
 
 #include "polysquare/core/error.h"
@@ -31,7 +32,17 @@ double region_area(const Region& region) {
 }
 
 nlohmann::json part_json(const PartMapStats& s) {
-  return {{"part", s.part},
+  nlohmann::json subregions = nlohmann::json::array();
+  for (const SubregionStats& r : s.subregions) {
+    nlohmann::json j = {{"subregion", r.subregion}, {"quads", r.quads}, {"meshed_by", r.mapped ? "map" : "patch"}};
+    if (!r.mapped) {
+      j["reason"] = r.reason;
+      j["at"] = {r.at.x, r.at.y};
+    }
+    subregions.push_back(std::move(j));
+  }
+  return {{"subregions", subregions},
+          {"part", s.part},
           {"triangles", s.triangles},
           {"rotation_deg", s.rotation_deg},
           {"deform", {{"iterations", s.deform.iterations},
@@ -121,8 +132,11 @@ struct Candidate {
   nlohmann::json summary;
 
   double size_deviation = 0.0;  // |log(mean quad area / h^2)|: how far the element size is from the request
+  double structured = 0.0;      // fraction of its quads in poly-square-mapped subregions (0 for the fallback)
 
   bool better_than(const Candidate& o) const {
+    // Semi-structured first: a candidate with fewer quads in unstructured patches wins.
+    if (std::abs(structured - o.structured) > 0.01) return structured > o.structured;
     if (std::abs(gated_sj - o.gated_sj) > 0.02) return gated_sj > o.gated_sj;  // quality first, within a margin
     if (interior_singularities != o.interior_singularities) return interior_singularities < o.interior_singularities;
     if (std::abs(size_deviation - o.size_deviation) > 0.05) return size_deviation < o.size_deviation;
@@ -141,20 +155,41 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
   const std::string name = (region.source.empty() ? std::string("region") : region.source) + ": part " +
                            std::to_string(part.part);
   try {
-    PartMapResult r = make_mesh();
-    const RefineStats refined = refine_flat_corners(r.mesh, options.refine);
-    c.summary["flat_corners"] = refined.flat_corners;
-    c.summary["flat_corners_collapsed"] = refined.collapsed;
-    const RefineStats loops = pillow_feature_loops(r.mesh, options.refine);
-    if (loops.feature_loops > 0) {
-      c.summary["feature_loops_flat"] = loops.feature_loops;
-      c.summary["feature_loops_pillowed"] = loops.pillowed;
+    // A mapped subregion whose quads stay folded after smoothing (its map folds near a convoluted boundary) is
+    // meshed again as a patch, with the subregions patched before; the rest of the part keeps its maps.
+    std::vector<int> patches;
+    PartMapResult r;
+    for (int round = 0;; ++round) {
+      r = make_mesh(patches);
+      const RefineStats refined = refine_flat_corners(r.mesh, options.refine);
+      c.summary["flat_corners"] = refined.flat_corners;
+      c.summary["flat_corners_collapsed"] = refined.collapsed;
+      const RefineStats loops = pillow_feature_loops(r.mesh, options.refine);
+      if (loops.feature_loops > 0) {
+        c.summary["feature_loops_flat"] = loops.feature_loops;
+        c.summary["feature_loops_pillowed"] = loops.pillowed;
+      }
+      SmoothOptions smooth = options.smooth;
+      smooth.feature_tolerance = options.feature_tolerance * options.size;
+      c.smooth = smooth_quads(r.mesh, smooth, &region);
+      const InvariantReport inv = check_invariants(r.mesh);
+      if (inv.ok()) break;
+      std::set<int> folded_mapped;
+      std::string where;
+      for (std::size_t q = 0; q < r.mesh.quads.size(); ++q) {
+        const auto& v = r.mesh.quads[q];
+        if (quad_min_sj(r.mesh.nodes[v[0]], r.mesh.nodes[v[1]], r.mesh.nodes[v[2]], r.mesh.nodes[v[3]]) > 0.0) continue;
+        const auto sub = static_cast<std::size_t>(r.mesh.quad_part.empty() ? 0 : r.mesh.quad_part[q]);
+        const bool mapped = sub < r.stats.subregions.size() && r.stats.subregions[sub].mapped;
+        if (where.empty())
+          where = "; first folded quad in subregion " + std::to_string(sub) +
+                  (sub < r.stats.subregions.size() ? (mapped ? " (mapped)" : " (patch)") : "");
+        if (mapped) folded_mapped.insert(static_cast<int>(sub));
+      }
+      if (folded_mapped.empty() || round >= options.repair_rounds)
+        throw MeshingError(name + ": the mesh breaks an invariant (" + inv.first_problem + where + ")");
+      patches.insert(patches.end(), folded_mapped.begin(), folded_mapped.end());
     }
-    SmoothOptions smooth = options.smooth;
-    smooth.feature_tolerance = options.feature_tolerance * options.size;
-    c.smooth = smooth_quads(r.mesh, smooth, &region);
-    const InvariantReport inv = check_invariants(r.mesh);
-    if (!inv.ok()) throw MeshingError(name + ": the mesh breaks an invariant (" + inv.first_problem + ")");
     const QuadMetrics metrics = quad_metrics(r.mesh);
     const QualityReport q = compute_quality(r.mesh, metrics);
     c.min_sj = q.sj.min;
@@ -166,6 +201,15 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
     const double mean_area = area / static_cast<double>(r.mesh.quads.size()) / (options.size * options.size);
     c.size_deviation = std::abs(std::log(mean_area));
     c.summary["quads"] = r.mesh.quads.size();
+    if (!c.summary.contains("fallback")) {
+      std::size_t patched = 0, all = 0;
+      for (const SubregionStats& sr : r.stats.subregions) {
+        all += sr.quads;
+        if (!sr.mapped) patched += sr.quads;
+      }
+      c.structured = all > 0 ? 1.0 - static_cast<double>(patched) / static_cast<double>(all) : 1.0;
+    }
+    c.summary["structured_fraction"] = c.structured;
     c.summary["min_scaled_jacobian"] = c.min_sj;
     c.summary["max_edge_ratio"] = c.max_edge_ratio;
     c.summary["interior_singularities"] = c.interior_singularities;
@@ -223,13 +267,17 @@ Candidate try_candidate(const Region& region, const RegionPart& part, const Poly
   const int k = map.partition.parts;
   nlohmann::json summary = {{"part", part.part}, {"subregions", k}};
   if (k > 1 && map.composition == MapComposition::ppm) summary["bent_interfaces"] = !map.layout.straight_interfaces;
-  return finish_candidate(region, part, options, std::move(summary), [&] { return map_part(region, part, map); });
+  return finish_candidate(region, part, options, std::move(summary), [&](const std::vector<int>& patches) {
+    PolysquareMapOptions with_patches = map;
+    with_patches.patch_subregions.insert(with_patches.patch_subregions.end(), patches.begin(), patches.end());
+    return map_part(region, part, with_patches);
+  });
 }
 
 // The last resort for a part no poly-square candidate meshes: triangles split into quads (unstructured).
 Candidate try_split_fallback(const Region& region, const RegionPart& part, const MeshOptions& options) {
   nlohmann::json summary = {{"part", part.part}, {"subregions", 0}, {"fallback", "split_triangles"}};
-  return finish_candidate(region, part, options, std::move(summary), [&] {
+  return finish_candidate(region, part, options, std::move(summary), [&](const std::vector<int>&) {
     SplitOptions so;
     so.size = options.size;
     so.corner_threshold_deg = options.corner_threshold_deg;
@@ -299,6 +347,7 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
   std::vector<std::string> errors(parts.size());
   std::vector<nlohmann::json> tried(parts.size());
   std::vector<SmoothStats> smoothed(parts.size());
+  std::vector<double> structured(parts.size(), 0.0);  // fraction of each part's quads from poly-square maps
   // One thread limit for every parallel stage (parts, candidates, subregions, colours in smoothing).
   const int threads = options.threads > 0 ? options.threads : static_cast<int>(oneapi::tbb::info::default_concurrency());
   oneapi::tbb::global_control limit(oneapi::tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
@@ -343,6 +392,7 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
     }
     tried[k][static_cast<std::size_t>(best)]["chosen"] = true;
     smoothed[k] = cands[static_cast<std::size_t>(best)].smooth;
+    structured[k] = cands[static_cast<std::size_t>(best)].structured;
     results[k] = std::move(cands[static_cast<std::size_t>(best)].result);
   });
   std::ostringstream failed;
@@ -411,7 +461,38 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
 
   nlohmann::json parts_json = nlohmann::json::array();
   for (const auto& s : out.parts) parts_json.push_back(part_json(s));
+  // The summary outside checks read: how much of the mesh is semi-structured, and where it is not.
+  double structured_quads = 0.0;
+  std::size_t subregion_count = 0;
+  nlohmann::json unstructured = nlohmann::json::array();
+  for (std::size_t k = 0; k < parts.size(); ++k) {
+    const PartMapStats& st = results[k]->stats;
+    structured_quads += structured[k] * static_cast<double>(results[k]->mesh.quads.size());
+    if (st.subregions.empty()) {
+      ++subregion_count;
+      if (structured[k] == 0.0) {
+        const Vec2 at = work->rings[static_cast<std::size_t>(parts[k].rings.front())].points.front();
+        unstructured.push_back({{"part", st.part}, {"subregion", -1}, {"quads", results[k]->mesh.quads.size()},
+                                {"meshed_by", "split_triangles"}, {"at", {at.x, at.y}}});
+      }
+    }
+    for (const SubregionStats& sr : st.subregions) {
+      ++subregion_count;
+      if (!sr.mapped)
+        unstructured.push_back({{"part", st.part}, {"subregion", sr.subregion}, {"quads", sr.quads},
+                                {"meshed_by", "patch"}, {"at", {sr.at.x, sr.at.y}}, {"reason", sr.reason}});
+    }
+  }
+  const nlohmann::json summary = {
+      {"quads", mesh.quads.size()},
+      {"structured_fraction", mesh.quads.empty() ? 0.0 : structured_quads / static_cast<double>(mesh.quads.size())},
+      {"subregions", subregion_count},
+      {"unstructured_subregions", unstructured.size()},
+      {"seconds", std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count()},
+      {"version", POLYSQUARE_VERSION}};
   out.report = {
+      {"summary", summary},
+      {"unstructured", unstructured},
       {"input", {{"source", region.source}, {"crs", region.crs}, {"units", region.units},
                  {"parts", region.num_parts}, {"rings", region.rings.size()}, {"feature_curves", region.features.size()},
                  {"area", area}}},

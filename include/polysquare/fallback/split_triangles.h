@@ -8,6 +8,7 @@
 #include "polysquare/core/quad_mesh.h"
 #include "polysquare/core/region.h"
 #include <cstdint>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -31,9 +32,21 @@ struct SplitOptions {
 /// The triangulation the fallback splits: curves at 2 h, interior edges up to 3.5 h, SplitOptions' shape bound.
 TriangulationOptions split_triangulation_options(const SplitOptions& options);
 
+/// The counter-clockwise quad made of triangle t of `tri` and its neighbour u across their shared edge
+/// ({-1, -1, -1, -1} when they share no edge).
+std::array<std::int32_t, 4> quad_of_pair(const TriMesh& tri, std::int32_t t, std::int32_t u);
+
 /// Greedy matching of the triangles of `tri` into quads across interior edges that are not on a curve, best
 /// worst-corner first, pairs below `min_sj` left out: partner triangle of each triangle (-1 if alone), pairs.
 std::pair<std::vector<std::int32_t>, std::size_t> pair_triangles(const TriMesh& tri, double min_sj);
+
+/// Splits the cells of `tri` into quads: triangle pairs (pair_triangles, min_sj = pair_min_sj) are merged
+/// first, then every quad is cut into four and every other triangle into three at its edge midpoints and centre.
+/// `out` already holds a node for every vertex of `tri` under the same index; `midpoint` gives the node already
+/// made for an edge's middle (by edge_key: curve edges); every other edge gets a new interior node at its middle
+/// and every cell an interior centre node. Appends the quads (counter-clockwise) with quad_part 0.
+void split_cells(const TriMesh& tri, double pair_min_sj, QuadMesh& out,
+                 std::unordered_map<std::uint64_t, std::int32_t>& midpoint);
 
 /// Quad mesh of `part` from a triangulation with edges of about 2 h (each split in two; triangle pairs merged
 /// into quads first, see SplitOptions::pair_min_sj), node kinds set for

@@ -30,4 +30,9 @@ QuadMesh extract_quads(const TriMesh& mesh, const std::vector<Vec2>& original, c
 void polysquare_targets(const TriMesh& mesh, const std::vector<Vec2>& original, const std::vector<Vec2>& deformed,
                         const Layout& layout, std::vector<Vec2>& targets, std::vector<std::uint8_t>& mask);
 
+/// n + 1 points along the polyline `place` at equal steps of the arc length of `measure` (the same polyline, or
+/// its deformed image, vertex for vertex); the first and last are exactly place's ends. The two subregions sharing
+/// an interface call it on the same input polyline, so they create the same nodes.
+std::vector<Vec2> spread_along(const std::vector<Vec2>& measure, const std::vector<Vec2>& place, long long n);
+
 }  // namespace polysquare

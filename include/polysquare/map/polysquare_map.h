@@ -36,6 +36,8 @@ struct PolysquareMapOptions {
                                      ///< changed SJ min by -0.09 to +0.01 on the cases and broke dam_channel k = 4)
   MapComposition composition = MapComposition::ppm;  ///< used when partition.parts != 1
   bool keep_partition = false;     ///< keep the background triangulation in the result (for the partition picture)
+  std::vector<int> patch_subregions;  ///< PPM subregions meshed by an unstructured patch whatever their map does
+                                      ///< (a user who wants a zone unstructured; the tests of local repair)
   DeformOptions deform;
   /// Weights of the labelled deformation that runs between labelling and quantization (continuation, one L-BFGS
   /// solve per weight): every side is pulled straight along its label, so the deformed layout the quantization
@@ -44,6 +46,15 @@ struct PolysquareMapOptions {
   std::vector<double> label_weights{5.0, 50.0, 500.0};
   LayoutOptions layout;
   QuantizeOptions quantize;
+};
+
+/// How one subregion of a partitioned part was meshed.
+struct SubregionStats {
+  int subregion = 0;
+  bool mapped = true;     ///< false: its map failed and an unstructured patch repairs it (fallback/patch.h)
+  std::size_t quads = 0;
+  std::string reason;     ///< why its map failed (patches only)
+  Vec2 at{};              ///< its first boundary vertex, to find it
 };
 
 struct PartMapStats {
@@ -55,6 +66,7 @@ struct PartMapStats {
   QuantizeStats quantize;
   std::size_t quads = 0;
   std::size_t separators = 0;      ///< separator chains between subregions
+  std::vector<SubregionStats> subregions;  ///< PPM: every subregion, in order
   double seconds_partition = 0;
   double seconds_triangulate = 0, seconds_deform = 0, seconds_quantize = 0, seconds_snap = 0, seconds_extract = 0;
 };

@@ -40,6 +40,10 @@ struct SegmentCoupling {
   int segment_b = 0;
 };
 
+/// Segments (layout, segment) whose element counts must add up to an even number: the interfaces around a
+/// subregion that an unstructured patch will fill (a quad mesh has an even number of boundary edges).
+using EvenGroup = std::vector<std::pair<std::size_t, int>>;
+
 /// At most max_conflicts conflicts of the quantized layout.
 std::vector<LayoutConflict> find_conflicts(const Layout& layout, std::size_t max_conflicts);
 
@@ -57,7 +61,7 @@ QuantizeStats quantize_layout(Layout& layout, const std::vector<Vec2>& deformed,
 /// Without couplings the layouts are independent and the program is the totally unimodular one above.
 QuantizeStats quantize_layouts(const std::vector<Layout*>& layouts, const std::vector<const std::vector<Vec2>*>& deformed,
                                const std::vector<SegmentCoupling>& couplings, const QuantizeOptions& options,
-                               const std::string& part_name);
+                               const std::string& part_name, const std::vector<EvenGroup>& even_groups = {});
 
 /// Checks that the quantized layout is a valid poly-square: no zero-length segment, and segments of different
 /// chains or non-adjacent segments of one chain meet only at shared break points. Returns an empty string when

@@ -38,6 +38,8 @@ struct MeshOptions {
                                               ///< meshed none)
   bool split_fallback = true;    ///< a part no poly-square candidate meshes gets an unstructured all-quad mesh
                                  ///< (triangles split into three quads), reported under `fallbacks`; false: refuse
+  int repair_rounds = 4;          ///< times a candidate is meshed again with the mapped subregions whose quads stay
+                                  ///< folded after smoothing turned into patches (local repair)
   bool keep_partition = false;   ///< return the background triangulation and its partition (for pictures)
   double min_scaled_jacobian = 0.2;    ///< a candidate whose worst quad is below this is refused; 0 = accept any valid mesh
   double max_edge_ratio = 20.0;        ///< refuse a mesh with a quad whose longest / shortest edge exceeds this

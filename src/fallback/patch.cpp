@@ -1,0 +1,381 @@
+#include "polysquare/fallback/patch.h"
+
+#include <CGAL/Constrained_Delaunay_triangulation_2.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Triangulation_face_base_2.h>
+#include <CGAL/Triangulation_vertex_base_with_info_2.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <unordered_map>
+#include <unordered_set>
+
+#include "polysquare/core/error.h"
+#include "fallback/perfect_matching.h"
+#include "polysquare/fallback/split_triangles.h"
+
+namespace polysquare {
+namespace {
+
+using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+struct NodeId {
+  std::int32_t v = -1;  // -1 until set: tells a new CDT vertex from one already there
+  operator std::int32_t() const { return v; }
+  NodeId& operator=(std::int32_t x) { v = x; return *this; }
+};
+using Vb = CGAL::Triangulation_vertex_base_with_info_2<NodeId, K>;
+using Fb = CGAL::Constrained_triangulation_face_base_2<K>;
+using Tds = CGAL::Triangulation_data_structure_2<Vb, Fb>;
+using CDT = CGAL::Constrained_Delaunay_triangulation_2<K, Tds, CGAL::Exact_predicates_tag>;
+
+std::string at_text(Vec2 p) { return "(" + std::to_string(p.x) + ", " + std::to_string(p.y) + ")"; }
+
+// Buckets of segments on a square grid, for "is this point at least r away from every segment" queries.
+struct SegmentGrid {
+  double cell;
+  Vec2 lo;
+  std::unordered_map<std::uint64_t, std::vector<std::pair<Vec2, Vec2>>> buckets;
+  std::uint64_t key(long long i, long long j) const {
+    return (static_cast<std::uint64_t>(i) << 32) ^ static_cast<std::uint64_t>(j & 0xffffffffLL);
+  }
+  void add(Vec2 a, Vec2 b) {
+    const long long i0 = static_cast<long long>(std::floor((std::min(a.x, b.x) - lo.x) / cell));
+    const long long i1 = static_cast<long long>(std::floor((std::max(a.x, b.x) - lo.x) / cell));
+    const long long j0 = static_cast<long long>(std::floor((std::min(a.y, b.y) - lo.y) / cell));
+    const long long j1 = static_cast<long long>(std::floor((std::max(a.y, b.y) - lo.y) / cell));
+    for (long long i = i0; i <= i1; ++i)
+      for (long long j = j0; j <= j1; ++j) buckets[key(i, j)].push_back({a, b});
+  }
+  // Distance below cell: checks the 3 x 3 cells around p.
+  bool clear_of(Vec2 p, double r) const {
+    const long long i = static_cast<long long>(std::floor((p.x - lo.x) / cell));
+    const long long j = static_cast<long long>(std::floor((p.y - lo.y) / cell));
+    for (long long di = -1; di <= 1; ++di)
+      for (long long dj = -1; dj <= 1; ++dj) {
+        auto it = buckets.find(key(i + di, j + dj));
+        if (it == buckets.end()) continue;
+        for (const auto& [a, b] : it->second)
+          if (point_segment_distance(p, a, b) < r) return false;
+      }
+    return true;
+  }
+};
+
+
+// The loops of a patch as polygons, for inside tests (even-odd over all loops).
+std::vector<std::vector<Vec2>> loop_polygons(const PatchInput& in) {
+  std::vector<std::vector<Vec2>> loops;
+  for (const PatchCurve& c : in.curves)
+    if (c.loop) {
+      loops.emplace_back();
+      for (std::int32_t v : c.nodes) loops.back().push_back(in.nodes[static_cast<std::size_t>(v)]);
+    }
+  return loops;
+}
+
+bool inside_loops(const std::vector<std::vector<Vec2>>& loops, Vec2 p) {
+  bool in_region = false;
+  for (const auto& l : loops) in_region ^= point_in_ring(p, l);
+  return in_region;
+}
+
+// Interior vertices: a hexagonal lattice of `spacing` inside the loops and `clearance` away from every segment.
+std::vector<Vec2> lattice_points(const std::vector<std::vector<Vec2>>& loops, const SegmentGrid& grid, double spacing,
+                                 double clearance, Vec2 offset = {}) {
+  Box2 box;
+  for (const auto& l : loops)
+    for (Vec2 p : l) box.add(p);
+  std::vector<Vec2> out;
+  const double dy = spacing * std::sqrt(3.0) / 2.0;
+  for (long long j = 0; box.lo.y + static_cast<double>(j) * dy <= box.hi.y; ++j)
+    for (long long i = 0;; ++i) {
+      const Vec2 p{box.lo.x + offset.x + (static_cast<double>(i) + 0.5 * static_cast<double>(j % 2)) * spacing,
+                   box.lo.y + offset.y + static_cast<double>(j) * dy};
+      if (p.x > box.hi.x) break;
+      if (inside_loops(loops, p) && grid.clear_of(p, clearance)) out.push_back(p);
+    }
+  return out;
+}
+
+// Boundary and feature edges of the output, from the given curves' roles.
+void tag_curve_edges(const PatchInput& in, QuadMesh& out) {
+  for (const PatchCurve& c : in.curves) {
+    const int n = static_cast<int>(c.nodes.size());
+    for (int i = 0; i < (c.closed ? n : n - 1); ++i) {
+      const std::array<std::int32_t, 2> e{c.nodes[i], c.nodes[(i + 1) % n]};
+      if (c.role[i] == PatchEdgeRole::boundary) {
+        out.boundary_edges.push_back(e);
+        out.boundary_edge_ring.push_back(c.tag[i]);
+      } else if (c.role[i] == PatchEdgeRole::feature) {
+        out.feature_edges.push_back(e);
+        out.feature_edge_curve.push_back(c.tag[i]);
+      }
+    }
+  }
+}
+
+// Plain Laplacian sweeps over the nodes after the given ones (a triangulation that hugs a convoluted boundary
+// can give quads that start folded; averaging untangles them before the guarded smoothing of the whole mesh),
+// then the check that every given node is used and, with refuse_folded, that no quad is folded.
+void finish_patch(const PatchInput& in, const PatchOptions& options, QuadMesh& out) {
+  std::vector<std::vector<std::int32_t>> adj(out.nodes.size());
+  for (const auto& q : out.quads)
+    for (int k = 0; k < 4; ++k) {
+      adj[static_cast<std::size_t>(q[k])].push_back(q[(k + 1) % 4]);
+      adj[static_cast<std::size_t>(q[(k + 1) % 4])].push_back(q[k]);
+    }
+  for (std::size_t v = 0; v < in.nodes.size(); ++v)
+    if (adj[v].empty()) throw MeshingError("patch: node at " + at_text(out.nodes[v]) + " is in no quad");
+  for (int sweep = 0; sweep < options.untangle_sweeps; ++sweep)
+    for (std::size_t v = in.nodes.size(); v < out.nodes.size(); ++v) {
+      if (adj[v].empty()) continue;
+      Vec2 c{};
+      for (std::int32_t u : adj[v]) c = c + out.nodes[static_cast<std::size_t>(u)];
+      out.nodes[v] = (1.0 / static_cast<double>(adj[v].size())) * c;
+    }
+  if (!options.refuse_folded) return;
+  for (const auto& q : out.quads) {
+    const Vec2 a = out.nodes[static_cast<std::size_t>(q[0])], b = out.nodes[static_cast<std::size_t>(q[1])];
+    const Vec2 c = out.nodes[static_cast<std::size_t>(q[2])], d = out.nodes[static_cast<std::size_t>(q[3])];
+    if (quad_min_sj(a, b, c, d) <= 0.0)
+      throw MeshingError("patch: a quad at " + at_text(a) + " stays folded (the boundary is too convoluted there)");
+  }
+}
+
+// A CDT whose vertices carry the index of their node; inserting a node where another one is already is an error.
+struct IndexedCdt {
+  CDT cdt;
+  std::vector<CDT::Vertex_handle> handle;
+  const std::vector<Vec2>& nodes;
+  explicit IndexedCdt(const std::vector<Vec2>& n) : handle(n.size()), nodes(n) {}
+  CDT::Vertex_handle vertex(std::int32_t v) {
+    if (handle[static_cast<std::size_t>(v)] == CDT::Vertex_handle()) {
+      const Vec2 p = nodes[static_cast<std::size_t>(v)];
+      CDT::Vertex_handle vh = cdt.insert(K::Point_2(p.x, p.y));
+      if (vh->info() >= 0 && vh->info() != v) throw MeshingError("patch: two given nodes coincide at " + at_text(p));
+      vh->info() = v;
+      handle[static_cast<std::size_t>(v)] = vh;
+    }
+    return handle[static_cast<std::size_t>(v)];
+  }
+  // Adds interior points (new indices from `first`), then returns the triangles inside the loops; throws when a
+  // constraint was cut (curves crossing), which shows as a vertex CGAL created itself.
+  std::vector<std::array<std::int32_t, 3>> triangles(const std::vector<Vec2>& extra, std::int32_t first,
+                                                     const std::vector<std::vector<Vec2>>& loops,
+                                                     std::vector<Vec2>& all_positions) {
+    for (const Vec2& p : extra) {
+      CDT::Vertex_handle vh = cdt.insert(K::Point_2(p.x, p.y));
+      if (vh->info() >= 0) continue;
+      vh->info() = first++;
+      all_positions.push_back(p);
+    }
+    for (auto vh = cdt.finite_vertices_begin(); vh != cdt.finite_vertices_end(); ++vh)
+      if (vh->info() < 0) throw MeshingError("patch: curves cross near " + at_text({vh->point().x(), vh->point().y()}));
+    std::vector<std::array<std::int32_t, 3>> out;
+    for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f) {
+      const std::array<std::int32_t, 3> t{f->vertex(0)->info().v, f->vertex(1)->info().v, f->vertex(2)->info().v};
+      const Vec2 c = (1.0 / 3.0) * (all_positions[t[0]] + all_positions[t[1]] + all_positions[t[2]]);
+      if (inside_loops(loops, c)) out.push_back(t);
+    }
+    return out;
+  }
+};
+
+// Split construction: every other given node is a vertex of a coarse constrained triangulation (interior vertices
+// 2 h apart), the nodes between are the midpoints of its curve edges, and every cell is split into quads.
+QuadMesh split_patch(const PatchInput& in, const PatchOptions& options) {
+  const double h = options.size;
+  const auto nn = static_cast<std::int32_t>(in.nodes.size());
+  // Anchors: nodes on two curves, ends of open curves. They must be coarse vertices; every other node of a curve
+  // alternates between coarse vertex and midpoint.
+  std::vector<int> uses(static_cast<std::size_t>(nn), 0);
+  for (const PatchCurve& c : in.curves)
+    for (std::int32_t v : c.nodes) uses[static_cast<std::size_t>(v)]++;
+  std::vector<std::uint8_t> anchor(static_cast<std::size_t>(nn), 0);
+  for (std::size_t v = 0; v < uses.size(); ++v) anchor[v] = uses[v] > 1;
+  for (const PatchCurve& c : in.curves)
+    if (!c.closed) {
+      anchor[static_cast<std::size_t>(c.nodes.front())] = 1;
+      anchor[static_cast<std::size_t>(c.nodes.back())] = 1;
+    }
+  struct CoarseEdge {
+    std::int32_t a, m, b;
+  };
+  std::vector<CoarseEdge> coarse;
+  std::vector<TriChain> chains;
+  for (const PatchCurve& c : in.curves) {
+    const int n = static_cast<int>(c.nodes.size());
+    const int edges = c.closed ? n : n - 1;
+    int start = -1;
+    if (c.closed)
+      for (int i = 0; i < n && start < 0; ++i)
+        if (anchor[static_cast<std::size_t>(c.nodes[i])]) start = i;
+    if (start < 0 && c.closed) {
+      // No anchor: the phase that makes more sharp turns coarse vertices (a sharp turn at a midpoint folds the
+      // quad there).
+      int sharp[2] = {0, 0};
+      for (int i = 0; i < n; ++i) {
+        const Vec2 a = in.nodes[static_cast<std::size_t>(c.nodes[(i + n - 1) % n])];
+        const Vec2 b = in.nodes[static_cast<std::size_t>(c.nodes[i])];
+        const Vec2 d = in.nodes[static_cast<std::size_t>(c.nodes[(i + 1) % n])];
+        if (sharp_turn(a, b, d, 30.0)) sharp[i % 2]++;
+      }
+      start = sharp[1] > sharp[0] ? 1 : 0;
+    }
+    start = std::max(start, 0);
+    if (edges % 2 != 0)
+      throw MeshingError("patch: a curve of " + std::to_string(edges) + " edges near " +
+                         at_text(in.nodes[static_cast<std::size_t>(c.nodes.front())]) + " cannot be split in pairs");
+    TriChain ch;
+    ch.kind = c.loop ? TriChain::Kind::ring : TriChain::Kind::feature;
+    ch.closed = c.closed;
+    for (int e = 0; e < edges; e += 2) {
+      const std::int32_t a = c.nodes[(start + e) % n], m = c.nodes[(start + e + 1) % n];
+      const std::int32_t b = c.nodes[(start + e + 2) % n];
+      if (anchor[static_cast<std::size_t>(m)])
+        throw MeshingError("patch: an anchor node at " + at_text(in.nodes[static_cast<std::size_t>(m)]) +
+                           " falls between two coarse vertices (odd count between anchors)");
+      if (a == b) throw MeshingError("patch: a closed curve of two edges at " + at_text(in.nodes[static_cast<std::size_t>(a)]));
+      coarse.push_back({a, m, b});
+      ch.vertices.push_back(a);
+    }
+    if (!c.closed) ch.vertices.push_back(c.nodes.back());
+    chains.push_back(std::move(ch));
+  }
+  const auto loops = loop_polygons(in);
+  Box2 box;
+  for (const auto& l : loops)
+    for (Vec2 p : l) box.add(p);
+  SegmentGrid grid{2.0 * h, box.lo, {}};
+  for (const CoarseEdge& e : coarse) {
+    grid.add(in.nodes[static_cast<std::size_t>(e.a)], in.nodes[static_cast<std::size_t>(e.m)]);
+    grid.add(in.nodes[static_cast<std::size_t>(e.m)], in.nodes[static_cast<std::size_t>(e.b)]);
+  }
+  IndexedCdt idx(in.nodes);
+  for (const CoarseEdge& e : coarse) idx.cdt.insert_constraint(idx.vertex(e.a), idx.vertex(e.b));
+  for (std::int32_t v : in.points) idx.vertex(v);
+  TriMesh tri;
+  tri.vertices = in.nodes;
+  tri.triangles = idx.triangles(lattice_points(loops, grid, 2.0 * h, 1.2 * h), nn, loops, tri.vertices);
+  tri.chains = std::move(chains);
+
+  QuadMesh out;
+  out.nodes = tri.vertices;
+  out.node_kind = in.kind;
+  out.node_kind.resize(out.nodes.size(), NodeKind::interior);
+  // Every coarse edge must be an edge of the triangulation, with the given node as its midpoint.
+  const auto owners = edge_owners(tri);
+  std::unordered_map<std::uint64_t, std::int32_t> midpoint;
+  for (const CoarseEdge& e : coarse) {
+    if (!owners.count(edge_key(e.a, e.b)))
+      throw MeshingError("patch: the curve edge near " + at_text(in.nodes[static_cast<std::size_t>(e.m)]) +
+                         " is not kept by the triangulation (curves too close)");
+    midpoint[edge_key(e.a, e.b)] = e.m;
+  }
+  tag_curve_edges(in, out);
+  split_cells(tri, options.pair_min_sj, out, midpoint);
+  finish_patch(in, options, out);
+  return out;
+}
+
+// Matching construction: a constrained triangulation of the given nodes themselves (interior vertices h apart),
+// whose triangles are paired into quads by a maximum-weight perfect matching (LEMON) over the edges that are
+// on no curve, weighted by the quad's worst corner. No edge skips a given node, so a convoluted boundary cannot
+// make two curve edges cross; it fails only when no perfect matching into unfolded quads exists.
+QuadMesh matched_patch_once(const PatchInput& in, const PatchOptions& options, Vec2 offset) {
+  const double h = options.size;
+  const auto nn = static_cast<std::int32_t>(in.nodes.size());
+  const auto loops = loop_polygons(in);
+  Box2 box;
+  for (const auto& l : loops)
+    for (Vec2 p : l) box.add(p);
+  SegmentGrid grid{h, box.lo, {}};
+  IndexedCdt idx(in.nodes);
+  std::unordered_set<std::uint64_t> curve_edge;
+  for (const PatchCurve& c : in.curves) {
+    const int n = static_cast<int>(c.nodes.size());
+    for (int i = 0; i < (c.closed ? n : n - 1); ++i) {
+      const std::int32_t a = c.nodes[i], b = c.nodes[(i + 1) % n];
+      grid.add(in.nodes[static_cast<std::size_t>(a)], in.nodes[static_cast<std::size_t>(b)]);
+      idx.cdt.insert_constraint(idx.vertex(a), idx.vertex(b));
+      curve_edge.insert(edge_key(a, b));
+    }
+  }
+  for (std::int32_t v : in.points) idx.vertex(v);
+  TriMesh tri;
+  tri.vertices = in.nodes;
+  tri.triangles = idx.triangles(lattice_points(loops, grid, h, 0.6 * h, offset), nn, loops, tri.vertices);
+  if (tri.triangles.size() % 2 != 0)
+    throw MeshingError("patch: an odd number of triangles near " + at_text(in.nodes.front()) + " cannot pair into quads");
+  std::vector<std::array<int, 2>> edges;
+  std::vector<double> weights;
+  for (const auto& [key, owner] : edge_owners(tri)) {
+    if (owner[1] < 0 || curve_edge.count(key)) continue;
+    const std::int32_t t = std::min(owner[0], owner[1]), u = std::max(owner[0], owner[1]);
+    const auto q = quad_of_pair(tri, t, u);
+    const double sj = quad_min_sj(tri.vertices[q[0]], tri.vertices[q[1]], tri.vertices[q[2]], tri.vertices[q[3]]);
+    // Every pair counts (a perfect matching first), better quads more; a folded one only where nothing else
+    // pairs, left to the untangling sweeps and the mesh's checks.
+    edges.push_back({t, u});
+    weights.push_back(sj > 0.0 ? 1.0 + sj : 0.01);
+  }
+  // Edges in a fixed order (the hash map's is not), so the matching does not depend on it.
+  std::vector<std::size_t> order(edges.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return edges[a] < edges[b]; });
+  std::vector<std::array<int, 2>> sorted_edges;
+  std::vector<double> sorted_weights;
+  for (std::size_t i : order) {
+    sorted_edges.push_back(edges[i]);
+    sorted_weights.push_back(weights[i]);
+  }
+  std::vector<int> matched;
+  if (!lemon_bridge::max_weight_perfect_matching(static_cast<int>(tri.triangles.size()), sorted_edges, sorted_weights, matched))
+    throw MeshingError("patch: the triangles near " + at_text(in.nodes.front()) + " cannot all pair into quads");
+  QuadMesh out;
+  out.nodes = tri.vertices;
+  out.node_kind = in.kind;
+  out.node_kind.resize(out.nodes.size(), NodeKind::interior);
+  for (int e : matched) out.quads.push_back(quad_of_pair(tri, sorted_edges[static_cast<std::size_t>(e)][0],
+                                                      sorted_edges[static_cast<std::size_t>(e)][1]));
+  out.quad_part.assign(out.quads.size(), 0);
+  tag_curve_edges(in, out);
+  finish_patch(in, options, out);
+  return out;
+}
+
+// A triangulation has no perfect matching into unfolded quads now and then (two ears sharing their only
+// neighbour): the interior lattice is shifted and the matching tried again.
+QuadMesh matched_patch(const PatchInput& in, const PatchOptions& options) {
+  const double h = options.size;
+  for (int attempt = 0;; ++attempt) {
+    // Shifts along the golden-ratio sequence cover the lattice cell evenly.
+    const Vec2 offset{std::fmod(attempt * 0.618034, 1.0) * h, std::fmod(attempt * 0.381966, 1.0) * h * 0.866};
+    try {
+      return matched_patch_once(in, options, offset);
+    } catch (const MeshingError&) {
+      if (attempt + 1 >= options.matching_attempts) throw;
+    }
+  }
+}
+
+}  // namespace
+
+QuadMesh mesh_patch(const PatchInput& in, const PatchOptions& options) {
+  // The split construction gives the more regular quads (about four at a vertex); where its coarse edges cannot
+  // follow the boundary, the matching construction works on the given edges themselves.
+  if (options.method == PatchMethod::split) return split_patch(in, options);
+  if (options.method == PatchMethod::matching) return matched_patch(in, options);
+  try {
+    return split_patch(in, options);
+  } catch (const MeshingError& split_error) {
+    try {
+      return matched_patch(in, options);
+    } catch (const MeshingError& e) {
+      throw MeshingError(std::string(split_error.what()) + "; " + e.what());
+    }
+  }
+}
+
+}  // namespace polysquare

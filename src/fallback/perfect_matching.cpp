@@ -1,0 +1,31 @@
+#include "fallback/perfect_matching.h"
+
+#include <lemon/list_graph.h>
+#include <algorithm>
+#include <lemon/matching.h>
+
+namespace polysquare::lemon_bridge {
+
+bool max_weight_perfect_matching(int nodes, const std::vector<std::array<int, 2>>& edges,
+                                 const std::vector<double>& weights, std::vector<int>& matched) {
+  lemon::ListGraph g;
+  std::vector<lemon::ListGraph::Node> node;
+  node.reserve(static_cast<std::size_t>(nodes));
+  for (int i = 0; i < nodes; ++i) node.push_back(g.addNode());
+  lemon::ListGraph::EdgeMap<double> weight(g);
+  lemon::ListGraph::EdgeMap<int> index(g);
+  for (std::size_t e = 0; e < edges.size(); ++e) {
+    const auto edge = g.addEdge(node[static_cast<std::size_t>(edges[e][0])], node[static_cast<std::size_t>(edges[e][1])]);
+    weight[edge] = weights[e];
+    index[edge] = static_cast<int>(e);
+  }
+  lemon::MaxWeightedPerfectMatching<lemon::ListGraph, lemon::ListGraph::EdgeMap<double>> matching(g, weight);
+  if (!matching.run()) return false;
+  matched.clear();
+  for (lemon::ListGraph::EdgeIt e(g); e != lemon::INVALID; ++e)
+    if (matching.matching(e)) matched.push_back(index[e]);
+  std::sort(matched.begin(), matched.end());
+  return true;
+}
+
+}  // namespace polysquare::lemon_bridge

@@ -1,0 +1,143 @@
+// Local repair (design.md, "Failures are local"): a PPM subregion whose map fails is meshed by an unstructured
+// patch on the nodes its mapped neighbours made, and only that subregion; the mesh keeps every invariant.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+#include "polysquare/core/error.h"
+#include "polysquare/fallback/patch.h"
+#include "polysquare/input/read_region.h"
+#include "polysquare/pipeline/invariants.h"
+#include "polysquare/pipeline/mesh_region.h"
+#include "polysquare/quality/quality.h"
+
+using namespace polysquare;
+
+namespace {
+Region load(const std::string& name) { return read_region(std::string(POLYSQUARE_DATA_DIR) + "/cases/" + name + ".geojson"); }
+
+// A square loop of side `side` with `per_side` given edges on each side (counter-clockwise), as a patch input.
+PatchInput square_loop(double side, int per_side) {
+  PatchInput in;
+  PatchCurve c;
+  c.closed = c.loop = true;
+  const Vec2 corner[4] = {{0, 0}, {side, 0}, {side, side}, {0, side}};
+  for (int s = 0; s < 4; ++s)
+    for (int k = 0; k < per_side; ++k) {
+      c.nodes.push_back(static_cast<std::int32_t>(in.nodes.size()));
+      in.nodes.push_back(lerp(corner[s], corner[(s + 1) % 4], static_cast<double>(k) / per_side));
+      in.kind.push_back(k == 0 ? NodeKind::corner : NodeKind::boundary);
+      c.role.push_back(PatchEdgeRole::boundary);
+      c.tag.push_back(0);
+    }
+  in.curves.push_back(c);
+  return in;
+}
+}  // namespace
+
+TEST(Patch, TakesExactlyTheGivenBoundaryNodes) {
+  for (const auto& [per_side, method] : {std::pair{2, PatchMethod::split}, std::pair{4, PatchMethod::split},
+                                         std::pair{8, PatchMethod::split}, std::pair{5, PatchMethod::matching},
+                                         std::pair{7, PatchMethod::matching}}) {
+    const PatchInput in = square_loop(8.0, per_side);
+    PatchOptions o;
+    o.size = 8.0 / per_side;
+    o.method = method;
+    const QuadMesh m = mesh_patch(in, o);
+    const InvariantReport inv = check_invariants(m);
+    EXPECT_TRUE(inv.ok()) << per_side << ": " << inv.first_problem;
+    // The given nodes come first, unmoved, and are the whole boundary.
+    for (std::size_t v = 0; v < in.nodes.size(); ++v) EXPECT_EQ(m.nodes[v], in.nodes[v]);
+    EXPECT_EQ(m.boundary_edges.size(), in.nodes.size());
+    const QualityReport q = compute_quality(m);
+    EXPECT_EQ(q.inverted, 0u);
+    EXPECT_GT(q.sj.min, 0.2) << per_side;
+    double area = 0;
+    for (const auto& x : m.quads) area += 0.5 * cross(m.nodes[x[2]] - m.nodes[x[0]], m.nodes[x[3]] - m.nodes[x[1]]);
+    EXPECT_NEAR(area, 64.0, 1e-9);
+  }
+}
+
+TEST(Patch, RefusesAnOddBoundary) {
+  PatchInput in = square_loop(8.0, 4);
+  // Drop one node: 15 edges cannot bound a quad mesh.
+  in.curves[0].nodes.pop_back();
+  in.curves[0].role.pop_back();
+  in.curves[0].tag.pop_back();
+  PatchOptions o;
+  o.size = 2.0;
+  EXPECT_THROW(mesh_patch(in, o), MeshingError);
+}
+
+TEST(LocalRepair, ASubregionMadeToFailIsPatchedAndOnlyIt) {
+  // letter_M in 4 subregions, subregion 1 forced to a patch: the other three stay mapped, the patch welds to
+  // their interface nodes, and the mesh holds every invariant with the boundary exactly on the input.
+  const Region region = load("letter_M");
+  MeshOptions o;
+  o.size = 2.0;
+  o.parts = 4;
+  o.map.patch_subregions = {1};
+  const MeshResult r = mesh_region(region, o);
+  EXPECT_TRUE(check_invariants(r.mesh).ok()) << check_invariants(r.mesh).first_problem;
+  ASSERT_EQ(r.parts.size(), 1u);
+  const auto& subs = r.parts[0].subregions;
+  ASSERT_EQ(subs.size(), 4u);
+  std::size_t patch_quads = 0;
+  for (const SubregionStats& s : subs) {
+    EXPECT_EQ(s.mapped, s.subregion != 1) << s.subregion;
+    if (!s.mapped) patch_quads += s.quads;
+  }
+  EXPECT_GT(patch_quads, 0u);
+  const double fraction = r.report["summary"]["structured_fraction"].get<double>();
+  EXPECT_GT(fraction, 0.3);
+  EXPECT_LT(fraction, 1.0);
+  EXPECT_EQ(r.report["summary"]["unstructured_subregions"].get<int>(), 1);
+  const QualityReport q = compute_quality(r.mesh);
+  EXPECT_EQ(q.inverted, 0u);
+  EXPECT_GT(q.sj.min, 0.2);
+  const DomainDistance d = domain_distance(r.mesh, region);
+  EXPECT_LT(d.boundary_max_relative, 1e-9);
+  EXPECT_EQ(d.sharp_vertices_missing, 0u);
+}
+
+TEST(LocalRepair, AnUnrepairedMeshIsFullyStructured) {
+  // The same case without a forced patch: every subregion mapped, structured fraction 1.
+  const Region region = load("letter_M");
+  MeshOptions o;
+  o.size = 2.0;
+  o.parts = 4;
+  const MeshResult r = mesh_region(region, o);
+  EXPECT_DOUBLE_EQ(r.report["summary"]["structured_fraction"].get<double>(), 1.0);
+  EXPECT_EQ(r.report["summary"]["unstructured_subregions"].get<int>(), 0);
+}
+
+TEST(LocalRepair, NewCoastsHoldTheInvariantsAndTheSummaryAccountsForEveryQuad) {
+  // Two coasts nobody tuned the mesher to (GSHHG, data/cases/PROVENANCE.md), one poly-square per part at 400 m:
+  // every invariant holds, the boundary lies on the input, and the summary's structured fraction matches the
+  // quads listed under `unstructured` (patches and whole-part fallbacks), each with its place.
+  for (const char* name : {"fjord_coast", "estuary"}) {
+    const Region region = load(name);
+    MeshOptions o;
+    o.size = 400.0;
+    o.parts = 1;
+    const MeshResult r = mesh_region(region, o);
+    EXPECT_TRUE(check_invariants(r.mesh).ok()) << name << ": " << check_invariants(r.mesh).first_problem;
+    EXPECT_EQ(compute_quality(r.mesh).inverted, 0u) << name;
+    DomainDistanceOptions measure;
+    for (const auto& d : r.report["dropped_parts"]) measure.skip_parts.push_back(d["part"].get<int>());
+    const DomainDistance d = domain_distance(r.mesh, region, measure);
+    EXPECT_LT(d.boundary_max_relative, 1e-9) << name;
+    EXPECT_EQ(d.sharp_vertices_missing, 0u) << name;
+    const auto& summary = r.report["summary"];
+    EXPECT_EQ(summary["quads"].get<std::size_t>(), r.mesh.quads.size()) << name;
+    double unstructured = 0;
+    for (const auto& u : r.report["unstructured"]) {
+      unstructured += u["quads"].get<double>();
+      EXPECT_EQ(u["at"].size(), 2u);
+    }
+    EXPECT_NEAR(summary["structured_fraction"].get<double>(), 1.0 - unstructured / static_cast<double>(r.mesh.quads.size()),
+                0.02) << name;
+    EXPECT_EQ(summary["unstructured_subregions"].get<std::size_t>(), r.report["unstructured"].size()) << name;
+  }
+}
