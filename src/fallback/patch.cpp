@@ -159,28 +159,84 @@ struct IndexedCdt {
     }
     return handle[static_cast<std::size_t>(v)];
   }
-  // Adds interior points (new indices from `first`), then returns the triangles inside the loops; throws when a
-  // constraint was cut (curves crossing), which shows as a vertex CGAL created itself.
-  std::vector<std::array<std::int32_t, 3>> triangles(const std::vector<Vec2>& extra, std::int32_t first,
-                                                     const std::vector<std::vector<Vec2>>& loops,
-                                                     std::vector<Vec2>& all_positions) {
+  std::unordered_set<std::uint64_t> loop_edges;  // node pairs of the loops: crossing one toggles inside/outside
+
+  // Adds interior points (new indices from all_positions.size()), then returns the triangles inside the loops
+  // (a flood fill from the outside that toggles at loop edges: no point-in-polygon test on thin triangles);
+  // throws when a constraint was cut (curves crossing), which shows as a vertex CGAL created itself.
+  std::vector<std::array<std::int32_t, 3>> triangles(const std::vector<Vec2>& extra, std::vector<Vec2>& all_positions) {
     for (const Vec2& p : extra) {
       CDT::Vertex_handle vh = cdt.insert(K::Point_2(p.x, p.y));
       if (vh->info() >= 0) continue;
-      vh->info() = first++;
+      vh->info() = static_cast<std::int32_t>(all_positions.size());
       all_positions.push_back(p);
     }
     for (auto vh = cdt.finite_vertices_begin(); vh != cdt.finite_vertices_end(); ++vh)
       if (vh->info() < 0) throw MeshingError("patch: curves cross near " + at_text({vh->point().x(), vh->point().y()}));
-    std::vector<std::array<std::int32_t, 3>> out;
-    for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f) {
-      const std::array<std::int32_t, 3> t{f->vertex(0)->info().v, f->vertex(1)->info().v, f->vertex(2)->info().v};
-      const Vec2 c = (1.0 / 3.0) * (all_positions[t[0]] + all_positions[t[1]] + all_positions[t[2]]);
-      if (inside_loops(loops, c)) out.push_back(t);
+    if (cdt.dimension() < 2) throw MeshingError("patch: its given nodes are collinear");
+    std::unordered_map<const void*, int> level;
+    std::vector<CDT::Face_handle> stack{cdt.infinite_face()};
+    level[&*cdt.infinite_face()] = 0;
+    while (!stack.empty()) {
+      const CDT::Face_handle f = stack.back();
+      stack.pop_back();
+      const int l = level[&*f];
+      for (int i = 0; i < 3; ++i) {
+        const CDT::Face_handle g = f->neighbor(i);
+        if (level.count(&*g)) continue;
+        const CDT::Vertex_handle a = f->vertex(CDT::cw(i)), b = f->vertex(CDT::ccw(i));
+        const bool crosses = !cdt.is_infinite(a) && !cdt.is_infinite(b) &&
+                             loop_edges.count(edge_key(a->info().v, b->info().v));
+        level[&*g] = l + (crosses ? 1 : 0);
+        stack.push_back(g);
+      }
     }
+    std::vector<std::array<std::int32_t, 3>> out;
+    for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f)
+      if (level[&*f] % 2 == 1) out.push_back({f->vertex(0)->info().v, f->vertex(1)->info().v, f->vertex(2)->info().v});
     return out;
   }
 };
+
+// Ears (triangles with one edge off the curves) must pair with their one neighbour, and their tip keeps a
+// single quad: a triangle that is the neighbour of two ears, and an ear on a smooth stretch of a loop (its tip
+// turns by less than 60 degrees, so its one quad would be nearly flat there), get a vertex at their centre.
+void break_ears(IndexedCdt& idx, TriMesh& tri, const std::unordered_set<std::uint64_t>& curve_edge) {
+  for (int round = 0; round < 4; ++round) {
+    std::vector<int> free_edges(tri.triangles.size(), 0);
+    std::vector<std::array<std::int32_t, 2>> pairs;
+    for (const auto& [key, owner] : edge_owners(tri))
+      if (owner[1] >= 0 && !curve_edge.count(key)) {
+        free_edges[static_cast<std::size_t>(owner[0])]++;
+        free_edges[static_cast<std::size_t>(owner[1])]++;
+        pairs.push_back(owner);
+      }
+    std::vector<int> ears_next(tri.triangles.size(), 0);
+    for (const auto& o : pairs) {
+      if (free_edges[static_cast<std::size_t>(o[0])] == 1) ears_next[static_cast<std::size_t>(o[1])]++;
+      if (free_edges[static_cast<std::size_t>(o[1])] == 1) ears_next[static_cast<std::size_t>(o[0])]++;
+    }
+    std::vector<Vec2> centres;
+    for (std::size_t t = 0; t < tri.triangles.size(); ++t) {
+      const auto& v = tri.triangles[t];
+      // An ear on a smooth stretch of a loop (its tip turns by less than 60 degrees) would leave its tip with a
+      // single, nearly flat quad: a vertex at its centre lets the tip take two quads.
+      bool flat_ear = false;
+      for (int k = 0; k < 3 && free_edges[t] == 1; ++k) {
+        const std::int32_t a = v[(k + 2) % 3], tip = v[k], b = v[(k + 1) % 3];
+        if (idx.loop_edges.count(edge_key(a, tip)) && idx.loop_edges.count(edge_key(tip, b)))
+          flat_ear = dot(tri.vertices[a] - tri.vertices[tip], tri.vertices[b] - tri.vertices[tip]) <
+                     -0.5 * distance(tri.vertices[a], tri.vertices[tip]) * distance(tri.vertices[b], tri.vertices[tip]);
+      }
+      if (ears_next[t] >= 2 || flat_ear) {
+        centres.push_back((1.0 / 3.0) * (tri.vertices[v[0]] + tri.vertices[v[1]] + tri.vertices[v[2]]));
+      }
+    }
+    if (centres.empty()) break;
+    std::sort(centres.begin(), centres.end(), [](Vec2 a, Vec2 b) { return a.x != b.x ? a.x < b.x : a.y < b.y; });
+    tri.triangles = idx.triangles(centres, tri.vertices);
+  }
+}
 
 // Split construction: every other given node is a vertex of a coarse constrained triangulation (interior vertices
 // 2 h apart), the nodes between are the midpoints of its curve edges, and every cell is split into quads.
@@ -203,6 +259,7 @@ QuadMesh split_patch(const PatchInput& in, const PatchOptions& options) {
     std::int32_t a, m, b;
   };
   std::vector<CoarseEdge> coarse;
+  std::vector<const PatchCurve*> coarse_curve;  // the curve of each coarse edge
   std::vector<TriChain> chains;
   for (const PatchCurve& c : in.curves) {
     const int n = static_cast<int>(c.nodes.size());
@@ -238,6 +295,7 @@ QuadMesh split_patch(const PatchInput& in, const PatchOptions& options) {
                            " falls between two coarse vertices (odd count between anchors)");
       if (a == b) throw MeshingError("patch: a closed curve of two edges at " + at_text(in.nodes[static_cast<std::size_t>(a)]));
       coarse.push_back({a, m, b});
+      coarse_curve.push_back(&c);
       ch.vertices.push_back(a);
     }
     if (!c.closed) ch.vertices.push_back(c.nodes.back());
@@ -253,11 +311,18 @@ QuadMesh split_patch(const PatchInput& in, const PatchOptions& options) {
     grid.add(in.nodes[static_cast<std::size_t>(e.m)], in.nodes[static_cast<std::size_t>(e.b)]);
   }
   IndexedCdt idx(in.nodes);
-  for (const CoarseEdge& e : coarse) idx.cdt.insert_constraint(idx.vertex(e.a), idx.vertex(e.b));
+  for (std::size_t k = 0; k < coarse.size(); ++k) {
+    const CoarseEdge& e = coarse[k];
+    idx.cdt.insert_constraint(idx.vertex(e.a), idx.vertex(e.b));
+    if (coarse_curve[k]->loop) idx.loop_edges.insert(edge_key(e.a, e.b));
+  }
   for (std::int32_t v : in.points) idx.vertex(v);
   TriMesh tri;
   tri.vertices = in.nodes;
-  tri.triangles = idx.triangles(lattice_points(loops, grid, 2.0 * h, 1.2 * h), nn, loops, tri.vertices);
+  tri.triangles = idx.triangles(lattice_points(loops, grid, 2.0 * h, 1.2 * h), tri.vertices);
+  std::unordered_set<std::uint64_t> coarse_edges;
+  for (const CoarseEdge& e : coarse) coarse_edges.insert(edge_key(e.a, e.b));
+  break_ears(idx, tri, coarse_edges);
   tri.chains = std::move(chains);
 
   QuadMesh out;
@@ -282,10 +347,10 @@ QuadMesh split_patch(const PatchInput& in, const PatchOptions& options) {
 // Matching construction: a constrained triangulation of the given nodes themselves (interior vertices h apart),
 // whose triangles are paired into quads by a maximum-weight perfect matching (LEMON) over the edges that are
 // on no curve, weighted by the quad's worst corner. No edge skips a given node, so a convoluted boundary cannot
-// make two curve edges cross; it fails only when no perfect matching into unfolded quads exists.
+// make two curve edges cross. Pairs that would make a folded quad are kept at a tiny weight, so they are used
+// only where no perfect matching exists without them (the untangling sweeps and the mesh's checks judge them).
 QuadMesh matched_patch_once(const PatchInput& in, const PatchOptions& options, Vec2 offset) {
   const double h = options.size;
-  const auto nn = static_cast<std::int32_t>(in.nodes.size());
   const auto loops = loop_polygons(in);
   Box2 box;
   for (const auto& l : loops)
@@ -300,12 +365,14 @@ QuadMesh matched_patch_once(const PatchInput& in, const PatchOptions& options, V
       grid.add(in.nodes[static_cast<std::size_t>(a)], in.nodes[static_cast<std::size_t>(b)]);
       idx.cdt.insert_constraint(idx.vertex(a), idx.vertex(b));
       curve_edge.insert(edge_key(a, b));
+      if (c.loop) idx.loop_edges.insert(edge_key(a, b));
     }
   }
   for (std::int32_t v : in.points) idx.vertex(v);
   TriMesh tri;
   tri.vertices = in.nodes;
-  tri.triangles = idx.triangles(lattice_points(loops, grid, h, 0.6 * h, offset), nn, loops, tri.vertices);
+  tri.triangles = idx.triangles(lattice_points(loops, grid, h, 0.6 * h, offset), tri.vertices);
+  break_ears(idx, tri, curve_edge);
   if (tri.triangles.size() % 2 != 0)
     throw MeshingError("patch: an odd number of triangles near " + at_text(in.nodes.front()) + " cannot pair into quads");
   std::vector<std::array<int, 2>> edges;
@@ -363,6 +430,17 @@ QuadMesh matched_patch(const PatchInput& in, const PatchOptions& options) {
 }  // namespace
 
 QuadMesh mesh_patch(const PatchInput& in, const PatchOptions& options) {
+  // A loop of four nodes and nothing inside is one quad.
+  if (in.curves.size() == 1 && in.curves[0].loop && in.curves[0].nodes.size() == 4 && in.points.empty()) {
+    QuadMesh out;
+    out.nodes = in.nodes;
+    out.node_kind = in.kind;
+    const auto& v = in.curves[0].nodes;
+    out.quads.push_back({v[0], v[1], v[2], v[3]});
+    out.quad_part.assign(1, 0);
+    tag_curve_edges(in, out);
+    return out;
+  }
   // The split construction gives the more regular quads (about four at a vertex); where its coarse edges cannot
   // follow the boundary, the matching construction works on the given edges themselves.
   if (options.method == PatchMethod::split) return split_patch(in, options);

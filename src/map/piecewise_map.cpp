@@ -739,8 +739,16 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
       patch_error[p] = sub_name(p) + ": its map failed (" + failure[p] + ") and so did its repair: " + e.what();
     }
   });
+  std::size_t failed_maps = 0, failed_repairs = 0;
+  for (std::size_t p = 0; p < n; ++p) {
+    failed_maps += is_patch[p];
+    failed_repairs += !patch_error[p].empty();
+  }
   for (const std::string& e : patch_error)
-    if (!e.empty()) throw MeshingError(e);
+    if (!e.empty())
+      throw MeshingError(e + " [" + std::to_string(failed_repairs) + " of " + std::to_string(failed_maps) +
+                         " repairs failed; " + std::to_string(failed_maps) + " of " + std::to_string(n) +
+                         " subregions did not map]");
   QuadMesh out = stitch_quad_meshes(meshes, side_nodes, 1e-6 * options.size);
   st.seconds_extract = seconds_since(t0);
   st.separators = couplings.size();

@@ -243,7 +243,13 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
         if (!pinned[q] && (worst == pinned.size() || (largest ? per_quad[q] > per_quad[worst] : per_quad[q] < per_quad[worst])))
           worst = q;
       const Vec2 p = r.mesh.nodes[r.mesh.quads[worst][0]];
-      return "(" + std::to_string(p.x) + ", " + std::to_string(p.y) + ")";
+      std::string in;
+      if (!r.stats.subregions.empty() && worst < r.mesh.quad_part.size()) {
+        const auto sub = static_cast<std::size_t>(r.mesh.quad_part[worst]);
+        if (sub < r.stats.subregions.size())
+          in = " in subregion " + std::to_string(sub) + (r.stats.subregions[sub].mapped ? " (mapped)" : " (patch)");
+      }
+      return "(" + std::to_string(p.x) + ", " + std::to_string(p.y) + ")" + in;
     };
     if (gated_edge_ratio > options.max_edge_ratio)
       throw MeshingError(name + ": the best mesh has a quad with edge ratio " + std::to_string(gated_edge_ratio) +
