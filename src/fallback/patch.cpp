@@ -201,7 +201,8 @@ struct IndexedCdt {
 // Ears (triangles with one edge off the curves) must pair with their one neighbour, and their tip keeps a
 // single quad: a triangle that is the neighbour of two ears, and an ear on a smooth stretch of a loop (its tip
 // turns by less than 60 degrees, so its one quad would be nearly flat there), get a vertex at their centre.
-void break_ears(IndexedCdt& idx, TriMesh& tri, const std::unordered_set<std::uint64_t>& curve_edge) {
+void break_ears(IndexedCdt& idx, TriMesh& tri, const std::unordered_set<std::uint64_t>& curve_edge,
+                const std::unordered_map<std::uint64_t, std::int32_t>& midpoint = {}) {
   for (int round = 0; round < 4; ++round) {
     std::vector<int> free_edges(tri.triangles.size(), 0);
     std::vector<std::array<std::int32_t, 2>> pairs;
@@ -223,10 +224,15 @@ void break_ears(IndexedCdt& idx, TriMesh& tri, const std::unordered_set<std::uin
       // single, nearly flat quad: a vertex at its centre lets the tip take two quads.
       bool flat_ear = false;
       for (int k = 0; k < 3 && free_edges[t] == 1; ++k) {
-        const std::int32_t a = v[(k + 2) % 3], tip = v[k], b = v[(k + 1) % 3];
-        if (idx.loop_edges.count(edge_key(a, tip)) && idx.loop_edges.count(edge_key(tip, b)))
-          flat_ear = dot(tri.vertices[a] - tri.vertices[tip], tri.vertices[b] - tri.vertices[tip]) <
-                     -0.5 * distance(tri.vertices[a], tri.vertices[tip]) * distance(tri.vertices[b], tri.vertices[tip]);
+        std::int32_t a = v[(k + 2) % 3];
+        const std::int32_t tip = v[k];
+        std::int32_t b = v[(k + 1) % 3];
+        if (!idx.loop_edges.count(edge_key(a, tip)) || !idx.loop_edges.count(edge_key(tip, b))) continue;
+        // Split construction: the tip's quad has its corner between the midpoints of the two edges.
+        if (auto it = midpoint.find(edge_key(a, tip)); it != midpoint.end()) a = it->second;
+        if (auto it = midpoint.find(edge_key(tip, b)); it != midpoint.end()) b = it->second;
+        flat_ear = dot(tri.vertices[a] - tri.vertices[tip], tri.vertices[b] - tri.vertices[tip]) <
+                   -0.5 * distance(tri.vertices[a], tri.vertices[tip]) * distance(tri.vertices[b], tri.vertices[tip]);
       }
       if (ears_next[t] >= 2 || flat_ear) {
         centres.push_back((1.0 / 3.0) * (tri.vertices[v[0]] + tri.vertices[v[1]] + tri.vertices[v[2]]));
@@ -321,8 +327,12 @@ QuadMesh split_patch(const PatchInput& in, const PatchOptions& options) {
   tri.vertices = in.nodes;
   tri.triangles = idx.triangles(lattice_points(loops, grid, 2.0 * h, 1.2 * h), tri.vertices);
   std::unordered_set<std::uint64_t> coarse_edges;
-  for (const CoarseEdge& e : coarse) coarse_edges.insert(edge_key(e.a, e.b));
-  break_ears(idx, tri, coarse_edges);
+  std::unordered_map<std::uint64_t, std::int32_t> coarse_midpoint;
+  for (const CoarseEdge& e : coarse) {
+    coarse_edges.insert(edge_key(e.a, e.b));
+    coarse_midpoint[edge_key(e.a, e.b)] = e.m;
+  }
+  break_ears(idx, tri, coarse_edges, coarse_midpoint);
   tri.chains = std::move(chains);
 
   QuadMesh out;
