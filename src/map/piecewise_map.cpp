@@ -733,6 +733,9 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
                                         sub_name(p));
       PatchOptions po;
       po.size = options.size;
+      if (std::find(options.matched_patches.begin(), options.matched_patches.end(), static_cast<int>(p)) !=
+          options.matched_patches.end())
+        po.method = PatchMethod::matching;
       meshes[p] = mesh_patch(in, po);
       side_nodes[p] = in.nodes.size();
     } catch (const MeshingError& e) {

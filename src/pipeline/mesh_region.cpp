@@ -144,6 +144,24 @@ struct Candidate {
   }
 };
 
+// What a candidate is meshed again with, after a round left folded or poor quads in some subregions: mapped
+// subregions become patches, patches are built by the other (matching) construction.
+struct Repairs {
+  std::vector<int> patches, matched;
+  // Adds the subregions in `bad`; false when none of them can be repaired further.
+  bool add(const std::set<int>& bad, const PartMapStats& stats) {
+    bool added = false;
+    for (int s : bad) {
+      const bool mapped = stats.subregions[static_cast<std::size_t>(s)].mapped;
+      std::vector<int>& list = mapped ? patches : matched;
+      if (std::find(list.begin(), list.end(), s) != list.end()) continue;
+      list.push_back(s);
+      added = true;
+    }
+    return added;
+  }
+};
+
 // Meshes a part with `make_mesh` (a map candidate or the fallback), then smooths, checks and measures it.
 template <typename MakeMesh>
 Candidate finish_candidate(const Region& region, const RegionPart& part, const MeshOptions& options,
@@ -157,10 +175,10 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
   try {
     // A mapped subregion whose quads stay folded after smoothing (its map folds near a convoluted boundary) is
     // meshed again as a patch, with the subregions patched before; the rest of the part keeps its maps.
-    std::vector<int> patches;
+    Repairs repairs;
     PartMapResult r;
     for (int round = 0;; ++round) {
-      r = make_mesh(patches);
+      r = make_mesh(repairs);
       const RefineStats refined = refine_flat_corners(r.mesh, options.refine);
       c.summary["flat_corners"] = refined.flat_corners;
       c.summary["flat_corners_collapsed"] = refined.collapsed;
@@ -173,22 +191,34 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
       smooth.feature_tolerance = options.feature_tolerance * options.size;
       c.smooth = smooth_quads(r.mesh, smooth, &region);
       const InvariantReport inv = check_invariants(r.mesh);
-      if (inv.ok()) break;
-      std::set<int> folded_mapped;
+      if (inv.ok()) {
+        // Mapped subregions holding a quad below the SJ gate (not pinned by a sharp input corner) are repaired
+        // the same way: the rest of the part keeps its maps.
+        if (round >= options.repair_rounds || r.stats.subregions.empty() || options.min_scaled_jacobian <= 0.0) break;
+        const std::vector<double> sj = quad_metrics(r.mesh).sj;
+        const std::vector<std::uint8_t> pin = quads_pinned_by_sharp_input(r.mesh, options.min_scaled_jacobian, options.size);
+        std::set<int> poor;
+        for (std::size_t q = 0; q < sj.size(); ++q) {
+          if (pin[q] || sj[q] >= options.min_scaled_jacobian || q >= r.mesh.quad_part.size()) continue;
+          const auto sub = static_cast<std::size_t>(r.mesh.quad_part[q]);
+          if (sub < r.stats.subregions.size()) poor.insert(static_cast<int>(sub));
+        }
+        if (!repairs.add(poor, r.stats)) break;
+        continue;
+      }
+      std::set<int> folded;
       std::string where;
       for (std::size_t q = 0; q < r.mesh.quads.size(); ++q) {
         const auto& v = r.mesh.quads[q];
         if (quad_min_sj(r.mesh.nodes[v[0]], r.mesh.nodes[v[1]], r.mesh.nodes[v[2]], r.mesh.nodes[v[3]]) > 0.0) continue;
         const auto sub = static_cast<std::size_t>(r.mesh.quad_part.empty() ? 0 : r.mesh.quad_part[q]);
-        const bool mapped = sub < r.stats.subregions.size() && r.stats.subregions[sub].mapped;
         if (where.empty())
           where = "; first folded quad in subregion " + std::to_string(sub) +
-                  (sub < r.stats.subregions.size() ? (mapped ? " (mapped)" : " (patch)") : "");
-        if (mapped) folded_mapped.insert(static_cast<int>(sub));
+                  (sub < r.stats.subregions.size() ? (r.stats.subregions[sub].mapped ? " (mapped)" : " (patch)") : "");
+        if (sub < r.stats.subregions.size()) folded.insert(static_cast<int>(sub));
       }
-      if (folded_mapped.empty() || round >= options.repair_rounds)
+      if (round >= options.repair_rounds || !repairs.add(folded, r.stats))
         throw MeshingError(name + ": the mesh breaks an invariant (" + inv.first_problem + where + ")");
-      patches.insert(patches.end(), folded_mapped.begin(), folded_mapped.end());
     }
     const QuadMetrics metrics = quad_metrics(r.mesh);
     const QualityReport q = compute_quality(r.mesh, metrics);
@@ -273,17 +303,18 @@ Candidate try_candidate(const Region& region, const RegionPart& part, const Poly
   const int k = map.partition.parts;
   nlohmann::json summary = {{"part", part.part}, {"subregions", k}};
   if (k > 1 && map.composition == MapComposition::ppm) summary["bent_interfaces"] = !map.layout.straight_interfaces;
-  return finish_candidate(region, part, options, std::move(summary), [&](const std::vector<int>& patches) {
-    PolysquareMapOptions with_patches = map;
-    with_patches.patch_subregions.insert(with_patches.patch_subregions.end(), patches.begin(), patches.end());
-    return map_part(region, part, with_patches);
+  return finish_candidate(region, part, options, std::move(summary), [&](const Repairs& repairs) {
+    PolysquareMapOptions with_repairs = map;
+    with_repairs.patch_subregions.insert(with_repairs.patch_subregions.end(), repairs.patches.begin(), repairs.patches.end());
+    with_repairs.matched_patches = repairs.matched;
+    return map_part(region, part, with_repairs);
   });
 }
 
 // The last resort for a part no poly-square candidate meshes: triangles split into quads (unstructured).
 Candidate try_split_fallback(const Region& region, const RegionPart& part, const MeshOptions& options) {
   nlohmann::json summary = {{"part", part.part}, {"subregions", 0}, {"fallback", "split_triangles"}};
-  return finish_candidate(region, part, options, std::move(summary), [&](const std::vector<int>&) {
+  return finish_candidate(region, part, options, std::move(summary), [&](const Repairs&) {
     SplitOptions so;
     so.size = options.size;
     so.corner_threshold_deg = options.corner_threshold_deg;

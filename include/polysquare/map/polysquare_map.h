@@ -38,6 +38,8 @@ struct PolysquareMapOptions {
   bool keep_partition = false;     ///< keep the background triangulation in the result (for the partition picture)
   std::vector<int> patch_subregions;  ///< PPM subregions meshed by an unstructured patch whatever their map does
                                       ///< (a user who wants a zone unstructured; the tests of local repair)
+  std::vector<int> matched_patches;   ///< patches built by the matching construction (PatchMethod::matching): the
+                                      ///< retry for a patch whose first construction left a poor or folded quad
   DeformOptions deform;
   /// Weights of the labelled deformation that runs between labelling and quantization (continuation, one L-BFGS
   /// solve per weight): every side is pulled straight along its label, so the deformed layout the quantization
