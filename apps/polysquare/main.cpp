@@ -175,8 +175,6 @@ int main(int argc, char** argv) {
   cmd_mesh->add_option("--feature-tolerance", mesh.options.feature_tolerance,
                        "largest distance between a feature curve and the mesh edges along it, as a fraction of the size")
       ->check(CLI::PositiveNumber)->capture_default_str();
-  cmd_mesh->add_option("--straighten-separators", mesh.options.map.separator_straightening,
-                       "smoothing sweeps over the separators' zig-zag before mapping (0 = keep triangle edges)");
   cmd_mesh->add_flag("--binary", mesh.binary, "write binary MSH");
   cmd_mesh->add_flag("--repair", mesh.input_options.repair,
                      "drop repeated points and clip features crossing holes instead of refusing the input (reported)");

@@ -29,28 +29,25 @@ using Fb = CGAL::Constrained_triangulation_face_base_2<K>;
 using Tds = CGAL::Triangulation_data_structure_2<Vb, Fb>;
 using CDT = CGAL::Constrained_Delaunay_triangulation_2<K, Tds, CGAL::Exact_predicates_tag>;
 
-std::string at_text(Vec2 p) { return "(" + std::to_string(p.x) + ", " + std::to_string(p.y) + ")"; }
-
 // Buckets of segments on a square grid, for "is this point at least r away from every segment" queries.
 struct SegmentGrid {
   double cell;
-  Vec2 lo;
   std::unordered_map<std::uint64_t, std::vector<std::pair<Vec2, Vec2>>> buckets;
   std::uint64_t key(long long i, long long j) const {
     return (static_cast<std::uint64_t>(i) << 32) ^ static_cast<std::uint64_t>(j & 0xffffffffLL);
   }
   void add(Vec2 a, Vec2 b) {
-    const long long i0 = static_cast<long long>(std::floor((std::min(a.x, b.x) - lo.x) / cell));
-    const long long i1 = static_cast<long long>(std::floor((std::max(a.x, b.x) - lo.x) / cell));
-    const long long j0 = static_cast<long long>(std::floor((std::min(a.y, b.y) - lo.y) / cell));
-    const long long j1 = static_cast<long long>(std::floor((std::max(a.y, b.y) - lo.y) / cell));
+    const long long i0 = static_cast<long long>(std::floor(std::min(a.x, b.x) / cell));
+    const long long i1 = static_cast<long long>(std::floor(std::max(a.x, b.x) / cell));
+    const long long j0 = static_cast<long long>(std::floor(std::min(a.y, b.y) / cell));
+    const long long j1 = static_cast<long long>(std::floor(std::max(a.y, b.y) / cell));
     for (long long i = i0; i <= i1; ++i)
       for (long long j = j0; j <= j1; ++j) buckets[key(i, j)].push_back({a, b});
   }
   // Distance below cell: checks the 3 x 3 cells around p.
   bool clear_of(Vec2 p, double r) const {
-    const long long i = static_cast<long long>(std::floor((p.x - lo.x) / cell));
-    const long long j = static_cast<long long>(std::floor((p.y - lo.y) / cell));
+    const long long i = static_cast<long long>(std::floor(p.x / cell));
+    const long long j = static_cast<long long>(std::floor(p.y / cell));
     for (long long di = -1; di <= 1; ++di)
       for (long long dj = -1; dj <= 1; ++dj) {
         auto it = buckets.find(key(i + di, j + dj));
@@ -308,10 +305,7 @@ QuadMesh split_patch(const PatchInput& in, const PatchOptions& options) {
     chains.push_back(std::move(ch));
   }
   const auto loops = loop_polygons(in);
-  Box2 box;
-  for (const auto& l : loops)
-    for (Vec2 p : l) box.add(p);
-  SegmentGrid grid{2.0 * h, box.lo, {}};
+  SegmentGrid grid{2.0 * h, {}};
   for (const CoarseEdge& e : coarse) {
     grid.add(in.nodes[static_cast<std::size_t>(e.a)], in.nodes[static_cast<std::size_t>(e.m)]);
     grid.add(in.nodes[static_cast<std::size_t>(e.m)], in.nodes[static_cast<std::size_t>(e.b)]);
@@ -362,10 +356,7 @@ QuadMesh split_patch(const PatchInput& in, const PatchOptions& options) {
 QuadMesh matched_patch_once(const PatchInput& in, const PatchOptions& options, Vec2 offset) {
   const double h = options.size;
   const auto loops = loop_polygons(in);
-  Box2 box;
-  for (const auto& l : loops)
-    for (Vec2 p : l) box.add(p);
-  SegmentGrid grid{h, box.lo, {}};
+  SegmentGrid grid{h, {}};
   IndexedCdt idx(in.nodes);
   std::unordered_set<std::uint64_t> curve_edge;
   for (const PatchCurve& c : in.curves) {

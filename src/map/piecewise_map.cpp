@@ -19,7 +19,6 @@
 namespace polysquare {
 namespace {
 
-std::string at_text(Vec2 p) { return "(" + std::to_string(p.x) + ", " + std::to_string(p.y) + ")"; }
 
 // What lies across a boundary edge of a subregion: the outside (a ring piece) or a neighbour, with the feature
 // curve the edge belongs to, if any. A loop is cut where this changes.

@@ -177,6 +177,20 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
     // meshed again as a patch, with the subregions patched before; the rest of the part keeps its maps.
     Repairs repairs;
     PartMapResult r;
+    QuadMetrics metrics;
+    std::vector<std::uint8_t> pinned;
+    // "in subregion s (mapped|patch)" for the quad q of a partitioned part's mesh, empty otherwise.
+    auto subregion_of = [&](std::size_t q) -> int {
+      if (q >= r.mesh.quad_part.size()) return -1;
+      const int s = r.mesh.quad_part[q];
+      return s >= 0 && static_cast<std::size_t>(s) < r.stats.subregions.size() ? s : -1;
+    };
+    auto in_subregion = [&](std::size_t q) {
+      const int s = subregion_of(q);
+      if (s < 0) return std::string();
+      return " in subregion " + std::to_string(s) +
+             (r.stats.subregions[static_cast<std::size_t>(s)].mapped ? " (mapped)" : " (patch)");
+    };
     for (int round = 0;; ++round) {
       r = make_mesh(repairs);
       const RefineStats refined = refine_flat_corners(r.mesh, options.refine);
@@ -191,36 +205,27 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
       smooth.feature_tolerance = options.feature_tolerance * options.size;
       c.smooth = smooth_quads(r.mesh, smooth, &region);
       const InvariantReport inv = check_invariants(r.mesh);
-      if (inv.ok()) {
-        // Mapped subregions holding a quad below the SJ gate (not pinned by a sharp input corner) are repaired
-        // the same way: the rest of the part keeps its maps.
-        if (round >= options.repair_rounds || r.stats.subregions.empty() || options.min_scaled_jacobian <= 0.0) break;
-        const std::vector<double> sj = quad_metrics(r.mesh).sj;
-        const std::vector<std::uint8_t> pin = quads_pinned_by_sharp_input(r.mesh, options.min_scaled_jacobian, options.size);
-        std::set<int> poor;
-        for (std::size_t q = 0; q < sj.size(); ++q) {
-          if (pin[q] || sj[q] >= options.min_scaled_jacobian || q >= r.mesh.quad_part.size()) continue;
-          const auto sub = static_cast<std::size_t>(r.mesh.quad_part[q]);
-          if (sub < r.stats.subregions.size()) poor.insert(static_cast<int>(sub));
-        }
-        if (!repairs.add(poor, r.stats)) break;
-        continue;
+      metrics = quad_metrics(r.mesh);
+      // The gates judge the quads the mesher controls: quads pinned by an input corner sharper than the SJ gate
+      // are only counted (they cannot do better in any conforming mesh).
+      pinned = quads_pinned_by_sharp_input(r.mesh, options.min_scaled_jacobian, options.size);
+      // Subregions holding a folded quad, or an unpinned one below the SJ gate, are meshed again (a mapped one
+      // as a patch, a patch by the matching construction); the rest of the part keeps its maps.
+      std::set<int> bad;
+      std::size_t first_folded = metrics.sj.size();
+      for (std::size_t q = 0; q < metrics.sj.size(); ++q) {
+        const bool folded = metrics.sj[q] <= 0.0;
+        if (folded && first_folded == metrics.sj.size()) first_folded = q;
+        if ((folded || (!pinned[q] && metrics.sj[q] < options.min_scaled_jacobian)) && subregion_of(q) >= 0)
+          bad.insert(subregion_of(q));
       }
-      std::set<int> folded;
-      std::string where;
-      for (std::size_t q = 0; q < r.mesh.quads.size(); ++q) {
-        const auto& v = r.mesh.quads[q];
-        if (quad_min_sj(r.mesh.nodes[v[0]], r.mesh.nodes[v[1]], r.mesh.nodes[v[2]], r.mesh.nodes[v[3]]) > 0.0) continue;
-        const auto sub = static_cast<std::size_t>(r.mesh.quad_part.empty() ? 0 : r.mesh.quad_part[q]);
-        if (where.empty())
-          where = "; first folded quad in subregion " + std::to_string(sub) +
-                  (sub < r.stats.subregions.size() ? (r.stats.subregions[sub].mapped ? " (mapped)" : " (patch)") : "");
-        if (sub < r.stats.subregions.size()) folded.insert(static_cast<int>(sub));
-      }
-      if (round >= options.repair_rounds || !repairs.add(folded, r.stats))
-        throw MeshingError(name + ": the mesh breaks an invariant (" + inv.first_problem + where + ")");
+      if (round < options.repair_rounds && repairs.add(bad, r.stats)) continue;
+      if (!inv.ok())
+        throw MeshingError(name + ": the mesh breaks an invariant (" + inv.first_problem +
+                           (first_folded < metrics.sj.size() ? "; first folded quad" + in_subregion(first_folded) : "") +
+                           ")");
+      break;
     }
-    const QuadMetrics metrics = quad_metrics(r.mesh);
     const QualityReport q = compute_quality(r.mesh, metrics);
     c.min_sj = q.sj.min;
     c.max_edge_ratio = q.edge_ratio.max;
@@ -244,9 +249,6 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
     c.summary["max_edge_ratio"] = c.max_edge_ratio;
     c.summary["interior_singularities"] = c.interior_singularities;
     c.summary["mean_area_over_size_squared"] = mean_area;
-    // The gates judge the quads the mesher controls: quads pinned by an input corner sharper than the SJ gate
-    // are only counted (they cannot do better in any conforming mesh).
-    const std::vector<std::uint8_t> pinned = quads_pinned_by_sharp_input(r.mesh, options.min_scaled_jacobian, options.size);
     double gated_sj = 1.0, gated_edge_ratio = 1.0, pinned_sj = 1.0;
     std::size_t pinned_count = 0, pinned_worst = 0;
     for (std::size_t q = 0; q < pinned.size(); ++q) {
@@ -272,14 +274,7 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
       for (std::size_t q = 0; q < per_quad.size(); ++q)
         if (!pinned[q] && (worst == pinned.size() || (largest ? per_quad[q] > per_quad[worst] : per_quad[q] < per_quad[worst])))
           worst = q;
-      const Vec2 p = r.mesh.nodes[r.mesh.quads[worst][0]];
-      std::string in;
-      if (!r.stats.subregions.empty() && worst < r.mesh.quad_part.size()) {
-        const auto sub = static_cast<std::size_t>(r.mesh.quad_part[worst]);
-        if (sub < r.stats.subregions.size())
-          in = " in subregion " + std::to_string(sub) + (r.stats.subregions[sub].mapped ? " (mapped)" : " (patch)");
-      }
-      return "(" + std::to_string(p.x) + ", " + std::to_string(p.y) + ")" + in;
+      return at_text(r.mesh.nodes[r.mesh.quads[worst][0]]) + in_subregion(worst);
     };
     if (gated_edge_ratio > options.max_edge_ratio)
       throw MeshingError(name + ": the best mesh has a quad with edge ratio " + std::to_string(gated_edge_ratio) +

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -48,6 +49,9 @@ inline double corner_sj(Vec2 prev, Vec2 p, Vec2 next) {
 inline double quad_min_sj(Vec2 a, Vec2 b, Vec2 c, Vec2 d) {
   return std::min(std::min(corner_sj(d, a, b), corner_sj(a, b, c)), std::min(corner_sj(b, c, d), corner_sj(c, d, a)));
 }
+
+/// "(x, y)" for messages that say where something is.
+inline std::string at_text(Vec2 p) { return "(" + std::to_string(p.x) + ", " + std::to_string(p.y) + ")"; }
 
 inline Vec2 lerp(Vec2 a, Vec2 b, double t) { return {a.x + t * (b.x - a.x), a.y + t * (b.y - a.y)}; }
 
