@@ -36,9 +36,13 @@ struct MeshArgs {
 };
 
 int run_mesh(const MeshArgs& args) {
-  std::vector<std::string> repairs;
-  const Region region = read_region(args.input, args.input_options, &repairs);
-  for (const std::string& r : repairs) std::cerr << "warning: repaired: " << r << "\n";
+  InputNotes notes;
+  const Region region = read_input(args.input, args.input_options, notes);
+  for (const std::string& r : notes.repairs) std::cerr << "warning: repaired: " << r << "\n";
+  for (const std::string& w : notes.warnings) std::cerr << "warning: " << w << "\n";
+  for (std::size_t i = 0; i < notes.snaps.size() && i < 5; ++i) std::cerr << "warning: " << notes.snaps[i] << "\n";
+  if (notes.snaps.size() > 5) std::cerr << "warning: ... and " << notes.snaps.size() - 5 << " more snapped points (see the report)\n";
+  if (notes.reprojected) std::cerr << "input in " << notes.input_crs << ", meshed in " << region.crs << " (--size in metres)\n";
   MeshOptions options = args.options;
   options.keep_partition = !args.partition_picture.empty();
   options.map.composition = args.map == "gpm" ? MapComposition::gpm : MapComposition::ppm;
@@ -51,7 +55,10 @@ int run_mesh(const MeshArgs& args) {
   result.report["quality"] = to_json(quality);
   result.report["summary"]["sj_min"] = quality.sj.min;
   result.report["summary"]["interior_singularities"] = quality.interior_singularities;
-  result.report["input"]["repairs"] = repairs;
+  result.report["input"]["repairs"] = notes.repairs;
+  result.report["input"]["snapped"] = notes.snaps;
+  result.report["input"]["warnings"] = notes.warnings;
+  result.report["input"]["input_crs"] = notes.input_crs;
   result.report["domain"] = to_json(domain);
   // Outputs are written only after the whole mesh passed its checks, each atomically.
   write_mesh(args.output, result.mesh, {args.binary});
@@ -131,8 +138,19 @@ int main(int argc, char** argv) {
 
   MeshArgs mesh;
   auto* cmd_mesh = app.add_subcommand("mesh", "mesh a region (GeoJSON) into all quadrilaterals");
-  cmd_mesh->add_option("input", mesh.input, "input region (.geojson)")->required();
-  cmd_mesh->add_option("--size", mesh.options.size, "target quad edge length h, in region units")->required();
+  cmd_mesh->add_option("input", mesh.input,
+                       "input region: GeoJSON, or any vector dataset GDAL reads (.shp, .gpkg, .kml, .gml, .dxf, .fgb); "
+                       "every layer, roles from a 'role' attribute or the geometry type")->required();
+  cmd_mesh->add_option("--features", mesh.input_options.feature_files,
+                       "more vector datasets whose layers are feature curves (repeatable)");
+  cmd_mesh->add_option("--domain-layer", mesh.input_options.domain_layer,
+                       "the input layer that is the domain (the other layers give features)");
+  cmd_mesh->add_option("--feature-layer", mesh.input_options.feature_layers,
+                       "a layer that gives feature curves (repeatable; other feature layers are then skipped)");
+  cmd_mesh->add_option("--where", mesh.input_options.where, "OGR SQL attribute filter applied to every layer read");
+  cmd_mesh->add_option("--crs", mesh.input_options.crs,
+                       "projected CRS to mesh geographic input in, e.g. EPSG:32615 (default: UTM zone of the centre)");
+  cmd_mesh->add_option("--size", mesh.options.size, "target quad edge length h, in region units (metres for geographic input)")->required();
   cmd_mesh->add_option("-o,--output", mesh.output, "output mesh (.msh Gmsh 4.1, .vtu VTK)")->required();
   cmd_mesh->add_option("--report", mesh.report, "write a JSON report (options, timings, counts, quality)");
   cmd_mesh->add_option("--picture", mesh.picture, "write an SVG picture of the mesh coloured by scaled Jacobian");

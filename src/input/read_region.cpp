@@ -9,6 +9,9 @@
 #include "polysquare/io/atomic_file.h"
 #include "polysquare/io/geojson.h"
 #include "polysquare/input/make_valid.h"
+#include "polysquare/input/project_region.h"
+#include "polysquare/input/read_gdal.h"
+#include "polysquare/input/snap_points.h"
 #include "polysquare/input/split_features.h"
 
 namespace polysquare {
@@ -216,14 +219,66 @@ void validate_region(Region& region, const InputOptions& options, std::vector<st
   });
 }
 
-Region read_region(const std::filesystem::path& path, const InputOptions& options, std::vector<std::string>* repairs) {
+namespace {
+
+// Validation names a feature by its index in reading order; for GDAL input that index is spelled out as the
+// file, layer and FID it came from.
+std::string name_feature(const std::string& message, const std::vector<std::string>& names) {
+  const std::size_t at = message.find("feature ");
+  if (at == std::string::npos) return message;
+  std::size_t i = at + 8, index = 0, digits = 0;
+  while (i < message.size() && std::isdigit(static_cast<unsigned char>(message[i])) && digits < 12)
+    index = index * 10 + static_cast<std::size_t>(message[i++] - '0'), ++digits;
+  if (digits == 0 || index >= names.size()) return message;
+  return message + " [feature " + std::to_string(index) + " is " + names[index] + "]";
+}
+
+}  // namespace
+
+Region read_input(const std::filesystem::path& path, const InputOptions& options, InputNotes& notes) {
   const std::string name = path.string();
   std::string ext = path.extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  if (ext != ".geojson" && ext != ".json")
-    throw InputError(name + ": unsupported input format '" + ext + "' (supported: .geojson, .json)");
-  Region region = parse_geojson(read_file(path), name);
-  validate_region(region, options, repairs);
+  const bool selects = !options.domain_layer.empty() || !options.feature_layers.empty() || !options.where.empty();
+  Region region;
+  std::vector<std::string> names;  // per source_feature, for GDAL input only
+  if ((ext == ".geojson" || ext == ".json") && !selects) {
+    region = parse_geojson(read_file(path), name);
+  } else {
+    region.source = name;
+    read_gdal(path, LayerRole::by_geometry, options, region, names, notes);
+  }
+  if (!options.feature_files.empty() && names.empty()) {
+    // The native reader's features keep their index; the feature files' features are numbered after them.
+    int next = 0;
+    for (const Ring& r : region.rings) next = std::max(next, r.source_feature + 1);
+    for (const FeatureCurve& c : region.features) next = std::max(next, c.source_feature + 1);
+    for (int k = 0; k < next; ++k) names.push_back(name + ", feature " + std::to_string(k));
+  }
+  for (const std::filesystem::path& f : options.feature_files) read_gdal(f, LayerRole::feature, options, region, names, notes);
+  for (const std::string& layer : options.feature_layers) {
+    bool found = false;
+    for (const std::string& n : names) found |= n.find(", layer '" + layer + "', ") != std::string::npos;
+    if (!found) throw InputError(name + ": no feature read from a layer '" + layer + "' (--feature-layer)");
+  }
+  if (region.rings.empty())
+    throw InputError(name + ": no domain: no polygon with role \"domain\" was read" +
+                     (names.empty() ? std::string() : " from " + std::to_string(names.size()) + " feature(s)"));
+  try {
+    project_region(region, options.crs, notes);
+    snap_near_coincident(region, options.snap_relative, &notes.snaps);
+    validate_region(region, options, &notes.repairs);
+  } catch (const InputError& e) {
+    if (names.empty()) throw;
+    throw InputError(name_feature(e.what(), names));
+  }
+  return region;
+}
+
+Region read_region(const std::filesystem::path& path, const InputOptions& options, std::vector<std::string>* repairs) {
+  InputNotes notes;
+  Region region = read_input(path, options, notes);
+  if (repairs) repairs->insert(repairs->end(), notes.repairs.begin(), notes.repairs.end());
   return region;
 }
 

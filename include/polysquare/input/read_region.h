@@ -14,6 +14,23 @@ struct InputOptions {
   bool repair = false;  ///< fix what a user would want fixed instead of refusing: make invalid polygons valid
                         ///< (GEOS through GDAL), drop repeated consecutive points, clip feature curves that
                         ///< cross a hole (each repair is reported)
+  // Files read through GDAL/OGR (every layer of every file, unless selected below).
+  std::vector<std::filesystem::path> feature_files;  ///< more datasets whose layers give feature curves (--features)
+  std::string domain_layer;                 ///< only this layer gives the domain (--domain-layer); empty: roles
+  std::vector<std::string> feature_layers;  ///< only these layers give features (--feature-layer); empty: roles
+  std::string where;                        ///< OGR SQL attribute filter on every layer read (--where)
+  std::string crs;  ///< projected CRS to mesh geographic input in (--crs "EPSG:n"); empty: UTM zone of the centre
+  double snap_relative = 1e-9;  ///< end points and feature points this close (times the bounding-box diagonal)
+                                ///< to a vertex or a curve are moved onto it (reported)
+};
+
+/// What reading changed or doubts, for the CLI and the report (one sentence each, naming file and coordinate).
+struct InputNotes {
+  std::vector<std::string> repairs;   ///< fixes made because of InputOptions::repair
+  std::vector<std::string> snaps;     ///< near-coincident points moved onto a vertex or curve
+  std::vector<std::string> warnings;  ///< e.g. coordinates that look like degrees in input without a CRS
+  std::string input_crs;              ///< CRS of the file as read ("EPSG:4326"); empty when it names none
+  bool reprojected = false;           ///< coordinates were projected from input_crs to Region::crs
 };
 
 /// Checks and normalizes a parsed region: finite coordinates below max_abs_coordinate; duplicate consecutive
@@ -24,7 +41,13 @@ struct InputOptions {
 /// With options.repair, each repair made is appended to `repairs` (a sentence naming the feature and coordinate).
 void validate_region(Region& region, const InputOptions& options = {}, std::vector<std::string>* repairs = nullptr);
 
-/// Reads `path` (GeoJSON: .geojson or .json) and validates it. Throws InputError on any problem.
+/// Reads `path` and options.feature_files, projects geographic coordinates (project_region), snaps
+/// near-coincident points (snap_near_coincident) and validates the result. GeoJSON (.geojson, .json) is parsed
+/// natively unless layers or a filter are selected; every other format, and the feature files, go through
+/// GDAL/OGR (read_gdal). Both paths feed the same projection, snapping and validation. Throws InputError.
+Region read_input(const std::filesystem::path& path, const InputOptions& options, InputNotes& notes);
+
+/// read_input, keeping only the repairs.
 Region read_region(const std::filesystem::path& path, const InputOptions& options = {},
                    std::vector<std::string>* repairs = nullptr);
 

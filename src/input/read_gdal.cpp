@@ -1,0 +1,278 @@
+#include "polysquare/input/read_gdal.h"
+
+#include <cpl_error.h>
+#include <gdal_priv.h>
+#include <ogr_spatialref.h>
+#include <ogrsf_frmts.h>
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <memory>
+#include <mutex>
+#include <sstream>
+
+#include "polysquare/core/error.h"
+
+namespace polysquare {
+namespace {
+
+struct DatasetCloser {
+  void operator()(GDALDataset* ds) const { GDALClose(ds); }
+};
+using Dataset = std::unique_ptr<GDALDataset, DatasetCloser>;
+
+// GDAL's default handler prints to stderr; its messages are folded into our errors instead.
+struct QuietErrors {
+  QuietErrors() { CPLPushErrorHandler(CPLQuietErrorHandler); CPLErrorReset(); }
+  ~QuietErrors() { CPLPopErrorHandler(); }
+};
+
+std::string gdal_message() {
+  const char* m = CPLGetLastErrorMsg();
+  return m && *m ? std::string(": ") + m : std::string();
+}
+
+std::string pt(Vec2 p) {
+  std::ostringstream os;
+  os.precision(12);
+  os << "(" << p.x << ", " << p.y << ")";
+  return os.str();
+}
+
+Dataset open_vector(const std::filesystem::path& path) {
+  static std::once_flag once;
+  std::call_once(once, [] { GDALAllRegister(); });
+  // NATIVE_DATA keeps the GeoJSON collection's own members, to see whether it has a "crs" member at all.
+  const char* open_options[] = {"NATIVE_DATA=YES", nullptr};
+  Dataset ds(static_cast<GDALDataset*>(
+      GDALOpenEx(path.c_str(), GDAL_OF_VECTOR | GDAL_OF_READONLY, nullptr, open_options, nullptr)));
+  if (!ds)
+    throw InputError(path.string() + ": not a vector dataset GDAL can read (Shapefile, GeoPackage, GeoJSON, KML, GML, "
+                     "DXF, FlatGeobuf, ...)" + gdal_message());
+  if (ds->GetLayerCount() == 0) throw InputError(path.string() + ": no vector layer");
+  return ds;
+}
+
+// The layer's CRS, or null when it has none. GDAL's GeoJSON driver assumes WGS 84 when the file has no "crs"
+// member; the native reader takes such a file as planar, and both readers must agree.
+const OGRSpatialReference* layer_srs(GDALDataset& ds, OGRLayer& layer) {
+  const OGRSpatialReference* srs = layer.GetSpatialRef();
+  if (!srs || !EQUAL(ds.GetDriverName(), "GeoJSON")) return srs;
+  const char* native = layer.GetMetadataItem("NATIVE_DATA", "NATIVE_DATA");
+  const nlohmann::json members = nlohmann::json::parse(native ? native : "{}", nullptr, false);
+  return members.is_object() && members.contains("crs") ? srs : nullptr;
+}
+
+std::string crs_name(const OGRSpatialReference& srs) {
+  const char* auth = srs.GetAuthorityName(nullptr);
+  const char* code = srs.GetAuthorityCode(nullptr);
+  if (auth && code && EQUAL(auth, "EPSG")) return std::string("EPSG:") + code;
+  OGRSpatialReference copy(srs);
+  if (copy.AutoIdentifyEPSG() == OGRERR_NONE && copy.GetAuthorityCode(nullptr))
+    return std::string("EPSG:") + copy.GetAuthorityCode(nullptr);
+  char* wkt = nullptr;
+  const char* wkt_options[] = {"FORMAT=WKT2_2019", nullptr};
+  srs.exportToWkt(&wkt, wkt_options);
+  std::string out = wkt ? wkt : "";
+  CPLFree(wkt);
+  return out;
+}
+
+// Where one feature came from, and the region being filled.
+struct Reader {
+  Region& region;
+  std::vector<std::string>& names;
+  std::string where;  // "FILE, layer 'L', FID n", for messages
+  int source = -1;
+  const OGRCoordinateTransformation* transform = nullptr;
+
+  [[noreturn]] void fail(const std::string& what) const { throw InputError(where + ": " + what); }
+
+  std::vector<Vec2> points(const OGRSimpleCurve& curve) const {
+    std::vector<Vec2> out(static_cast<std::size_t>(curve.getNumPoints()));
+    std::vector<double> x(out.size()), y(out.size());
+    for (std::size_t i = 0; i < out.size(); ++i) {
+      x[i] = curve.getX(static_cast<int>(i));
+      y[i] = curve.getY(static_cast<int>(i));
+    }
+    to_region_crs(x, y);
+    for (std::size_t i = 0; i < out.size(); ++i) out[i] = {x[i], y[i]};
+    return out;
+  }
+
+  void to_region_crs(std::vector<double>& x, std::vector<double>& y) const {
+    if (!transform || x.empty()) return;
+    std::vector<int> ok(x.size(), 0);
+    const_cast<OGRCoordinateTransformation*>(transform)->Transform(x.size(), x.data(), y.data(), nullptr, ok.data());
+    for (std::size_t i = 0; i < x.size(); ++i)
+      if (!ok[i]) fail("cannot transform the point " + pt({x[i], y[i]}) + " into the region's CRS");
+  }
+
+  // As for GeoJSON: a ring repeats its first point at the end; the repeat is dropped here.
+  std::vector<Vec2> ring(const OGRLinearRing& r, int index) const {
+    std::vector<Vec2> pts = points(r);
+    if (pts.size() < 4)
+      fail("ring " + std::to_string(index) + " has " + std::to_string(pts.size()) +
+           " positions; a closed ring needs at least 4");
+    if (!(pts.front() == pts.back()))
+      fail("ring " + std::to_string(index) + " is not closed: first point " + pt(pts.front()) + " differs from last point " +
+           pt(pts.back()));
+    pts.pop_back();
+    return pts;
+  }
+
+  void add(const OGRGeometry& g, bool domain) {
+    if (g.IsEmpty()) return;
+    if (g.hasCurveGeometry()) {  // arcs (GML, DXF) become polylines at GDAL's default step
+      std::unique_ptr<OGRGeometry> linear(g.getLinearGeometry());
+      if (!linear) fail("cannot linearize a " + std::string(g.getGeometryName()));
+      add(*linear, domain);
+      return;
+    }
+    switch (wkbFlatten(g.getGeometryType())) {
+      case wkbPolygon: {
+        const auto& poly = *g.toPolygon();
+        if (domain) {
+          const int part = region.num_parts++;
+          for (int k = 0; k <= poly.getNumInteriorRings(); ++k) {
+            const OGRLinearRing* r = k == 0 ? poly.getExteriorRing() : poly.getInteriorRing(k - 1);
+            region.rings.push_back({ring(*r, k), part, k > 0, source});
+          }
+        } else {  // a polygon feature is a closed curve along its outer ring, as for GeoJSON
+          region.features.push_back({ring(*poly.getExteriorRing(), 0), true, source});
+        }
+        return;
+      }
+      case wkbLineString:
+      case wkbLinearRing:
+        if (domain) fail("a domain must be a polygon, got a line string (give it the role \"feature\")");
+        if (wkbFlatten(g.getGeometryType()) == wkbLinearRing)
+          region.features.push_back({ring(*g.toLinearRing(), 0), true, source});
+        else
+          region.features.push_back({points(*g.toLineString()), false, source});
+        return;
+      case wkbPoint: {
+        if (domain) fail("a domain must be a polygon, got a point");
+        std::vector<double> x{g.toPoint()->getX()}, y{g.toPoint()->getY()};
+        to_region_crs(x, y);
+        region.feature_points.push_back({x[0], y[0]});
+        return;
+      }
+      case wkbMultiPolygon:
+      case wkbMultiLineString:
+      case wkbMultiPoint:
+      case wkbGeometryCollection:
+        for (const OGRGeometry* part : *g.toGeometryCollection()) add(*part, domain);
+        return;
+      default:
+        fail("unsupported geometry " + std::string(g.getGeometryName()) +
+             " (expected polygons for the domain, lines and points for features)");
+    }
+  }
+};
+
+bool contains(const std::vector<std::string>& names, const std::string& name) {
+  return std::find(names.begin(), names.end(), name) != names.end();
+}
+
+}  // namespace
+
+std::vector<std::string> gdal_layer_names(const std::filesystem::path& path) {
+  QuietErrors quiet;
+  Dataset ds = open_vector(path);
+  std::vector<std::string> names;
+  for (OGRLayer* layer : ds->GetLayers()) names.push_back(layer->GetName());
+  return names;
+}
+
+void read_gdal(const std::filesystem::path& path, LayerRole default_role, const InputOptions& options, Region& region,
+               std::vector<std::string>& feature_names, InputNotes& notes) {
+  QuietErrors quiet;
+  const std::string file = path.string();
+  Dataset ds = open_vector(path);
+  std::vector<std::string> layer_names;
+  for (OGRLayer* layer : ds->GetLayers()) layer_names.push_back(layer->GetName());
+  auto list = [&] {
+    std::string s;
+    for (const std::string& n : layer_names) s += (s.empty() ? "'" : ", '") + n + "'";
+    return s;
+  };
+  // A --domain-layer belongs to the main input; --feature-layer names may be in any file, checked by the caller.
+  if (default_role == LayerRole::by_geometry && !options.domain_layer.empty() && !contains(layer_names, options.domain_layer))
+    throw InputError(file + ": no layer '" + options.domain_layer + "' (--domain-layer); its layers are " + list());
+
+  OGRSpatialReference region_srs;
+  region_srs.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
+  bool have_region_srs = false;
+  if (!region.crs.empty()) {
+    const char* no_io[] = {"ALLOW_NETWORK_ACCESS=NO", "ALLOW_FILE_ACCESS=NO", nullptr};
+    have_region_srs = region_srs.SetFromUserInput(region.crs.c_str(), no_io) == OGRERR_NONE;
+  }
+  for (OGRLayer* layer : ds->GetLayers()) {
+    const std::string name = layer->GetName();
+    // Which role this layer's geometries take: forced by a layer option, else the attribute or the default.
+    enum class Mode { skip, by_attribute, domain, feature } mode = Mode::by_attribute;
+    if (name == options.domain_layer && default_role == LayerRole::by_geometry) mode = Mode::domain;
+    else if (contains(options.feature_layers, name)) mode = Mode::feature;
+    else if (!options.feature_layers.empty() && (default_role == LayerRole::feature || !options.domain_layer.empty())) mode = Mode::skip;
+    else if (!options.domain_layer.empty()) mode = Mode::feature;
+    if (mode == Mode::skip) continue;
+
+    if (!options.where.empty() && layer->SetAttributeFilter(options.where.c_str()) != OGRERR_NONE)
+      throw InputError(file + ", layer '" + name + "': --where \"" + options.where + "\" is not a valid filter here" +
+                       gdal_message());
+    std::unique_ptr<OGRCoordinateTransformation> transform;
+    if (const OGRSpatialReference* srs = layer_srs(*ds, *layer)) {
+      OGRSpatialReference layer_srs_gis(*srs);
+      layer_srs_gis.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
+      if (!have_region_srs && region.rings.empty() && region.features.empty() && region.feature_points.empty()) {
+        region_srs = layer_srs_gis;
+        have_region_srs = true;
+        region.crs = crs_name(layer_srs_gis);
+      } else if (!have_region_srs) {
+        notes.warnings.push_back(file + ", layer '" + name + "' is in " + crs_name(layer_srs_gis) +
+                                 " but what was read before names no CRS; its coordinates are taken as they are");
+      } else if (!layer_srs_gis.IsSame(&region_srs)) {
+        transform.reset(OGRCreateCoordinateTransformation(&layer_srs_gis, &region_srs));
+        if (!transform)
+          throw InputError(file + ", layer '" + name + "': cannot transform from " + crs_name(layer_srs_gis) + " to " +
+                           region.crs + gdal_message());
+      }
+    }
+    const int role_field = layer->GetLayerDefn()->GetFieldIndex("role");
+    CPLErrorReset();
+    layer->ResetReading();
+    for (auto& feature : *layer) {
+      Reader reader{region, feature_names,
+                    file + ", layer '" + name + "', FID " + std::to_string(feature->GetFID()),
+                    static_cast<int>(feature_names.size()), transform.get()};
+      feature_names.push_back(reader.where);
+      const OGRGeometry* g = feature->GetGeometryRef();
+      if (!g) reader.fail("the feature has no geometry");
+      bool is_domain = false;
+      if (mode == Mode::domain || mode == Mode::feature) {
+        is_domain = mode == Mode::domain;
+      } else {
+        std::string role;
+        if (role_field >= 0 && feature->IsFieldSetAndNotNull(role_field)) role = feature->GetFieldAsString(role_field);
+        if (role.empty()) {
+          const OGRwkbGeometryType t = wkbFlatten(g->getGeometryType());
+          is_domain = default_role == LayerRole::by_geometry &&
+                      (t == wkbPolygon || t == wkbMultiPolygon || t == wkbCurvePolygon || t == wkbMultiSurface);
+        } else if (role == "domain" || role == "feature") {
+          is_domain = role == "domain";
+        } else {
+          reader.fail("unknown role \"" + role + "\" (expected \"domain\" or \"feature\")");
+        }
+      }
+      reader.add(*g, is_domain);
+    }
+    // Some drivers (GeoPackage) only run the filter while reading and then stop early without a feature.
+    if (CPLGetLastErrorType() == CE_Failure)
+      throw InputError(file + ", layer '" + name + "': reading failed" +
+                       (options.where.empty() ? std::string() : " (--where \"" + options.where + "\")") + gdal_message());
+  }
+}
+
+}  // namespace polysquare
