@@ -1,1 +1,19 @@
 list(APPEND TEST_SOURCES io/test_mesh_io.cpp)
+
+# deal.II as an independent reader of our MSH files, when it is installed (Debian: libdeal.ii-dev, about 200
+# packages and 1 GB, so scripts/install-deps does not pull it in; the test skips without it). deal.II's CMake
+# setup changes compiler flags, so only its own small target uses it, and only in plain Release/Debug builds.
+option(POLYSQUARE_DEALII_TEST "Build the deal.II reader test when deal.II is found" ON)
+if(POLYSQUARE_DEALII_TEST AND NOT POLYSQUARE_SANITIZE AND NOT POLYSQUARE_FUZZ
+   AND CMAKE_BUILD_TYPE MATCHES "^(Release|Debug)$")
+  find_package(deal.II 9.3 QUIET HINTS /usr/share/cmake/deal.II)
+  if(deal.II_FOUND)
+    message(STATUS "deal.II ${DEAL_II_PACKAGE_VERSION} found: building the deal.II MSH reader test")
+    add_executable(dealii_read_msh ${CMAKE_CURRENT_SOURCE_DIR}/io/dealii_read_msh.cpp)
+    deal_ii_setup_target(dealii_read_msh)
+    set_source_files_properties(io/test_mesh_io.cpp PROPERTIES
+      COMPILE_DEFINITIONS "POLYSQUARE_DEALII_READER=\"$<TARGET_FILE:dealii_read_msh>\"")
+  else()
+    message(STATUS "deal.II not found: the deal.II MSH reader test will be skipped")
+  endif()
+endif()

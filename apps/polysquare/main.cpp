@@ -31,6 +31,7 @@ void on_signal(int sig) {
 struct MeshArgs {
   std::string input, output, report, picture, partition_picture, map = "ppm";
   bool binary = false, bend_interfaces = false;
+  std::string msh_version = "2.2", msh_features = "nodes";
   InputOptions input_options;
   MeshOptions options;
 };
@@ -61,7 +62,11 @@ int run_mesh(const MeshArgs& args) {
   result.report["input"]["input_crs"] = notes.input_crs;
   result.report["domain"] = to_json(domain);
   // Outputs are written only after the whole mesh passed its checks, each atomically.
-  write_mesh(args.output, result.mesh, {args.binary});
+  const MeshWriteOptions write{args.binary,
+                               args.msh_features == "lines" ? MshFeatures::lines
+                               : args.msh_features == "none" ? MshFeatures::none : MshFeatures::nodes,
+                               args.msh_version == "4.1" ? MshVersion::v4_1 : MshVersion::v2_2};
+  write_mesh(args.output, result.mesh, write);
   if (!args.report.empty())
     write_file_atomically(args.report, [&](std::ostream& os) { os << result.report.dump(2) << "\n"; }, false);
   if (!args.picture.empty()) write_svg(args.picture, result.mesh, &region);
@@ -111,9 +116,13 @@ int run_mesh(const MeshArgs& args) {
   return 0;
 }
 
-int run_quality(const std::string& mesh_path, const std::string& domain_path, bool json) {
+int run_quality(const std::string& mesh_path, const std::string& domain_path, bool json, bool require_quads) {
   const QuadMesh mesh = read_mesh(mesh_path);
   const QualityReport quality = compute_quality(mesh);
+  // Shape figures cover quads only, so a mesh of triangles would otherwise read as SJ 0 and pass.
+  if (quality.triangles > 0)
+    std::cerr << (require_quads ? "error: " : "warning: ") << mesh_path << " has " << quality.triangles
+              << " triangles beside " << quality.quads << " quads; quality figures cover the quads only\n";
   std::optional<DomainDistance> domain;
   if (!domain_path.empty()) domain = domain_distance(mesh, read_region(domain_path));
   if (json) {
@@ -123,7 +132,7 @@ int run_quality(const std::string& mesh_path, const std::string& domain_path, bo
   } else {
     std::cout << format_quality_text(quality, domain ? &*domain : nullptr);
   }
-  return 0;
+  return require_quads && quality.triangles > 0 ? 2 : 0;
 }
 
 }  // namespace
@@ -135,6 +144,7 @@ int main(int argc, char** argv) {
 
   CLI::App app{"polysquare: feature-aligned semi-structured quad meshes of 2D regions"};
   app.require_subcommand(1);
+  app.set_version_flag("--version", std::string("polysquare ") + library_version());
 
   MeshArgs mesh;
   auto* cmd_mesh = app.add_subcommand("mesh", "mesh a region (GeoJSON) into all quadrilaterals");
@@ -194,15 +204,24 @@ int main(int argc, char** argv) {
                        "largest distance between a feature curve and the mesh edges along it, as a fraction of the size")
       ->check(CLI::PositiveNumber)->capture_default_str();
   cmd_mesh->add_flag("--binary", mesh.binary, "write binary MSH");
+  cmd_mesh->add_option("--msh-version", mesh.msh_version,
+                       "MSH version: 2.2 (read by Gmsh, meshio, deal.II, MFEM, MOOSE, DUNE) or 4.1 (Gmsh's current; "
+                       "not MFEM or DUNE)")
+      ->check(CLI::IsMember({"2.2", "4.1"}))->capture_default_str();
+  cmd_mesh->add_option("--msh-features", mesh.msh_features,
+                       "feature curves in MSH: nodes (a physical point group per curve; every reader takes the file), "
+                       "lines (physical curves of line elements; deal.II refuses them) or none")
+      ->check(CLI::IsMember({"nodes", "lines", "none"}))->capture_default_str();
   cmd_mesh->add_flag("--repair", mesh.input_options.repair,
                      "drop repeated points and clip features crossing holes instead of refusing the input (reported)");
 
   std::string quality_mesh, quality_domain;
-  bool quality_json = false;
+  bool quality_json = false, quality_require_quads = false;
   auto* cmd_quality = app.add_subcommand("quality", "report the quality of a mesh (MSH 2.2/4.1, VTU)");
   cmd_quality->add_option("mesh", quality_mesh, "mesh file")->required();
   cmd_quality->add_option("--domain", quality_domain, "input region, to measure boundary and feature distances");
   cmd_quality->add_flag("--json", quality_json, "print JSON");
+  cmd_quality->add_flag("--require-quads", quality_require_quads, "exit 2 if the mesh has triangles");
 
   try {
     app.parse(argc, argv);
@@ -213,7 +232,7 @@ int main(int argc, char** argv) {
   }
   try {
     if (*cmd_mesh) return run_mesh(mesh);
-    if (*cmd_quality) return run_quality(quality_mesh, quality_domain, quality_json);
+    if (*cmd_quality) return run_quality(quality_mesh, quality_domain, quality_json, quality_require_quads);
   } catch (const InputError& e) {
     std::cerr << "error: " << e.what() << "\n";
     return 2;

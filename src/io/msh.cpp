@@ -1,7 +1,8 @@
-// Gmsh MSH reader (2.2 and 4.1, ASCII and binary little-endian) and MSH 4.1 writer.
+// Gmsh MSH reader (2.2 and 4.1, ASCII and binary little-endian) and writer (2.2 and 4.1).
 #include <algorithm>
 #include <cstring>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <sstream>
 #include <unordered_map>
@@ -63,9 +64,10 @@ struct Cursor {
 struct Builder {
   QuadMesh mesh;
   std::unordered_map<long long, std::int32_t> node_index;
-  std::map<int, std::string> physical_names;  // (tag) -> name, dimension 1 only
-  std::map<int, int> curve_entity_physical;   // 4.1: curve entity tag -> physical tag
-  std::map<std::string, int> curve_ids;       // "boundary"/"feature" name -> running index
+  std::map<int, std::string> physical_names[2];  // per dimension 0 and 1: tag -> name
+  std::map<int, int> entity_physical[2];         // 4.1, per dimension 0 and 1: entity tag -> physical tag
+  std::map<std::string, int> curve_ids;          // "boundary"/"feature" name -> ring or curve index
+  std::map<std::string, std::vector<std::int32_t>> feature_points;  // "feature*" point group -> its nodes
   void node(long long tag, double x, double y) {
     node_index[tag] = static_cast<std::int32_t>(mesh.nodes.size());
     mesh.nodes.push_back({x, y});
@@ -75,18 +77,71 @@ struct Builder {
     if (it == node_index.end()) c.fail("element refers to unknown node " + std::to_string(tag));
     return it->second;
   }
+  // The index our writer put after the last '_' ("boundary_ring_3" -> 3), so files round-trip; other names get
+  // the next free index.
+  int curve_id(const std::string& name) {
+    auto it = curve_ids.find(name);
+    if (it != curve_ids.end()) return it->second;
+    int id = -1;
+    const std::size_t cut = name.rfind('_');
+    if (cut != std::string::npos && cut + 1 < name.size() && cut + 7 > name.size() &&
+        name.find_first_not_of("0123456789", cut + 1) == std::string::npos)
+      id = std::stoi(name.substr(cut + 1));
+    const bool boundary = name.rfind("boundary", 0) == 0;
+    for (const auto& [other, used] : curve_ids)
+      if (used == id && (other.rfind("boundary", 0) == 0) == boundary) id = -1;
+    if (id < 0) {
+      id = 0;
+      for (const auto& [other, used] : curve_ids)
+        if ((other.rfind("boundary", 0) == 0) == boundary) id = std::max(id, used + 1);
+    }
+    return curve_ids[name] = id;
+  }
   void element(int type, int physical, const std::vector<long long>& nodes, const Cursor& c) {
     if (type == 3) mesh.quads.push_back({at(nodes[0], c), at(nodes[1], c), at(nodes[2], c), at(nodes[3], c)});
     else if (type == 2) mesh.triangles.push_back({at(nodes[0], c), at(nodes[1], c), at(nodes[2], c)});
-    else if (type == 1) {
-      auto it = physical_names.find(physical);
-      if (it == physical_names.end()) return;
+    else if (type == 15) {
+      auto it = physical_names[0].find(physical);
+      if (it != physical_names[0].end() && it->second.rfind("feature", 0) == 0) feature_points[it->second].push_back(at(nodes[0], c));
+    } else if (type == 1) {
+      auto it = physical_names[1].find(physical);
+      if (it == physical_names[1].end()) return;
       const std::string& n = it->second;
       const std::array<std::int32_t, 2> e{at(nodes[0], c), at(nodes[1], c)};
-      const int id = curve_ids.try_emplace(n, static_cast<int>(curve_ids.size())).first->second;
+      const int id = curve_id(n);
       if (n.rfind("boundary", 0) == 0) { mesh.boundary_edges.push_back(e); mesh.boundary_edge_ring.push_back(id); }
       else if (n.rfind("feature", 0) == 0) { mesh.feature_edges.push_back(e); mesh.feature_edge_curve.push_back(id); }
     }
+  }
+  // A curve written as a point group becomes the cell edges joining two of its nodes (a group that also has
+  // line elements keeps those). One pass over the cell edges, each looked up in the groups of its two ends.
+  void feature_edges_from_points() {
+    std::unordered_map<std::int32_t, std::vector<int>> groups_of;
+    for (const auto& [name, nodes] : feature_points) {
+      if (curve_ids.count(name)) continue;
+      const int id = curve_id(name);
+      for (auto v : nodes) {
+        auto& g = groups_of[v];
+        if (std::find(g.begin(), g.end(), id) == g.end()) g.push_back(id);
+      }
+    }
+    if (groups_of.empty()) return;
+    std::unordered_map<std::uint64_t, bool> seen;
+    auto edge = [&](std::int32_t a, std::int32_t b) {
+      auto ia = groups_of.find(a), ib = groups_of.find(b);
+      if (ia == groups_of.end() || ib == groups_of.end()) return;
+      const auto lo = static_cast<std::uint64_t>(std::min(a, b)), hi = static_cast<std::uint64_t>(std::max(a, b));
+      if (!seen.emplace(lo << 32 | hi, true).second) return;
+      for (int g : ia->second)
+        if (std::find(ib->second.begin(), ib->second.end(), g) != ib->second.end()) {
+          mesh.feature_edges.push_back({a, b});
+          mesh.feature_edge_curve.push_back(g);
+        }
+    };
+    for (const auto& q : mesh.quads)
+      for (int k = 0; k < 4; ++k) edge(q[k], q[(k + 1) % 4]);
+    for (const auto& t : mesh.triangles)
+      for (int k = 0; k < 3; ++k) edge(t[k], t[(k + 1) % 3]);
   }
 };
 
@@ -114,7 +169,7 @@ void read_physical_names(Cursor& c, Builder& b) {
       if (name.size() > 1000) c.fail("unterminated physical name");
       name += " " + c.token();
     }
-    if (dim == 1) b.physical_names[static_cast<int>(tag)] = name.substr(1, name.size() - 2);
+    if (dim == 0 || dim == 1) b.physical_names[dim][static_cast<int>(tag)] = name.substr(1, name.size() - 2);
   }
   c.expect("$EndPhysicalNames");
 }
@@ -182,9 +237,10 @@ void read_v4(Cursor& c, Builder& b, bool binary) {
     } else if (section == "$Entities") {
       const long long np = size(), nc = size(), ns = size(), nv = size();
       for (long long i = 0; i < np; ++i) {
-        i32(); for (int k = 0; k < 3; ++k) f64();
+        const int tag = i32();
+        for (int k = 0; k < 3; ++k) f64();
         const std::size_t nphys = c.count(size(), 4);
-        for (std::size_t k = 0; k < nphys; ++k) i32();
+        for (std::size_t k = 0; k < nphys; ++k) { const int p = i32(); if (k == 0) b.entity_physical[0][tag] = p; }
       }
       for (long long dim = 1; dim <= 3; ++dim) {
         const long long n = dim == 1 ? nc : (dim == 2 ? ns : nv);
@@ -192,7 +248,7 @@ void read_v4(Cursor& c, Builder& b, bool binary) {
           const int tag = i32();
           for (int k = 0; k < 6; ++k) f64();
           const std::size_t nphys = c.count(size(), 4);
-          for (std::size_t k = 0; k < nphys; ++k) { const int p = i32(); if (dim == 1 && k == 0) b.curve_entity_physical[tag] = p; }
+          for (std::size_t k = 0; k < nphys; ++k) { const int p = i32(); if (dim == 1 && k == 0) b.entity_physical[1][tag] = p; }
           const std::size_t nb = c.count(size(), 4);
           for (std::size_t k = 0; k < nb; ++k) i32();
         }
@@ -226,7 +282,11 @@ void read_v4(Cursor& c, Builder& b, bool binary) {
         const int dim = i32(), entity = i32(), type = i32();
         const std::size_t n = c.count(size(), 8);
         const int nn = nodes_per_element(type, c);
-        const int physical = dim == 1 && b.curve_entity_physical.count(entity) ? b.curve_entity_physical[entity] : 0;
+        int physical = 0;
+        if (dim == 0 || dim == 1) {
+          auto it = b.entity_physical[dim].find(entity);
+          if (it != b.entity_physical[dim].end()) physical = it->second;
+        }
         for (std::size_t i = 0; i < n; ++i) {
           size();
           nodes.assign(static_cast<std::size_t>(nn), 0);
@@ -262,68 +322,177 @@ QuadMesh parse_msh(const std::string& data, const std::string& name) {
   else if (version.rfind("4.", 0) == 0) read_v4(c, b, binary);
   else c.fail("unsupported MSH version " + version);
   if (b.mesh.quads.empty() && b.mesh.triangles.empty()) throw InputError(name + ": the mesh has no quads or triangles");
+  b.feature_edges_from_points();
   return std::move(b.mesh);
 }
 
-void write_msh(const std::filesystem::path& path, const QuadMesh& mesh, const MeshWriteOptions& options) {
-  // One curve entity (and physical curve) per boundary ring and per feature curve, one surface for the quads.
-  std::map<int, std::vector<std::size_t>> rings, curves;
-  for (std::size_t e = 0; e < mesh.boundary_edges.size(); ++e) rings[mesh.boundary_edge_ring[e]].push_back(e);
-  for (std::size_t e = 0; e < mesh.feature_edges.size(); ++e) curves[mesh.feature_edge_curve[e]].push_back(e);
-  struct Curve { std::string name; const std::vector<std::array<std::int32_t, 2>>* edges; const std::vector<std::size_t>* ids; };
-  std::vector<Curve> entities;
-  for (const auto& [r, ids] : rings) entities.push_back({"boundary_ring_" + std::to_string(r), &mesh.boundary_edges, &ids});
-  for (const auto& [c, ids] : curves) entities.push_back({"feature_" + std::to_string(c), &mesh.feature_edges, &ids});
-  const bool bin = options.binary;
-  Box2 box;
-  for (Vec2 p : mesh.nodes) box.add(p);
+namespace {
 
+// What goes into the file besides the quads: one physical group (and one entity) per boundary ring and per
+// feature curve, lines or points.
+struct Group {
+  int dim = 1;      // 1: line elements, 0: point elements
+  int entity = 0;   // entity (elementary) tag, counted per dimension from 1
+  int physical = 0;
+  std::string name;
+  std::vector<std::array<std::int32_t, 2>> lines;
+  std::vector<std::int32_t> points;
+  Box2 box;
+};
+
+std::vector<Group> msh_groups(const QuadMesh& mesh, MshFeatures features) {
+  std::map<int, std::vector<std::array<std::int32_t, 2>>> rings, curves;
+  for (std::size_t e = 0; e < mesh.boundary_edges.size(); ++e) rings[mesh.boundary_edge_ring[e]].push_back(mesh.boundary_edges[e]);
+  if (features != MshFeatures::none)
+    for (std::size_t e = 0; e < mesh.feature_edges.size(); ++e) curves[mesh.feature_edge_curve[e]].push_back(mesh.feature_edges[e]);
+  std::vector<Group> groups;
+  int entities[2] = {0, 0};
+  // Physical tags do not depend on the feature mode, so boundary ids stay the same in every file.
+  auto add = [&](const std::string& name, int dim, std::vector<std::array<std::int32_t, 2>> edges) {
+    Group g;
+    g.dim = dim;
+    g.entity = ++entities[dim];
+    g.physical = static_cast<int>(groups.size()) + 2;
+    g.name = name;
+    for (const auto& e : edges) g.box.add(mesh.nodes[e[0]]), g.box.add(mesh.nodes[e[1]]);
+    if (dim == 1) g.lines = std::move(edges);
+    else {
+      std::unordered_map<std::int32_t, bool> seen;
+      for (const auto& e : edges)
+        for (auto v : e)
+          if (seen.emplace(v, true).second) g.points.push_back(v);
+    }
+    groups.push_back(std::move(g));
+  };
+  for (auto& [r, edges] : rings) add("boundary_ring_" + std::to_string(r), 1, std::move(edges));
+  for (auto& [c, edges] : curves) add("feature_" + std::to_string(c), features == MshFeatures::lines ? 1 : 0, std::move(edges));
+  return groups;
+}
+
+// ASCII or little-endian binary values in the layout both MSH versions share.
+struct MshStream {
+  std::ostream& os;
+  bool bin;
+  void size(std::uint64_t v) { if (bin) os.write(reinterpret_cast<const char*>(&v), 8); else os << v; }
+  void i32(int v) { if (bin) os.write(reinterpret_cast<const char*>(&v), 4); else os << v; }
+  void f64(double v) { if (bin) os.write(reinterpret_cast<const char*>(&v), 8); else os << v; }
+  void sep(const char* s) { if (!bin) os << s; }
+  void end_binary() { if (bin) os << "\n"; }
+};
+
+void write_physical_names(std::ostream& os, const std::vector<Group>& groups) {
+  os << "$PhysicalNames\n" << groups.size() + 1 << "\n2 1 \"domain\"\n";
+  for (const Group& g : groups) os << g.dim << " " << g.physical << " \"" << g.name << "\"\n";
+  os << "$EndPhysicalNames\n";
+}
+
+void write_v41(MshStream& w, const QuadMesh& mesh, const std::vector<Group>& groups) {
+  std::ostream& os = w.os;
+  Box2 all;
+  for (Vec2 p : mesh.nodes) all.add(p);
+  std::size_t count[2] = {0, 0};
+  for (const Group& g : groups) count[g.dim]++;
+  os << "$Entities\n";
+  w.size(count[0]); w.sep(" "); w.size(count[1]); w.sep(" "); w.size(1); w.sep(" "); w.size(0); w.sep("\n");
+  auto bbox = [&](const Box2& b) {
+    for (double v : {b.lo.x, b.lo.y, 0.0, b.hi.x, b.hi.y, 0.0}) { w.f64(v); w.sep(" "); }
+  };
+  for (int dim : {0, 1})
+    for (const Group& g : groups) {
+      if (g.dim != dim) continue;
+      w.i32(g.entity); w.sep(" ");
+      if (dim == 0) {  // a point entity has one position: the group's first node
+        const Vec2 p = mesh.nodes[g.points.front()];
+        w.f64(p.x); w.sep(" "); w.f64(p.y); w.sep(" "); w.f64(0); w.sep(" ");
+      } else {
+        bbox(g.box);
+      }
+      w.size(1); w.sep(" "); w.i32(g.physical); w.sep(" ");
+      if (dim == 1) { w.size(0); w.sep(" "); }
+      w.sep("\n");
+    }
+  w.i32(1); w.sep(" "); bbox(all); w.size(1); w.sep(" "); w.i32(1); w.sep(" "); w.size(0); w.sep("\n");
+  w.end_binary();
+  os << "$EndEntities\n$Nodes\n";
+  const std::uint64_t nn = mesh.nodes.size();
+  w.size(1); w.sep(" "); w.size(nn); w.sep(" "); w.size(1); w.sep(" "); w.size(nn); w.sep("\n");
+  w.i32(2); w.sep(" "); w.i32(1); w.sep(" "); w.i32(0); w.sep(" "); w.size(nn); w.sep("\n");
+  for (std::uint64_t v = 1; v <= nn; ++v) { w.size(v); w.sep("\n"); }
+  for (Vec2 p : mesh.nodes) { w.f64(p.x); w.sep(" "); w.f64(p.y); w.sep(" "); w.f64(0); w.sep("\n"); }
+  w.end_binary();
+  os << "$EndNodes\n$Elements\n";
+  std::uint64_t nel = mesh.quads.size();
+  for (const Group& g : groups) nel += g.lines.size() + g.points.size();
+  w.size(groups.size() + 1); w.sep(" "); w.size(nel); w.sep(" "); w.size(1); w.sep(" "); w.size(nel); w.sep("\n");
+  std::uint64_t tag = 1;
+  auto node = [&](std::int32_t v) { w.sep(" "); w.size(static_cast<std::uint64_t>(v) + 1); };
+  for (const Group& g : groups) {
+    w.i32(g.dim); w.sep(" "); w.i32(g.entity); w.sep(" "); w.i32(g.dim == 1 ? 1 : 15); w.sep(" ");
+    w.size(g.lines.size() + g.points.size()); w.sep("\n");
+    for (const auto& e : g.lines) { w.size(tag++); node(e[0]); node(e[1]); w.sep("\n"); }
+    for (auto v : g.points) { w.size(tag++); node(v); w.sep("\n"); }
+  }
+  w.i32(2); w.sep(" "); w.i32(1); w.sep(" "); w.i32(3); w.sep(" "); w.size(mesh.quads.size()); w.sep("\n");
+  for (const auto& q : mesh.quads) {
+    w.size(tag++);
+    for (auto v : q) node(v);
+    w.sep("\n");
+  }
+  w.end_binary();
+  os << "$EndElements\n";
+}
+
+// MSH 2.2: no entities; every element carries its physical and elementary tags. Binary element blocks start with
+// (type, count, number of tags), and every value is a 32-bit int.
+void write_v22(MshStream& w, const QuadMesh& mesh, const std::vector<Group>& groups) {
+  std::ostream& os = w.os;
+  constexpr auto most = static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max() / 2);
+  if (mesh.nodes.size() >= most || mesh.quads.size() >= most)
+    throw InputError("MSH 2.2 numbers nodes and elements with 32-bit integers: the mesh is too large, use MSH 4.1");
+  os << "$Nodes\n" << mesh.nodes.size() << "\n";
+  int id = 1;
+  for (Vec2 p : mesh.nodes) { w.i32(id++); w.sep(" "); w.f64(p.x); w.sep(" "); w.f64(p.y); w.sep(" "); w.f64(0); w.sep("\n"); }
+  w.end_binary();
+  os << "$EndNodes\n$Elements\n";
+  std::size_t nel = mesh.quads.size();
+  for (const Group& g : groups) nel += g.lines.size() + g.points.size();
+  os << nel << "\n";
+  int tag = 1;
+  auto block = [&](int type, std::size_t count, int physical, int entity, auto&& each) {
+    if (count == 0) return;
+    if (w.bin) { w.i32(type); w.i32(static_cast<int>(count)); w.i32(2); }
+    each([&](std::initializer_list<std::int32_t> nodes) {
+      w.i32(tag++); w.sep(" ");
+      if (!w.bin) { w.i32(type); w.sep(" 2 "); }
+      w.i32(physical); w.sep(" "); w.i32(entity);
+      for (auto v : nodes) { w.sep(" "); w.i32(v + 1); }
+      w.sep("\n");
+    });
+  };
+  for (const Group& g : groups) {
+    block(1, g.lines.size(), g.physical, g.entity, [&](auto&& put) { for (const auto& e : g.lines) put({e[0], e[1]}); });
+    block(15, g.points.size(), g.physical, g.entity, [&](auto&& put) { for (auto v : g.points) put({v}); });
+  }
+  block(3, mesh.quads.size(), 1, 1, [&](auto&& put) { for (const auto& q : mesh.quads) put({q[0], q[1], q[2], q[3]}); });
+  w.end_binary();
+  os << "$EndElements\n";
+}
+
+}  // namespace
+
+void write_msh(const std::filesystem::path& path, const QuadMesh& mesh, const MeshWriteOptions& options) {
+  const std::vector<Group> groups = msh_groups(mesh, options.msh_features);
+  const bool v41 = options.msh_version == MshVersion::v4_1;
   write_file_atomically(path, [&](std::ostream& os) {
     os.precision(17);
-    auto size = [&](std::uint64_t v) { if (bin) os.write(reinterpret_cast<const char*>(&v), 8); else os << v; };
-    auto i32 = [&](int v) { if (bin) os.write(reinterpret_cast<const char*>(&v), 4); else os << v; };
-    auto f64 = [&](double v) { if (bin) os.write(reinterpret_cast<const char*>(&v), 8); else os << v; };
-    auto sep = [&](const char* s) { if (!bin) os << s; };
-    os << "$MeshFormat\n4.1 " << (bin ? 1 : 0) << " 8\n";
-    if (bin) { i32(1); os << "\n"; }
-    os << "$EndMeshFormat\n$PhysicalNames\n" << entities.size() + 1 << "\n2 1 \"domain\"\n";
-    for (std::size_t k = 0; k < entities.size(); ++k) os << "1 " << k + 2 << " \"" << entities[k].name << "\"\n";
-    os << "$EndPhysicalNames\n$Entities\n";
-    size(0); sep(" "); size(entities.size()); sep(" "); size(1); sep(" "); size(0); sep("\n");
-    auto bbox = [&] { f64(box.lo.x); sep(" "); f64(box.lo.y); sep(" "); f64(0); sep(" "); f64(box.hi.x); sep(" "); f64(box.hi.y); sep(" "); f64(0); sep(" "); };
-    for (std::size_t k = 0; k < entities.size(); ++k) {
-      i32(static_cast<int>(k + 1)); sep(" "); bbox(); size(1); sep(" "); i32(static_cast<int>(k + 2)); sep(" "); size(0); sep("\n");
-    }
-    i32(1); sep(" "); bbox(); size(1); sep(" "); i32(1); sep(" "); size(0); sep("\n");
-    if (bin) os << "\n";
-    os << "$EndEntities\n$Nodes\n";
-    const std::uint64_t nn = mesh.nodes.size();
-    size(1); sep(" "); size(nn); sep(" "); size(1); sep(" "); size(nn); sep("\n");
-    i32(2); sep(" "); i32(1); sep(" "); i32(0); sep(" "); size(nn); sep("\n");
-    for (std::uint64_t v = 1; v <= nn; ++v) { size(v); sep("\n"); }
-    for (Vec2 p : mesh.nodes) { f64(p.x); sep(" "); f64(p.y); sep(" "); f64(0); sep("\n"); }
-    if (bin) os << "\n";
-    os << "$EndNodes\n$Elements\n";
-    std::uint64_t nel = mesh.quads.size();
-    for (const auto& e : entities) nel += e.ids->size();
-    size(entities.size() + 1); sep(" "); size(nel); sep(" "); size(1); sep(" "); size(nel); sep("\n");
-    std::uint64_t tag = 1;
-    for (std::size_t k = 0; k < entities.size(); ++k) {
-      i32(1); sep(" "); i32(static_cast<int>(k + 1)); sep(" "); i32(1); sep(" "); size(entities[k].ids->size()); sep("\n");
-      for (std::size_t id : *entities[k].ids) {
-        const auto& e = (*entities[k].edges)[id];
-        size(tag++); sep(" "); size(static_cast<std::uint64_t>(e[0]) + 1); sep(" "); size(static_cast<std::uint64_t>(e[1]) + 1); sep("\n");
-      }
-    }
-    i32(2); sep(" "); i32(1); sep(" "); i32(3); sep(" "); size(mesh.quads.size()); sep("\n");
-    for (const auto& q : mesh.quads) {
-      size(tag++);
-      for (auto v : q) { sep(" "); size(static_cast<std::uint64_t>(v) + 1); }
-      sep("\n");
-    }
-    if (bin) os << "\n";
-    os << "$EndElements\n";
-  }, bin);
+    MshStream w{os, options.binary};
+    os << "$MeshFormat\n" << (v41 ? "4.1 " : "2.2 ") << (w.bin ? 1 : 0) << " 8\n";
+    if (w.bin) { w.i32(1); os << "\n"; }
+    os << "$EndMeshFormat\n";
+    write_physical_names(os, groups);
+    if (v41) write_v41(w, mesh, groups);
+    else write_v22(w, mesh, groups);
+  }, options.binary);
 }
 
 }  // namespace polysquare

@@ -102,3 +102,74 @@ TEST(Cli, InterruptLeavesNoPartialFile) {
   }
   fs::remove_all(dir);
 }
+
+TEST(Cli, VersionPrintsTheProjectVersion) {
+  const fs::path out = fs::temp_directory_path() / ("polysquare_cli_version_" + std::to_string(::getpid()));
+  const int status = std::system((std::string(POLYSQUARE_CLI) + " --version > " + out.string()).c_str());
+  std::ifstream in(out);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  fs::remove(out);
+  EXPECT_EQ(WEXITSTATUS(status), 0);
+  EXPECT_EQ(text.rfind("polysquare ", 0), 0u) << text;
+  EXPECT_NE(text.find_first_of("0123456789"), std::string::npos) << text;
+}
+
+TEST(Cli, QualityReportsTrianglesAndRequireQuadsRefusesThem) {
+  const fs::path dir = fs::temp_directory_path() / ("polysquare_cli_tri_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  // One quad and two triangles, as another tool's MSH 2.2 would hold them.
+  std::ofstream(dir / "mixed.msh") << "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n6\n1 0 0 0\n2 1 0 0\n3 1 1 0\n"
+                                      "4 0 1 0\n5 2 0 0\n6 2 1 0\n$EndNodes\n$Elements\n3\n1 3 2 1 1 1 2 3 4\n"
+                                      "2 2 2 1 1 2 5 6\n3 2 2 1 1 2 6 3\n$EndElements\n";
+  const std::string mixed = (dir / "mixed.msh").string();
+  const CliRun plain = run("quality " + mixed);
+  EXPECT_EQ(plain.code, 0) << plain.err;
+  EXPECT_NE(plain.err.find("warning: "), std::string::npos) << plain.err;
+  EXPECT_NE(plain.err.find("2 triangles"), std::string::npos) << plain.err;
+  const CliRun strict = run("quality " + mixed + " --require-quads");
+  EXPECT_EQ(strict.code, 2) << strict.err;
+  EXPECT_EQ(strict.err.rfind("error: ", 0), 0u) << strict.err;
+  // A mesh of quads passes the same check.
+  const CliRun made = run("mesh " + data("cases/letter_I.geojson") + " --size 2 -o " + (dir / "q.msh").string());
+  ASSERT_EQ(made.code, 0) << made.err;
+  const CliRun quads = run("quality " + (dir / "q.msh").string() + " --require-quads");
+  EXPECT_EQ(quads.code, 0) << quads.err;
+  EXPECT_EQ(quads.err, "");
+  fs::remove_all(dir);
+}
+
+TEST(Cli, MshVersionAndFeatureOptions) {
+  const fs::path dir = fs::temp_directory_path() / ("polysquare_cli_msh_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  auto header = [](const fs::path& p) {
+    std::ifstream in(p);
+    std::string line;
+    std::getline(in, line);
+    std::getline(in, line);
+    return line;
+  };
+  // Physical groups named feature_* of dimension `dim` (0: point group, 1: curve) in $PhysicalNames.
+  auto feature_groups = [](const fs::path& p, char dim) {
+    std::ifstream in(p);
+    std::string line;
+    std::size_t n = 0;
+    while (std::getline(in, line) && line != "$EndPhysicalNames")
+      n += line.size() > 2 && line[0] == dim && line[1] == ' ' && line.find(" \"feature_") != std::string::npos;
+    return n;
+  };
+  const std::string input = data("cases/square_feature.geojson") + " --size 3 -o ";
+  ASSERT_EQ(run("mesh " + input + (dir / "default.msh").string()).code, 0);
+  EXPECT_EQ(header(dir / "default.msh"), "2.2 0 8");
+  EXPECT_EQ(feature_groups(dir / "default.msh", '0'), 1u);  // the feature curve's nodes as a point group
+  EXPECT_EQ(feature_groups(dir / "default.msh", '1'), 0u);
+  ASSERT_EQ(run("mesh " + input + (dir / "v41.msh").string() + " --msh-version 4.1 --msh-features lines").code, 0);
+  EXPECT_EQ(header(dir / "v41.msh"), "4.1 0 8");
+  EXPECT_EQ(feature_groups(dir / "v41.msh", '1'), 1u);
+  EXPECT_EQ(feature_groups(dir / "v41.msh", '0'), 0u);
+  ASSERT_EQ(run("mesh " + input + (dir / "none.msh").string() + " --msh-features none").code, 0);
+  EXPECT_EQ(feature_groups(dir / "none.msh", '0') + feature_groups(dir / "none.msh", '1'), 0u);
+  const CliRun bad = run("mesh " + input + (dir / "bad.msh").string() + " --msh-version 3");
+  EXPECT_EQ(bad.code, 2) << bad.err;
+  EXPECT_FALSE(fs::exists(dir / "bad.msh"));
+  fs::remove_all(dir);
+}

@@ -9,12 +9,29 @@
 
 namespace polysquare {
 
+/// How feature curves go into an MSH file. deal.II's GridIn::read_msh turns every line element into a boundary
+/// face and refuses the file when one lies between two cells, whatever its physical tag (0 included), so interior
+/// feature edges cannot be line elements in a file meant for every reader.
+enum class MshFeatures {
+  nodes,  ///< default: one physical point group "feature_<c>" per curve holding its nodes (type-15 elements);
+          ///< deal.II and MFEM ignore points in 2D, Gmsh/meshio keep them, libMesh/MOOSE read them as node sets
+  lines,  ///< physical curves "feature_<c>" of line elements (Gmsh, meshio, MFEM, MOOSE; deal.II refuses them)
+  none,   ///< no feature information, boundary rings only
+};
+
+/// MSH version: 2.2 is the one every FEM reader takes (MFEM and DUNE read no other); 4.1 is Gmsh's current one.
+enum class MshVersion { v2_2, v4_1 };
+
 struct MeshWriteOptions {
-  bool binary = false;  ///< binary MSH 4.1 instead of ASCII
+  bool binary = false;                         ///< binary MSH instead of ASCII
+  MshFeatures msh_features = MshFeatures::nodes;
+  MshVersion msh_version = MshVersion::v2_2;
 };
 
 /// Reads a mesh by extension (.msh, .vtu). Quads and triangles are kept; lines of physical curves named
-/// "boundary*" / "feature*" become tagged edges. A mesh whose cells are mostly clockwise (a surface with normal
+/// "boundary*" / "feature*" become tagged edges, and so do the cell edges joining two nodes of one physical point
+/// group named "feature*" (how MshFeatures::nodes writes a curve; exact unless a curve comes back within one
+/// element of itself, where such an edge may join two nodes that are not consecutive along it). A mesh whose cells are mostly clockwise (a surface with normal
 /// -z, as Gmsh makes from a clockwise outline) is reversed, so quads are counter-clockwise as QuadMesh requires.
 /// Throws InputError on malformed or truncated files.
 QuadMesh read_mesh(const std::filesystem::path& path);
@@ -24,10 +41,15 @@ QuadMesh read_vtu(const std::filesystem::path& path);
 QuadMesh parse_msh(const std::string& data, const std::string& name);
 QuadMesh parse_vtu(const std::string& xml, const std::string& name);
 
-/// Writes by extension, atomically: .msh = Gmsh MSH 4.1 with the quads as physical surface "domain" and tagged
-/// physical curves "boundary_ring_<r>" and "feature_<c>"; .vtu = VTK XML with per-cell quality fields.
+/// Writes by extension, atomically. .msh = Gmsh MSH 2.2 or 4.1: the quads are physical surface "domain" (tag 1),
+/// boundary ring r is physical curve "boundary_ring_<r>" of line elements (tags 2, 3, ... in ring order, which
+/// deal.II and MFEM take as boundary ids), feature curve c is "feature_<c>" (the next tags) as options say;
+/// .vtu = VTK XML with per-cell quality fields.
 void write_mesh(const std::filesystem::path& path, const QuadMesh& mesh, const MeshWriteOptions& options = {});
 void write_msh(const std::filesystem::path& path, const QuadMesh& mesh, const MeshWriteOptions& options = {});
 void write_vtu(const std::filesystem::path& path, const QuadMesh& mesh);
+
+/// The library version (CMake project version), as `polysquare --version` and the report's summary give it.
+const char* library_version();
 
 }  // namespace polysquare

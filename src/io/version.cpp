@@ -1,0 +1,8 @@
+// The version string lives in the library, where CMake defines it, so the CLI and the report agree.
+#include "polysquare/io/mesh_io.h"
+
+namespace polysquare {
+
+const char* library_version() { return POLYSQUARE_VERSION; }
+
+}  // namespace polysquare
