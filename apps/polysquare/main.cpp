@@ -161,7 +161,7 @@ int main(int argc, char** argv) {
   cmd_mesh->add_option("--crs", mesh.input_options.crs,
                        "projected CRS to mesh geographic input in, e.g. EPSG:32615 (default: UTM zone of the centre)");
   cmd_mesh->add_option("--size", mesh.options.size, "target quad edge length h, in region units (metres for geographic input)")->required();
-  cmd_mesh->add_option("-o,--output", mesh.output, "output mesh (.msh Gmsh 4.1, .vtu VTK)")->required();
+  cmd_mesh->add_option("-o,--output", mesh.output, "output mesh (.msh Gmsh, .vtu VTK)")->required();
   cmd_mesh->add_option("--report", mesh.report, "write a JSON report (options, timings, counts, quality)");
   cmd_mesh->add_option("--picture", mesh.picture, "write an SVG picture of the mesh coloured by scaled Jacobian");
   cmd_mesh->add_option("--parts", mesh.options.parts,
