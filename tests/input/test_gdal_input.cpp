@@ -105,6 +105,16 @@ TEST(GdalInput, GeoPackageShapefilesAndOgrGeoJsonGiveTheNativeRegion) {
   layers.feature_layers = {"features"};
   expect_same_region(read_input(dir / "db.gpkg", layers, notes), native, 0.0);
 
+  // Other formats GDAL writes and reads back: FlatGeobuf and GML keep the UTM coordinates, KML is lon/lat by
+  // definition and comes back through the UTM projection.
+  // Without the spatial index FlatGeobuf keeps the features in order (with it, in Hilbert order).
+  ogr2ogr("-f FlatGeobuf -nlt GEOMETRY -lco SPATIAL_INDEX=NO " + (dir / "db.fgb").string() + " " + src);
+  ogr2ogr("-f GML " + (dir / "db.gml").string() + " " + src);
+  ogr2ogr("-f KML " + (dir / "db.kml").string() + " " + src);
+  expect_same_region(read_input(dir / "db.fgb", {}, notes), native, 0.0);
+  expect_same_region(read_input(dir / "db.gml", {}, notes), native, 1e-6);
+  expect_same_region(read_input(dir / "db.kml", {}, notes), native, 1e-4);
+
   // A filter keeps only the rivers: fewer curves, same domain.
   InputOptions rivers;
   rivers.where = "role = 'domain' OR kind = 'river'";
