@@ -112,10 +112,48 @@ void tag_curve_edges(const PatchInput& in, QuadMesh& out) {
   }
 }
 
+// A given node in one quad only keeps the whole angle of the patch there as that quad's corner: on a straight
+// stretch that corner is flat (scaled Jacobian 0) whatever the smoothing does, since the given nodes are fixed.
+// Such a quad is replaced by an inner quad and four quads around it (its edges, shared with its neighbours, stay
+// as they are), so the node gets two corners. Interior angles above options.inset_angle_deg are split.
+void inset_flat_single_corners(const PatchInput& in, const PatchOptions& options, QuadMesh& out) {
+  std::vector<int> quads_at(out.nodes.size(), 0);
+  for (const auto& q : out.quads)
+    for (std::int32_t v : q) quads_at[static_cast<std::size_t>(v)]++;
+  const double limit = options.inset_angle_deg * std::acos(-1.0) / 180.0;
+  const std::size_t nq = out.quads.size();
+  for (std::size_t i = 0; i < nq; ++i) {
+    const auto q = out.quads[i];
+    bool flat = false;
+    for (int k = 0; k < 4 && !flat; ++k) {
+      const auto v = static_cast<std::size_t>(q[k]);
+      if (v >= in.nodes.size() || quads_at[v] != 1) continue;
+      const Vec2 p = out.nodes[v], next = out.nodes[static_cast<std::size_t>(q[(k + 1) % 4])] - p,
+                 prev = out.nodes[static_cast<std::size_t>(q[(k + 3) % 4])] - p;
+      double angle = std::atan2(cross(next, prev), dot(next, prev));  // counter-clockwise from next to prev
+      if (angle < 0) angle += 2.0 * std::acos(-1.0);
+      flat = angle > limit;
+    }
+    if (!flat) continue;
+    Vec2 centre{};
+    for (std::int32_t v : q) centre = centre + 0.25 * out.nodes[static_cast<std::size_t>(v)];
+    std::array<std::int32_t, 4> inner{};
+    for (int k = 0; k < 4; ++k) {
+      inner[k] = static_cast<std::int32_t>(out.nodes.size());
+      out.nodes.push_back(lerp(out.nodes[static_cast<std::size_t>(q[k])], centre, 0.5));
+      out.node_kind.push_back(NodeKind::interior);
+    }
+    out.quads[i] = inner;
+    for (int k = 0; k < 4; ++k) out.quads.push_back({q[k], q[(k + 1) % 4], inner[(k + 1) % 4], inner[k]});
+  }
+}
+
 // Plain Laplacian sweeps over the nodes after the given ones (a triangulation that hugs a convoluted boundary
 // can give quads that start folded; averaging untangles them before the guarded smoothing of the whole mesh),
 // then the check that every given node is used and, with refuse_folded, that no quad is folded.
 void finish_patch(const PatchInput& in, const PatchOptions& options, QuadMesh& out) {
+  inset_flat_single_corners(in, options, out);
+  out.quad_part.assign(out.quads.size(), 0);
   std::vector<std::vector<std::int32_t>> adj(out.nodes.size());
   for (const auto& q : out.quads)
     for (int k = 0; k < 4; ++k) {
@@ -407,7 +445,6 @@ QuadMesh matched_patch_once(const PatchInput& in, const PatchOptions& options, V
   out.node_kind.resize(out.nodes.size(), NodeKind::interior);
   for (int e : matched) out.quads.push_back(quad_of_pair(tri, sorted_edges[static_cast<std::size_t>(e)][0],
                                                       sorted_edges[static_cast<std::size_t>(e)][1]));
-  out.quad_part.assign(out.quads.size(), 0);
   tag_curve_edges(in, out);
   finish_patch(in, options, out);
   return out;
@@ -438,8 +475,8 @@ QuadMesh mesh_patch(const PatchInput& in, const PatchOptions& options) {
     out.node_kind = in.kind;
     const auto& v = in.curves[0].nodes;
     out.quads.push_back({v[0], v[1], v[2], v[3]});
-    out.quad_part.assign(1, 0);
     tag_curve_edges(in, out);
+    finish_patch(in, options, out);
     return out;
   }
   // The split construction gives the more regular quads (about four at a vertex); where its coarse edges cannot

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <map>
 #include <set>
 #include <tuple>
@@ -741,6 +742,71 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
       patch_error[p] = sub_name(p) + ": its map failed (" + failure[p] + ") and so did its repair: " + e.what();
     }
   });
+  // A patch that cannot be built (no room for its construction near a narrow neck, an odd count all round)
+  // takes in its neighbours, mapped or not, and is built again over their union, which gains room and reaches
+  // ring pieces that can even out its count; the subregions beyond keep their maps and nodes.
+  std::vector<std::int32_t> group(n);  // the subregion whose patch holds p (p itself unless p joined a union)
+  for (std::size_t p = 0; p < n; ++p) group[p] = static_cast<std::int32_t>(p);
+  for (int grow = 0; grow < options.patch_growth; ++grow) {
+    std::set<std::int32_t> failed;
+    for (std::size_t p = 0; p < n; ++p)
+      if (!patch_error[p].empty()) failed.insert(group[p]);
+    if (failed.empty()) break;
+    // Every failed group absorbs the groups across its boundary (groups meeting through one merge).
+    std::vector<std::int32_t> into(n);
+    for (std::size_t p = 0; p < n; ++p) into[p] = static_cast<std::int32_t>(p);
+    std::function<std::int32_t(std::int32_t)> root = [&](std::int32_t p) {
+      return into[static_cast<std::size_t>(p)] == p ? p : into[static_cast<std::size_t>(p)] = root(into[static_cast<std::size_t>(p)]);
+    };
+    for (std::size_t p = 0; p < n; ++p) {
+      if (!failed.count(group[p])) continue;
+      for (const TriChain& ch : subs[p].mesh.chains)
+        if (ch.interface >= 0) {
+          const std::int32_t a = root(group[p]), b = root(group[static_cast<std::size_t>(ch.interface)]);
+          if (a != b) into[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);
+        }
+    }
+    std::set<std::int32_t> rebuilt;
+    for (std::size_t p = 0; p < n; ++p) {
+      const std::int32_t r = root(group[p]);
+      if (r != group[p] || failed.count(r)) rebuilt.insert(r);
+      group[p] = r;
+    }
+    std::vector<std::int32_t> tp(triangle_part.size());
+    std::vector<std::vector<std::int32_t>> members_of(n);
+    for (std::size_t t = 0; t < tp.size(); ++t) {
+      tp[t] = group[static_cast<std::size_t>(triangle_part[t])];
+      if (rebuilt.count(tp[t])) members_of[static_cast<std::size_t>(tp[t])].push_back(static_cast<std::int32_t>(t));
+    }
+    const PartitionTopology g = topology(tri, tp);
+    std::vector<std::uint8_t> patch_now(n, 0);
+    for (std::size_t p = 0; p < n; ++p) patch_now[static_cast<std::size_t>(group[p])] |= is_patch[p] || rebuilt.count(group[p]);
+    for (std::size_t p = 0; p < n; ++p)
+      if (rebuilt.count(group[p])) {
+        is_patch[p] = 1;
+        patch_error[p].clear();
+        if (group[p] != static_cast<std::int32_t>(p)) {
+          meshes[p] = {};
+          side_nodes[p] = 0;
+        }
+      }
+    const std::vector<std::int32_t> roots(rebuilt.begin(), rebuilt.end());
+    for_each_subregion(roots.size(), [&](std::size_t k) {
+      const auto r = static_cast<std::size_t>(roots[k]);
+      try {
+        const Subregion u = cut_subregion(tri, tp, g, roots[k], members_of[r], name);
+        const PatchInput in = patch_input(u, patch_now, side_count, options.size, options.layout.corner_threshold_deg,
+                                          sub_name(r));
+        PatchOptions po;
+        po.size = options.size;
+        meshes[r] = mesh_patch(in, po);
+        side_nodes[r] = in.nodes.size();
+      } catch (const MeshingError& e) {
+        patch_error[r] = sub_name(r) + ": its repair failed even over its neighbours' area too (" +
+                         std::to_string(grow + 1) + " times): " + e.what();
+      }
+    });
+  }
   std::size_t failed_maps = 0, failed_repairs = 0;
   for (std::size_t p = 0; p < n; ++p) {
     failed_maps += is_patch[p];
@@ -758,8 +824,11 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
   for (std::size_t p = 0; p < n; ++p) {
     SubregionStats& s = st.subregions[p];
     s.subregion = static_cast<int>(p);
-    s.mapped = failure[p].empty();
-    s.reason = failure[p];
+    s.mapped = !is_patch[p];
+    s.reason = !failure[p].empty() ? failure[p]
+               : is_patch[p]       ? sub_name(p) + ": its neighbour's patch could not be built without it"
+                                   : std::string();
+    if (group[p] != static_cast<std::int32_t>(p)) s.reason += " (meshed in the patch of subregion " + std::to_string(group[p]) + ")";
     s.quads = meshes[p].quads.size();
     s.at = subs[p].mesh.vertices.empty() ? Vec2{} : subs[p].mesh.vertices.front();
   }

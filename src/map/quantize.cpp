@@ -156,6 +156,27 @@ void solve_joint(JointProblem& jp, const std::vector<SegmentCoupling>& couplings
   }
   for (const Separation& sep : separations)
     add_row({{col(sep.layout, sep.axis, sep.hi), 1.0}, {col(sep.layout, sep.axis, sep.lo), -1.0}}, GLP_LO, 1.0, 0.0);
+  // A row may name one column twice (consecutive sides of one axis in an even group share a break class; a
+  // coupling may tie a layout to itself): GLPK refuses repeated entries, so they are summed and zeros dropped.
+  {
+    std::vector<std::size_t> order(ia.size() - 1);
+    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i + 1;
+    std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+      return ia[a] != ia[b] ? ia[a] < ia[b] : (ja[a] != ja[b] ? ja[a] < ja[b] : a < b);
+    });
+    std::vector<int> mi{0}, mj{0};
+    std::vector<double> ma{0.0};
+    for (std::size_t i : order) {
+      if (mi.size() > 1 && mi.back() == ia[i] && mj.back() == ja[i]) {
+        ma.back() += ar[i];
+        continue;
+      }
+      if (mi.size() > 1 && ma.back() == 0.0) { mi.pop_back(); mj.pop_back(); ma.pop_back(); }
+      mi.push_back(ia[i]); mj.push_back(ja[i]); ma.push_back(ar[i]);
+    }
+    if (mi.size() > 1 && ma.back() == 0.0) { mi.pop_back(); mj.pop_back(); ma.pop_back(); }
+    ia.swap(mi); ja.swap(mj); ar.swap(ma);
+  }
   glp_load_matrix(P, static_cast<int>(ia.size()) - 1, ia.data(), ja.data(), ar.data());
   glp_smcp parm;
   glp_init_smcp(&parm);

@@ -339,33 +339,50 @@ namespace polysquare {
 
 int merge_enclosed_parts(const TriMesh& mesh, std::vector<std::int32_t>& triangle_part) {
   auto owners = edge_owners(mesh);  // edge -> its (one or two) triangles
+  auto key = [](std::int32_t part, std::int32_t v) {
+    return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(part)) << 32) | static_cast<std::uint32_t>(v);
+  };
   for (bool changed = true; changed;) {
     changed = false;
-    // For every part: the other parts across its boundary, and the vertices it shares with them and with the
-    // outside (its rings). A part with one neighbour whose interface never touches a ring is enclosed by it
-    // (holes inside the part do not help: the interface loop itself has no corner).
-    std::map<std::int32_t, std::set<std::int32_t>> across;
-    std::map<std::int32_t, std::set<std::int32_t>> interface_vertices, ring_vertices;
-    for (const auto& [k, o] : owners) {
-      const std::int32_t a = triangle_part[o[0]], b = o[1] < 0 ? -1 : triangle_part[o[1]];
-      if (a == b) continue;
-      const auto u = static_cast<std::int32_t>(k >> 32), v = static_cast<std::int32_t>(k & 0xffffffffULL);
-      if (b < 0) {
-        ring_vertices[a].insert({u, v});
-        continue;
+    // Every boundary loop of every part, walked with the part on its left (outer loops counter-clockwise), and
+    // for every vertex on a part boundary the parts around it (-1: outside). A part whose outer loop faces one
+    // other part only and meets no third part, ring or pinch is enclosed by it: that loop has no vertex where a
+    // poly-square corner could sit on both sides, whatever else (holes, other parts inside) the part holds.
+    std::map<std::uint64_t, std::pair<std::int32_t, std::int32_t>> next;  // (part, vertex) -> (vertex, across)
+    std::unordered_map<std::int32_t, std::set<std::int32_t>> parts_at;
+    std::unordered_set<std::int32_t> pinched;
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+      const std::int32_t p = triangle_part[t];
+      for (int k = 0; k < 3; ++k) {
+        const std::int32_t x = mesh.triangles[t][k], y = mesh.triangles[t][(k + 1) % 3];
+        const auto& o = owners.at(edge_key(x, y));
+        const std::int32_t other = o[1] < 0 ? -1 : triangle_part[o[0] == static_cast<std::int32_t>(t) ? o[1] : o[0]];
+        if (other == p) continue;
+        for (auto v : {x, y}) parts_at[v].insert({p, other});
+        if (!next.try_emplace(key(p, x), y, other).second) pinched.insert(x);
       }
-      across[a].insert(b);
-      across[b].insert(a);
-      for (auto p : {a, b}) interface_vertices[p].insert({u, v});
     }
-    for (const auto& [part, nbrs] : across) {
-      if (nbrs.size() != 1) continue;
-      const auto& iv = interface_vertices[part];
-      const auto& rv = ring_vertices[part];
-      if (std::any_of(iv.begin(), iv.end(), [&](std::int32_t v) { return rv.count(v) > 0; })) continue;
-      const std::int32_t into = *nbrs.begin();
+    std::set<std::uint64_t> visited;
+    for (const auto& [k0, first] : next) {
+      if (visited.count(k0)) continue;
+      const auto part = static_cast<std::int32_t>(k0 >> 32);
+      std::int32_t v = static_cast<std::int32_t>(k0 & 0xffffffffULL);
+      const std::int32_t across = first.second;
+      bool enclosed = across >= 0;
+      double area = 0.0;
+      for (std::uint64_t k = k0; !visited.count(k);) {
+        visited.insert(k);
+        const auto it = next.find(k);
+        if (it == next.end()) { enclosed = false; break; }
+        const auto [w, a] = it->second;
+        enclosed = enclosed && a == across && !pinched.count(v) && parts_at[v].size() == 2;
+        area += cross(mesh.vertices[v], mesh.vertices[w]);
+        v = w;
+        k = key(part, v);
+      }
+      if (!enclosed || area <= 0.0) continue;
       for (auto& p : triangle_part)
-        if (p == part) p = into;
+        if (p == part) p = across;
       changed = true;
       break;  // neighbourhoods changed: recompute
     }

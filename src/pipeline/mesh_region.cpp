@@ -69,11 +69,11 @@ struct CandidateSpec {
 };
 
 // Candidates for one part, in rounds: a round is meshed only when every candidate of the rounds before it
-// failed. An explicit --parts K is one round, K with bendable interfaces the next, one poly-square the last.
+// failed or left unstructured patches. An explicit --parts K is one round, K with bendable interfaces the next, one poly-square the last.
 // Automatic mode meshes small parts every way at once (one poly-square, the counts of search_subregions, the
-// area- and perimeter-based counts); a large part tries one poly-square first and partitions only if that
-// fails, which keeps its time near one map. A last round retries the partitions with bendable interfaces (parts
-// up to bent_round_quads: on coastline parts it doubled the search and meshed none).
+// area- and perimeter-based counts) and retries their partitions with bendable interfaces (parts up to
+// bent_round_quads); a large part is meshed one way (see MeshOptions::parts), the whole-part fallback only when
+// that fails.
 std::vector<std::vector<CandidateSpec>> candidate_rounds(const Region& region, const RegionPart& part,
                                                          const MeshOptions& options) {
   const double quads = part_area(region, part) / (options.size * options.size);
@@ -98,24 +98,40 @@ std::vector<std::vector<CandidateSpec>> candidate_rounds(const Region& region, c
     add({1});
     return rounds;
   }
-  const bool large = quads > static_cast<double>(options.search_quads);
-  if (large) {
-    add({1});
-    rounds.emplace_back();
-  }
-  // k from the area; long, convoluted boundaries (coastlines) need more subregions than their area says, so k
-  // from the perimeter too.
+  // Boundary complexity: the length of the rings and, counted twice (a subregion meets them from both sides),
+  // of the feature curves. Long, convoluted boundaries (coastlines) need more subregions than their area says.
   double perimeter = 0.0;
-  for (int r : part.rings) {
-    const auto& pts = region.rings[static_cast<std::size_t>(r)].points;
-    for (std::size_t i = 0; i < pts.size(); ++i) perimeter += distance(pts[i], pts[(i + 1) % pts.size()]);
+  auto add_length = [&](const std::vector<Vec2>& pts, bool closed, double weight) {
+    for (std::size_t i = 0; i + (closed ? 0 : 1) < pts.size(); ++i)
+      perimeter += weight * distance(pts[i], pts[(i + 1) % pts.size()]);
+  };
+  for (int r : part.rings) add_length(region.rings[static_cast<std::size_t>(r)].points, true, 1.0);
+  double ring_length = perimeter;
+  for (int f : part.features) {
+    const FeatureCurve& c = region.features[static_cast<std::size_t>(f)];
+    add_length(c.points, c.closed, 2.0);
   }
-  add({std::max(1, static_cast<int>(std::lround(quads / static_cast<double>(options.target_quads_per_part))))});
+  const int by_area = std::max(1, static_cast<int>(std::lround(quads / static_cast<double>(options.target_quads_per_part))));
   const int by_perimeter = static_cast<int>(std::lround(perimeter / (options.perimeter_per_subregion * options.size)));
-  if (by_perimeter > 1 && quads / by_perimeter >= 16.0) add({by_perimeter});
-  if (!large)
-    for (int k : options.search_subregions)
-      if (quads / k >= 16.0) add({k});  // at least a 4 x 4 block per subregion
+  const int automatic = std::max(by_area, by_perimeter);
+  // A boundary much longer than a square's of the same area (twice over), or features longer than the rings.
+  const bool convoluted = ring_length > 8.0 * std::sqrt(quads) * options.size || perimeter > 2.0 * ring_length;
+  if (quads > static_cast<double>(options.search_quads)) {
+    // Large parts: one deterministic path (subregions from size and boundary complexity, failures repaired
+    // locally), with one poly-square beside it (a comb or a square full of square islands is one map with no
+    // singular node; on a coast it fails within the time the partitioned map takes).
+    if (automatic > 1 && quads / automatic >= 16.0) add({automatic});
+    add({1});
+    return rounds;
+  }
+  // Small parts are cheap to mesh several ways: the automatic count (on convoluted parts), the counts from area
+  // and ring length alone, the fixed search counts and one poly-square; the best mesh wins.
+  if (convoluted && quads / automatic >= 16.0) add({automatic});
+  add({by_area});
+  const int by_rings = static_cast<int>(std::lround(ring_length / (2.0 * options.perimeter_per_subregion * options.size)));
+  if (by_rings > 1 && quads / by_rings >= 16.0) add({by_rings});
+  for (int k : options.search_subregions)
+    if (quads / k >= 16.0) add({k});  // at least a 4 x 4 block per subregion
   add({1});
   if (quads <= static_cast<double>(options.bent_round_quads)) add_bent_round();
   return rounds;
@@ -404,7 +420,10 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
         if (cands[c].error.empty() && (best < 0 || cands[c].better_than(cands[static_cast<std::size_t>(best)])))
           best = static_cast<int>(c);
       }
-      if (best >= 0) break;
+      // A later round is meshed while the best mesh so far holds unstructured patches nobody asked for; the
+      // best of all wins.
+      if (best >= 0 && (cands[static_cast<std::size_t>(best)].structured >= 1.0 || !options.map.patch_subregions.empty()))
+        break;
     }
     if (best < 0 && options.split_fallback) {
       cands.push_back(try_split_fallback(*work, parts[k], options));

@@ -51,6 +51,8 @@ struct PatchOptions {
   double pair_min_sj = 0.3;    ///< triangle pairs merged first when their quad's worst corner reaches this
   bool refuse_folded = false;  ///< throw when a quad is still folded after the sweeps (else the mesh's smoothing
                                ///< and invariant check decide)
+  double inset_angle_deg = 150.0;  ///< a given node in one quad whose angle there exceeds this gets two quads
+                                   ///< (that quad is replaced by an inner quad and four around it)
   int untangle_sweeps = 30;    ///< plain Laplacian sweeps over the interior nodes before the quads are checked
 };
 

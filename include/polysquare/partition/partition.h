@@ -73,9 +73,9 @@ std::size_t add_separator_chains(TriMesh& mesh, const std::vector<std::int32_t>&
 std::size_t absorb_pieces_cut_off_by_features(const TriMesh& mesh, std::vector<std::int32_t>& triangle_part,
                                               int max_rounds = 10);
 
-/// Merges every part whose whole boundary faces one other part (a part enclosed by another: its loop has no
-/// corner to close a poly-square on) into that part, repeatedly, and renumbers the parts 0 .. k-1 keeping their
-/// order. Returns the new number of parts.
+/// Merges every part whose outer loop faces one other part only, touching no third part and no ring (a part
+/// enclosed by another: that loop has no corner to close a poly-square on), into that part, repeatedly, whatever
+/// the part holds inside; renumbers the parts 0 .. k-1 keeping their order. Returns the new number of parts.
 int merge_enclosed_parts(const TriMesh& mesh, std::vector<std::int32_t>& triangle_part);
 
 /// Gives every closed feature loop, its inside and the triangles touching it to the part that holds most of that

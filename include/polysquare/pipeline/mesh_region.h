@@ -22,15 +22,16 @@ struct MeshOptions {
   double simplify = 0.0;         ///< simplify curves first: remove vertices whose triangle area is below
                                  ///< (simplify * size)^2, keeping topology (coastlines: 0.5); 0 = off
   std::size_t max_quads = 50'000'000;  ///< refuse sizes whose estimated quad count exceeds this
-  int parts = 0;                 ///< subregions per polygon part. 0 = automatic: parts up to search_quads quads
-                                 ///< are meshed with one poly-square, every count of search_subregions and the
-                                 ///< area- and perimeter-based counts, and the best mesh is kept; larger parts use
-                                 ///< one poly-square and partition only if it fails. K > 0: K subregions, one
-                                 ///< poly-square if that fails.
+  int parts = 0;                 ///< subregions per polygon part. 0 = automatic: a part above search_quads quads
+                                 ///< is meshed one way, with max(its quads / target_quads_per_part, its boundary
+                                 ///< length / (perimeter_per_subregion * size)) subregions (feature curves count
+                                 ///< twice), plus one poly-square when its boundary is not convoluted; smaller
+                                 ///< parts also try one poly-square and the counts of search_subregions, and the
+                                 ///< best mesh is kept. K > 0: K subregions, one poly-square if that fails.
   std::size_t target_quads_per_part = 20000;  ///< subregion size for large parts in automatic mode
-  double perimeter_per_subregion = 60.0;      ///< automatic mode also tries perimeter / (this * size) subregions
+  double perimeter_per_subregion = 30.0;      ///< boundary length per subregion in automatic mode, in sizes
   bool drop_small_parts = true;               ///< leave out (and report) polygon parts smaller than size^2
-  std::size_t search_quads = 200'000;         ///< parts up to this many quads try every count of search_subregions
+  std::size_t search_quads = 5'000;           ///< parts up to this many quads try every count of search_subregions
   std::vector<int> search_subregions{2, 3, 4, 5, 6, 8};
   std::size_t bent_round_quads = 5'000;       ///< automatic mode retries partitions with bendable interfaces only
                                               ///< for parts up to this many quads (smile, 1,300, needed it once;
