@@ -113,7 +113,7 @@ std::vector<std::vector<CandidateSpec>> candidate_rounds(const Region& region, c
   }
   const int by_area = std::max(1, static_cast<int>(std::lround(quads / static_cast<double>(options.target_quads_per_part))));
   const int by_perimeter = static_cast<int>(std::lround(perimeter / (options.perimeter_per_subregion * options.size)));
-  const int automatic = std::max(by_area, by_perimeter);
+  const int automatic = std::min(std::max(by_area, by_perimeter), std::max(by_area, options.max_automatic_subregions));
   // A boundary much longer than a square's of the same area (twice over), or features longer than the rings.
   const bool convoluted = ring_length > 8.0 * std::sqrt(quads) * options.size || perimeter > 2.0 * ring_length;
   if (quads > static_cast<double>(options.search_quads)) {
