@@ -83,6 +83,10 @@ int run_mesh(const MeshArgs& args) {
       std::cerr << "warning: part " << u["part"] << ": subregion " << u["subregion"] << " at (" << u["at"][0] << ", "
                 << u["at"][1] << ") is an unstructured patch of " << u["quads"] << " quads: "
                 << u["reason"].get<std::string>() << "\n";
+  if (const auto& simp = result.report["simplify"]; simp["vertices_after"] != simp["vertices_before"])
+    std::cerr << "simplified curves finer than the size: " << simp["vertices_before"] << " -> " << simp["vertices_after"]
+              << " vertices, largest distance moved " << simp["max_distance"] << " (" << simp["max_distance_over_size"]
+              << " of the size), area change " << simp["area_change"] << " (--simplify 0 keeps them)\n";
   std::cerr << "structured fraction " << result.report["summary"]["structured_fraction"] << " ("
             << result.report["summary"]["unstructured_subregions"] << " of " << result.report["summary"]["subregions"]
             << " subregions unstructured)\n";

@@ -149,6 +149,21 @@ SimplifyStats simplify_region(Region& region, const SimplifyOptions& options) {
     for (int w : {a, b})
       if (!pool.locked[w] && pool.prev[w] >= 0 && pool.next[w] >= 0) heap.push({current[w] = area(w), w});
   }
+  // How far the input moved: every removed vertex's distance to the kept segment that replaced it.
+  for (const Line& line : lines) {
+    std::vector<int> kept;
+    for (int i = 0; i < line.size; ++i)
+      if (pool.alive[line.first + i]) kept.push_back(i);
+    if (kept.empty()) continue;
+    for (std::size_t k = 0; k < kept.size(); ++k) {
+      const bool last = k + 1 == kept.size();
+      if (last && !line.closed) break;
+      const int from = kept[k], to = last ? kept[0] + line.size : kept[k + 1];
+      const Vec2 pa = pool.p[line.first + from], pb = pool.p[line.first + to % line.size];
+      for (int i = from + 1; i < to; ++i)
+        stats.max_distance = std::max(stats.max_distance, point_segment_distance(pool.p[line.first + i % line.size], pa, pb));
+    }
+  }
   // Write the surviving vertices back in order.
   auto collect = [&](const Line& line) {
     std::vector<Vec2> out;

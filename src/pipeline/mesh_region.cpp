@@ -564,7 +564,10 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
       {"candidates", tried},
       {"dropped_parts", dropped},
       {"simplify", {{"fraction_of_size", options.simplify}, {"vertices_before", simplify_stats.vertices_before},
-                    {"vertices_after", simplify_stats.vertices_after}, {"refused", simplify_stats.refused}}},
+                    {"vertices_after", simplify_stats.vertices_after}, {"refused", simplify_stats.refused},
+                    {"max_distance", simplify_stats.max_distance},
+                    {"max_distance_over_size", simplify_stats.max_distance / options.size},
+                    {"area_change", area != 0.0 ? region_area(*work) / area - 1.0 : 0.0}}},
       {"smooth", {{"sweeps", smooth.sweeps}, {"moves", smooth.moves}, {"curve_moves", smooth.curve_moves}}},
       {"seconds", {{"parts", seconds_parts}}},
   };

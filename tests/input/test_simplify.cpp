@@ -38,3 +38,19 @@ TEST(Simplify, ZeroAreaThresholdChangesNothingAndSharedVerticesStay) {
   // (5, 0.001) is nearly collinear but a feature ends there: it stays.
   EXPECT_EQ(r.rings[0].points.size(), 5u);
 }
+
+TEST(Simplify, ReportsHowFarTheRemovedVerticesLie) {
+  // A square whose bottom side has a bump 0.3 high at x = 4 and 0.1 high at x = 7: with a threshold above both
+  // triangles' areas both go, and the largest distance is the higher bump's, measured to the new bottom side.
+  Region r;
+  r.source = "test";
+  r.num_parts = 1;
+  r.rings.push_back({{{0, 0}, {4, 0.3}, {7, 0.1}, {10, 0}, {10, 10}, {0, 10}}, 0, false, 0});
+  SimplifyOptions o;
+  o.min_area = 2.0;
+  const SimplifyStats st = simplify_region(r, o);
+  ASSERT_EQ(r.rings[0].points.size(), 4u);
+  EXPECT_NEAR(st.max_distance, 0.3, 1e-12);
+  Region kept = r;
+  EXPECT_EQ(simplify_region(kept, {}).max_distance, 0.0);
+}

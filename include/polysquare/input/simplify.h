@@ -16,6 +16,7 @@ struct SimplifyOptions {
 struct SimplifyStats {
   std::size_t vertices_before = 0, vertices_after = 0;
   std::size_t refused = 0;  ///< removals refused because the shortcut would cross or cover other geometry
+  double max_distance = 0.0;  ///< largest distance of a removed vertex from the simplified curve (region units)
 };
 
 /// Simplifies every ring and feature curve in place. Ring vertices where a feature ends, feature end points,

@@ -20,7 +20,8 @@ struct MeshOptions {
   std::uint64_t seed = 1;        ///< seed of every randomized stage (partitioning); the output depends only on it
   double corner_threshold_deg = 30.0;  ///< input vertices turning by more than this are mesh nodes
   double simplify = 0.0;         ///< simplify curves first: remove vertices whose triangle area is below
-                                 ///< (simplify * size)^2, keeping topology (coastlines: 0.5); 0 = off
+                                 ///< (simplify * size)^2, keeping topology (coastlines: 0.5); the report gives the
+                                 ///< largest distance moved and the area change; 0 = off
   std::size_t max_quads = 50'000'000;  ///< refuse sizes whose estimated quad count exceeds this
   int parts = 0;                 ///< subregions per polygon part. 0 = automatic: a part above search_quads quads
                                  ///< is meshed one way, with max(its quads / target_quads_per_part, its boundary
