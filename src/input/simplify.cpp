@@ -141,6 +141,18 @@ SimplifyStats simplify_region(Region& region, const SimplifyOptions& options) {
     if (line_size[l] <= (lines[l].closed ? 4 : 2)) continue;
     if (!shortcut_is_free(v)) { ++stats.refused; pool.locked[v] = 1; continue; }
     const int a = pool.prev[v], b = pool.next[v];
+    if (options.max_distance > 0.0) {
+      // Every input vertex the new segment replaces (those removed before between a and b, and v) stays
+      // within max_distance of it; the line's vertices are consecutive in the pool.
+      const Line& line = lines[static_cast<std::size_t>(l)];
+      bool close = true;
+      for (int i = a;;) {
+        i = i + 1 < line.first + line.size ? i + 1 : line.first;
+        if (i == b) break;
+        close = close && point_segment_distance(pool.p[i], pool.p[a], pool.p[b]) <= options.max_distance;
+      }
+      if (!close) { pool.locked[v] = 1; continue; }
+    }
     pool.alive[v] = 0;
     pool.next[a] = b;
     pool.prev[b] = a;

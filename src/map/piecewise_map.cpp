@@ -745,6 +745,10 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
   // A patch that cannot be built (no room for its construction near a narrow neck, an odd count all round)
   // takes in its neighbours, mapped or not, and is built again over their union, which gains room and reaches
   // ring pieces that can even out its count; the subregions beyond keep their maps and nodes.
+  for (int p : options.grown_patches)
+    if (p >= 0 && static_cast<std::size_t>(p) < n && is_patch[static_cast<std::size_t>(p)] &&
+        patch_error[static_cast<std::size_t>(p)].empty())
+      patch_error[static_cast<std::size_t>(p)] = sub_name(static_cast<std::size_t>(p)) + ": its patch left a folded or poor quad";
   std::vector<std::int32_t> group(n);  // the subregion whose patch holds p (p itself unless p joined a union)
   for (std::size_t p = 0; p < n; ++p) group[p] = static_cast<std::int32_t>(p);
   for (int grow = 0; grow < options.patch_growth; ++grow) {

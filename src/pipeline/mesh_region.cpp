@@ -163,14 +163,16 @@ struct Candidate {
 // What a candidate is meshed again with, after a round left folded or poor quads in some subregions: mapped
 // subregions become patches, patches are built by the other (matching) construction.
 struct Repairs {
-  std::vector<int> patches, matched;
-  // Adds the subregions in `bad`; false when none of them can be repaired further.
+  std::vector<int> patches, matched, grown;
+  // Adds the subregions in `bad`; false when none of them can be repaired further. A mapped one becomes a
+  // patch, a patch is built by the matching construction, and a matched patch grows over its neighbours.
   bool add(const std::set<int>& bad, const PartMapStats& stats) {
     bool added = false;
+    auto has = [](const std::vector<int>& list, int s) { return std::find(list.begin(), list.end(), s) != list.end(); };
     for (int s : bad) {
       const bool mapped = stats.subregions[static_cast<std::size_t>(s)].mapped;
-      std::vector<int>& list = mapped ? patches : matched;
-      if (std::find(list.begin(), list.end(), s) != list.end()) continue;
+      std::vector<int>& list = mapped ? patches : (has(matched, s) ? grown : matched);
+      if (has(list, s)) continue;
       list.push_back(s);
       added = true;
     }
@@ -318,6 +320,7 @@ Candidate try_candidate(const Region& region, const RegionPart& part, const Poly
     PolysquareMapOptions with_repairs = map;
     with_repairs.patch_subregions.insert(with_repairs.patch_subregions.end(), repairs.patches.begin(), repairs.patches.end());
     with_repairs.matched_patches = repairs.matched;
+    with_repairs.grown_patches = repairs.grown;
     return map_part(region, part, with_repairs);
   });
 }
@@ -364,6 +367,7 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
     simplified = region;
     SimplifyOptions so;
     so.min_area = (options.simplify * options.size) * (options.simplify * options.size);
+    so.max_distance = options.size;  // the simplified curves stay within h of the input
     simplify_stats = simplify_region(simplified, so);
     work = &simplified;
   }

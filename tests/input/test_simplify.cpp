@@ -54,3 +54,18 @@ TEST(Simplify, ReportsHowFarTheRemovedVerticesLie) {
   Region kept = r;
   EXPECT_EQ(simplify_region(kept, {}).max_distance, 0.0);
 }
+
+TEST(Simplify, KeepsEveryInputVertexWithinTheDistanceBound) {
+  // The same bumps with a bound of 0.2: the 0.1 bump may go, the 0.3 one may not (neither alone nor after it).
+  Region r;
+  r.source = "test";
+  r.num_parts = 1;
+  r.rings.push_back({{{0, 0}, {4, 0.3}, {7, 0.1}, {10, 0}, {10, 10}, {0, 10}}, 0, false, 0});
+  SimplifyOptions o;
+  o.min_area = 2.0;
+  o.max_distance = 0.2;
+  const SimplifyStats st = simplify_region(r, o);
+  EXPECT_NE(std::find(r.rings[0].points.begin(), r.rings[0].points.end(), Vec2{4, 0.3}), r.rings[0].points.end());
+  EXPECT_LE(st.max_distance, 0.2);
+  EXPECT_EQ(r.rings[0].points.size(), 5u);
+}

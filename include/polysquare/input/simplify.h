@@ -11,6 +11,8 @@ namespace polysquare {
 struct SimplifyOptions {
   double min_area = 0.0;  ///< Visvalingam-Whyatt: vertices whose triangle with their neighbours has an area below
                           ///< this are removed, smallest first (region units squared); 0 disables
+  double max_distance = 0.0;  ///< a removal is skipped when an input vertex it replaces would lie farther than
+                              ///< this from the new segment (region units); 0 = no bound
 };
 
 struct SimplifyStats {

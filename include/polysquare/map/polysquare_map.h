@@ -40,6 +40,8 @@ struct PolysquareMapOptions {
                                       ///< (a user who wants a zone unstructured; the tests of local repair)
   std::vector<int> matched_patches;   ///< patches built by the matching construction (PatchMethod::matching): the
                                       ///< retry for a patch whose first construction left a poor or folded quad
+  std::vector<int> grown_patches;     ///< patches rebuilt over their neighbours' area at once (patch_growth): the
+                                      ///< retry for a matched patch that still left a folded or poor quad
   int patch_growth = 3;  ///< times a patch that cannot be built takes in its neighbouring subregions and is built
                          ///< again over their union (a narrow or odd-counted subregion gains room and a ring piece)
   DeformOptions deform;
