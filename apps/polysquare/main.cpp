@@ -9,6 +9,7 @@
 #include <iostream>
 
 #include "polysquare/core/error.h"
+#include "polysquare/core/version.h"
 #include "polysquare/input/read_region.h"
 #include "polysquare/io/atomic_file.h"
 #include "polysquare/io/mesh_io.h"

@@ -1,2 +1,3 @@
 # Sources of the core module (relative to this folder).
 list(APPEND MODULE_SOURCES)
+list(APPEND MODULE_SOURCES version.cpp)

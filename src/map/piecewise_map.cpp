@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <functional>
 #include <map>
 #include <set>
 #include <tuple>
@@ -726,18 +725,23 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
   std::vector<std::uint8_t> is_patch(n, 0);
   for (std::size_t p = 0; p < n; ++p) is_patch[p] = !failure[p].empty();
   std::vector<std::string> patch_error(n);
+  // Builds the patch of subregion (or union) `sub`, numbered p, on the nodes of its quantized neighbours.
+  auto build_patch = [&](std::size_t p, const Subregion& sub, const std::vector<std::uint8_t>& patch_now,
+                         PatchMethod method) {
+    const PatchInput in = patch_input(sub, patch_now, side_count, options.size, options.layout.corner_threshold_deg,
+                                      sub_name(p));
+    PatchOptions po;
+    po.size = options.size;
+    po.method = method;
+    meshes[p] = mesh_patch(in, po);
+    side_nodes[p] = in.nodes.size();
+  };
   for_each_subregion(n, [&](std::size_t p) {
     if (!is_patch[p]) return;
     try {
-      const PatchInput in = patch_input(subs[p], is_patch, side_count, options.size, options.layout.corner_threshold_deg,
-                                        sub_name(p));
-      PatchOptions po;
-      po.size = options.size;
-      if (std::find(options.matched_patches.begin(), options.matched_patches.end(), static_cast<int>(p)) !=
-          options.matched_patches.end())
-        po.method = PatchMethod::matching;
-      meshes[p] = mesh_patch(in, po);
-      side_nodes[p] = in.nodes.size();
+      const bool matched = std::find(options.matched_patches.begin(), options.matched_patches.end(),
+                                     static_cast<int>(p)) != options.matched_patches.end();
+      build_patch(p, subs[p], is_patch, matched ? PatchMethod::matching : PatchMethod::automatic);
     } catch (const MeshingError& e) {
       patch_error[p] = sub_name(p) + ": its map failed (" + failure[p] + ") and so did its repair: " + e.what();
     }
@@ -759,8 +763,9 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
     // Every failed group absorbs the groups across its boundary (groups meeting through one merge).
     std::vector<std::int32_t> into(n);
     for (std::size_t p = 0; p < n; ++p) into[p] = static_cast<std::int32_t>(p);
-    std::function<std::int32_t(std::int32_t)> root = [&](std::int32_t p) {
-      return into[static_cast<std::size_t>(p)] == p ? p : into[static_cast<std::size_t>(p)] = root(into[static_cast<std::size_t>(p)]);
+    auto root = [&](std::int32_t p) {
+      while (into[static_cast<std::size_t>(p)] != p) p = into[static_cast<std::size_t>(p)];
+      return p;
     };
     for (std::size_t p = 0; p < n; ++p) {
       if (!failed.count(group[p])) continue;
@@ -798,13 +803,7 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
     for_each_subregion(roots.size(), [&](std::size_t k) {
       const auto r = static_cast<std::size_t>(roots[k]);
       try {
-        const Subregion u = cut_subregion(tri, tp, g, roots[k], members_of[r], name);
-        const PatchInput in = patch_input(u, patch_now, side_count, options.size, options.layout.corner_threshold_deg,
-                                          sub_name(r));
-        PatchOptions po;
-        po.size = options.size;
-        meshes[r] = mesh_patch(in, po);
-        side_nodes[r] = in.nodes.size();
+        build_patch(r, cut_subregion(tri, tp, g, roots[k], members_of[r], name), patch_now, PatchMethod::automatic);
       } catch (const MeshingError& e) {
         patch_error[r] = sub_name(r) + ": its repair failed even over its neighbours' area too (" +
                          std::to_string(grow + 1) + " times): " + e.what();

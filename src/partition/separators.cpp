@@ -363,6 +363,8 @@ int merge_enclosed_parts(const TriMesh& mesh, std::vector<std::int32_t>& triangl
       }
     }
     std::set<std::uint64_t> visited;
+    std::map<std::int32_t, std::int32_t> merge;  // enclosed part -> the part around it
+    std::set<std::int32_t> touched;              // parts whose neighbourhood a merge of this pass changes
     for (const auto& [k0, first] : next) {
       if (visited.count(k0)) continue;
       const auto part = static_cast<std::int32_t>(k0 >> 32);
@@ -380,12 +382,15 @@ int merge_enclosed_parts(const TriMesh& mesh, std::vector<std::int32_t>& triangl
         v = w;
         k = key(part, v);
       }
-      if (!enclosed || area <= 0.0) continue;
-      for (auto& p : triangle_part)
-        if (p == part) p = across;
-      changed = true;
-      break;  // neighbourhoods changed: recompute
+      // Merges of one pass must not depend on each other (a part merged into one that is merged itself);
+      // the others wait for the next pass, which sees the new neighbourhoods.
+      if (!enclosed || area <= 0.0 || touched.count(part) || touched.count(across)) continue;
+      merge[part] = across;
+      touched.insert({part, across});
     }
+    for (auto& p : triangle_part)
+      if (auto it = merge.find(p); it != merge.end()) p = it->second;
+    changed = !merge.empty();
   }
   // Renumber the remaining parts 0 .. k-1 in their old order.
   std::map<std::int32_t, std::int32_t> renumber;

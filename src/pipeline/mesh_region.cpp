@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "polysquare/core/error.h"
+#include "polysquare/core/version.h"
 #include "polysquare/fallback/split_triangles.h"
 #include "polysquare/input/simplify.h"
 #include "polysquare/pipeline/invariants.h"
@@ -69,7 +70,8 @@ struct CandidateSpec {
 };
 
 // Candidates for one part, in rounds: a round is meshed only when every candidate of the rounds before it
-// failed or left unstructured patches. An explicit --parts K is one round, K with bendable interfaces the next, one poly-square the last.
+// failed or left unstructured patches. An explicit --parts K is one round, K with bendable interfaces the next,
+// one poly-square the last.
 // Automatic mode meshes small parts every way at once (one poly-square, the counts of search_subregions, the
 // area- and perimeter-based counts) and retries their partitions with bendable interfaces (parts up to
 // bent_round_quads); a large part is meshed one way (see MeshOptions::parts), the whole-part fallback only when
@@ -113,7 +115,7 @@ std::vector<std::vector<CandidateSpec>> candidate_rounds(const Region& region, c
   }
   const int by_area = std::max(1, static_cast<int>(std::lround(quads / static_cast<double>(options.target_quads_per_part))));
   const int by_perimeter = static_cast<int>(std::lround(perimeter / (options.perimeter_per_subregion * options.size)));
-  const int automatic = std::min(std::max(by_area, by_perimeter), std::max(by_area, options.max_automatic_subregions));
+  const int automatic = std::max(by_area, std::min(by_perimeter, options.max_automatic_subregions));
   // A boundary much longer than a square's of the same area (twice over), or features longer than the rings.
   const bool convoluted = ring_length > 8.0 * std::sqrt(quads) * options.size || perimeter > 2.0 * ring_length;
   if (quads > static_cast<double>(options.search_quads)) {
@@ -544,7 +546,7 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
       {"subregions", subregion_count},
       {"unstructured_subregions", unstructured.size()},
       {"seconds", std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count()},
-      {"version", POLYSQUARE_VERSION}};
+      {"version", library_version()}};
   out.report = {
       {"summary", summary},
       {"unstructured", unstructured},

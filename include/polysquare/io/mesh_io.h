@@ -49,7 +49,4 @@ void write_mesh(const std::filesystem::path& path, const QuadMesh& mesh, const M
 void write_msh(const std::filesystem::path& path, const QuadMesh& mesh, const MeshWriteOptions& options = {});
 void write_vtu(const std::filesystem::path& path, const QuadMesh& mesh);
 
-/// The library version (CMake project version), as `polysquare --version` and the report's summary give it.
-const char* library_version();
-
 }  // namespace polysquare

@@ -1,5 +1,5 @@
 // The version string lives in the library, where CMake defines it, so the CLI and the report agree.
-#include "polysquare/io/mesh_io.h"
+#include "polysquare/core/version.h"
 
 namespace polysquare {
 
