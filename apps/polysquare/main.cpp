@@ -13,6 +13,7 @@
 #include "polysquare/input/read_region.h"
 #include "polysquare/io/atomic_file.h"
 #include "polysquare/io/mesh_io.h"
+#include "polysquare/io/solver_files.h"
 #include "polysquare/io/svg.h"
 #include "polysquare/partition/partition.h"
 #include "polysquare/pipeline/mesh_region.h"
@@ -32,12 +33,18 @@ void on_signal(int sig) {
 struct MeshArgs {
   std::string input, output, report, picture, partition_picture, map = "ppm";
   bool binary = false, bend_interfaces = false;
+  double depth = 0.0;  ///< constant water depth (positive down) for solver files, when depth_given
+  bool depth_given = false;
   std::string msh_version = "2.2", msh_features = "nodes";
   InputOptions input_options;
   MeshOptions options;
 };
 
 int run_mesh(const MeshArgs& args) {
+  check_output_path(args.output);  // before minutes of meshing
+  const std::string out_ext = lower_extension(args.output);
+  if (args.depth_given && (out_ext == ".msh" || out_ext == ".vtu"))
+    std::cerr << "warning: --depth is written to .gr3, .nc and .2dm files only, not to " << args.output << "\n";
   InputNotes notes;
   const Region region = read_input(args.input, args.input_options, notes);
   for (const std::string& r : notes.repairs) std::cerr << "warning: repaired: " << r << "\n";
@@ -54,7 +61,9 @@ int run_mesh(const MeshArgs& args) {
   DomainDistanceOptions measure{args.options.corner_threshold_deg, {}};
   for (const auto& d : result.report["dropped_parts"]) measure.skip_parts.push_back(d["part"].get<int>());
   const DomainDistance domain = domain_distance(result.mesh, region, measure);
+  const FiniteVolumeQuality fv = finite_volume_quality(result.mesh);
   result.report["quality"] = to_json(quality);
+  result.report["quality"]["finite_volume"] = to_json(fv);
   result.report["summary"]["sj_min"] = quality.sj.min;
   result.report["summary"]["interior_singularities"] = quality.interior_singularities;
   result.report["input"]["repairs"] = notes.repairs;
@@ -66,8 +75,16 @@ int run_mesh(const MeshArgs& args) {
   const MeshWriteOptions write{args.binary,
                                args.msh_features == "lines" ? MshFeatures::lines
                                : args.msh_features == "none" ? MshFeatures::none : MshFeatures::nodes,
-                               args.msh_version == "4.1" ? MshVersion::v4_1 : MshVersion::v2_2};
+                               args.msh_version == "4.1" ? MshVersion::v4_1 : MshVersion::v2_2,
+                               args.depth_given ? std::vector<double>(result.mesh.nodes.size(), args.depth)
+                                                : std::vector<double>{},
+                               notes.input_crs};
   write_mesh(args.output, result.mesh, write);
+  if (out_ext == ".nc" && fv.orthogonality_above > 0)
+    std::cerr << "warning: " << fv.orthogonality_above << " of " << fv.interior_edges
+              << " interior edges have a D-Flow FM orthogonality above " << fv.orthogonality_limit
+              << ", which D-Flow FM refuses; the worst, " << fv.orthogonality.max << ", at "
+              << at_text(fv.orthogonality_worst_at) << "\n";
   if (!args.report.empty())
     write_file_atomically(args.report, [&](std::ostream& os) { os << result.report.dump(2) << "\n"; }, false);
   if (!args.picture.empty()) write_svg(args.picture, result.mesh, &region);
@@ -117,13 +134,14 @@ int run_mesh(const MeshArgs& args) {
   }
   std::cout << "polysquare: " << result.mesh.quads.size() << " quads, " << result.mesh.nodes.size() << " nodes -> "
             << args.output << "\n"
-            << format_quality_text(quality, &domain);
+            << format_quality_text(quality, &domain) << format_finite_volume_text(fv);
   return 0;
 }
 
 int run_quality(const std::string& mesh_path, const std::string& domain_path, bool json, bool require_quads) {
   const QuadMesh mesh = read_mesh(mesh_path);
   const QualityReport quality = compute_quality(mesh);
+  const FiniteVolumeQuality fv = finite_volume_quality(mesh);
   // Shape figures cover quads only, so a mesh of triangles would otherwise read as SJ 0 and pass.
   if (quality.triangles > 0)
     std::cerr << (require_quads ? "error: " : "warning: ") << mesh_path << " has " << quality.triangles
@@ -132,10 +150,11 @@ int run_quality(const std::string& mesh_path, const std::string& domain_path, bo
   if (!domain_path.empty()) domain = domain_distance(mesh, read_region(domain_path));
   if (json) {
     nlohmann::json j = to_json(quality);
+    j["finite_volume"] = to_json(fv);
     if (domain) j["domain"] = to_json(*domain);
     std::cout << j.dump(2) << "\n";
   } else {
-    std::cout << format_quality_text(quality, domain ? &*domain : nullptr);
+    std::cout << format_quality_text(quality, domain ? &*domain : nullptr) << format_finite_volume_text(fv);
   }
   return require_quads && quality.triangles > 0 ? 2 : 0;
 }
@@ -166,7 +185,10 @@ int main(int argc, char** argv) {
   cmd_mesh->add_option("--crs", mesh.input_options.crs,
                        "projected CRS to mesh geographic input in, e.g. EPSG:32615 (default: UTM zone of the centre)");
   cmd_mesh->add_option("--size", mesh.options.size, "target quad edge length h, in region units (metres for geographic input)")->required();
-  cmd_mesh->add_option("-o,--output", mesh.output, "output mesh (.msh Gmsh, .vtu VTK)")->required();
+  cmd_mesh->add_option("-o,--output", mesh.output, "output mesh (.msh Gmsh, .vtu VTK, .gr3 SCHISM hgrid, .nc D-Flow FM UGRID net file, .2dm SMS)")->required();
+  cmd_mesh->add_option("--depth", mesh.depth,
+                       "constant water depth, positive down, for .gr3 (depth column), .nc (mesh2d_node_z = -depth) "
+                       "and .2dm files");
   cmd_mesh->add_option("--report", mesh.report, "write a JSON report (options, timings, counts, quality)");
   cmd_mesh->add_option("--picture", mesh.picture, "write an SVG picture of the mesh coloured by scaled Jacobian");
   cmd_mesh->add_option("--parts", mesh.options.parts,
@@ -235,6 +257,7 @@ int main(int argc, char** argv) {
     std::cerr << "error: " << e.what() << "\n";
     return 2;
   }
+  mesh.depth_given = cmd_mesh->count("--depth") > 0;
   try {
     if (*cmd_mesh) return run_mesh(mesh);
     if (*cmd_quality) return run_quality(quality_mesh, quality_domain, quality_json, quality_require_quads);

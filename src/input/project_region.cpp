@@ -7,6 +7,7 @@
 #include <memory>
 #include <sstream>
 
+#include "io/crs_info.h"
 #include "polysquare/core/error.h"
 
 namespace polysquare {
@@ -17,17 +18,6 @@ std::string pt(Vec2 p) {
   os.precision(12);
   os << "(" << p.x << ", " << p.y << ")";
   return os.str();
-}
-
-// A CRS from a name in the input or on the command line; never reads a file or the network, since the name may
-// come from an untrusted file.
-bool parse_crs(const std::string& name, OGRSpatialReference& srs) {
-  const char* no_io[] = {"ALLOW_NETWORK_ACCESS=NO", "ALLOW_FILE_ACCESS=NO", nullptr};
-  CPLPushErrorHandler(CPLQuietErrorHandler);
-  const bool ok = srs.SetFromUserInput(name.c_str(), no_io) == OGRERR_NONE;
-  CPLPopErrorHandler();
-  srs.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);  // x = longitude / easting whatever the CRS says
-  return ok;
 }
 
 std::string units_of(const OGRSpatialReference& srs) {
@@ -76,7 +66,7 @@ void project_region(Region& region, const std::string& target_crs, InputNotes& n
     return;
   }
   OGRSpatialReference source;
-  if (!parse_crs(region.crs, source)) {
+  if (!crs::parse(region.crs, source)) {
     notes.warnings.push_back(region.source + ": CRS \"" + region.crs.substr(0, 80) +
                              "\" is not one PROJ knows; coordinates are taken as planar");
     return;
@@ -99,7 +89,7 @@ void project_region(Region& region, const std::string& target_crs, InputNotes& n
     const double to_degree = source.GetAngularUnits() / (M_PI / 180.0);
     target_name = "EPSG:" + std::to_string(utm_epsg(c.x * to_degree, c.y * to_degree));
   }
-  if (!parse_crs(target_name, target)) throw InputError("--crs " + target_name + ": not a CRS PROJ knows");
+  if (!crs::parse(target_name, target)) throw InputError("--crs " + target_name + ": not a CRS PROJ knows");
   if (!target.IsProjected()) throw InputError("--crs " + target_name + ": not a projected CRS (meshing needs planar coordinates)");
   std::unique_ptr<OGRCoordinateTransformation> transform(OGRCreateCoordinateTransformation(&source, &target));
   if (!transform)

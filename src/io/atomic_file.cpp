@@ -33,18 +33,12 @@ void release_slot(int i) {
 }
 }  // namespace
 
-void write_file_atomically(const std::filesystem::path& target, const std::function<void(std::ostream&)>& write,
-                           bool binary) {
+void write_path_atomically(const std::filesystem::path& target,
+                           const std::function<void(const std::filesystem::path&)>& write) {
   const std::filesystem::path tmp = target.string() + ".tmp." + std::to_string(::getpid());
   const int slot = claim_slot(tmp.string());
   try {
-    {
-      std::ofstream out(tmp, binary ? std::ios::binary | std::ios::trunc : std::ios::trunc);
-      if (!out) throw InputError(target.string() + ": cannot write the output file");
-      write(out);
-      out.flush();
-      if (!out) throw InputError(target.string() + ": writing failed (disk full?)");
-    }
+    write(tmp);
     std::filesystem::rename(tmp, target);
   } catch (...) {
     std::error_code ec;
@@ -53,6 +47,17 @@ void write_file_atomically(const std::filesystem::path& target, const std::funct
     throw;
   }
   release_slot(slot);
+}
+
+void write_file_atomically(const std::filesystem::path& target, const std::function<void(std::ostream&)>& write,
+                           bool binary) {
+  write_path_atomically(target, [&](const std::filesystem::path& tmp) {
+    std::ofstream out(tmp, binary ? std::ios::binary | std::ios::trunc : std::ios::trunc);
+    if (!out) throw InputError(target.string() + ": cannot write the output file");
+    write(out);
+    out.flush();
+    if (!out) throw InputError(target.string() + ": writing failed (disk full?)");
+  });
 }
 
 std::string read_file(const std::filesystem::path& path) {

@@ -6,17 +6,19 @@
 #include "polysquare/core/error.h"
 #include "polysquare/io/atomic_file.h"
 #include "polysquare/io/mesh_io.h"
+#include "polysquare/io/solver_files.h"
 #include "polysquare/io/svg.h"
 #include "polysquare/quality/quality.h"
 
 namespace polysquare {
-namespace {
 
 std::string lower_extension(const std::filesystem::path& p) {
   std::string ext = p.extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   return ext;
 }
+
+namespace {
 
 // Text content of the first DataArray at or after `from` (plain search: std::regex recurses per character and
 // overflows the stack on large files).
@@ -128,7 +130,10 @@ void write_mesh(const std::filesystem::path& path, const QuadMesh& mesh, const M
   const std::string ext = lower_extension(path);
   if (ext == ".msh") return write_msh(path, mesh, options);
   if (ext == ".vtu") return write_vtu(path, mesh);
-  throw InputError(path.string() + ": unsupported output format '" + ext + "' (supported: .msh, .vtu)");
+  if (ext == ".gr3") return write_gr3(path, mesh, options);
+  if (ext == ".nc") return write_ugrid(path, mesh, options);
+  if (ext == ".2dm") return write_2dm(path, mesh, options);
+  throw InputError(path.string() + ": unsupported output format '" + ext + "' (supported: .msh, .vtu, .gr3, .nc, .2dm)");
 }
 
 void write_svg(const std::filesystem::path& path, const QuadMesh& mesh, const Region* region, const SvgOptions& options) {

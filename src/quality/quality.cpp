@@ -288,6 +288,167 @@ std::vector<std::uint8_t> quads_pinned_by_sharp_input(const QuadMesh& mesh, doub
   return pinned;
 }
 
+namespace {
+// Faces: quads first, then triangles.
+std::size_t face_count(const QuadMesh& m) { return m.quads.size() + m.triangles.size(); }
+int face_size(const QuadMesh& m, std::size_t f) { return f < m.quads.size() ? 4 : 3; }
+std::int32_t face_node(const QuadMesh& m, std::size_t f, int k) {
+  return f < m.quads.size() ? m.quads[f][static_cast<std::size_t>(k)]
+                            : m.triangles[f - m.quads.size()][static_cast<std::size_t>(k)];
+}
+double face_area(const QuadMesh& m, std::size_t f) {
+  const int n = face_size(m, f);
+  double s = 0;
+  for (int k = 0; k < n; ++k) s += cross(m.nodes[face_node(m, f, k)], m.nodes[face_node(m, f, (k + 1) % n)]);
+  return 0.5 * s;
+}
+}  // namespace
+
+EdgeTable edge_table(const QuadMesh& mesh) {
+  EdgeTable t;
+  std::unordered_map<std::uint64_t, std::int32_t> index;
+  index.reserve(2 * face_count(mesh) + 16);
+  for (std::size_t f = 0; f < face_count(mesh); ++f) {
+    const int n = face_size(mesh, f);
+    for (int k = 0; k < n; ++k) {
+      const std::int32_t a = face_node(mesh, f, k), b = face_node(mesh, f, (k + 1) % n);
+      const auto [it, added] = index.try_emplace(edge_key(a, b), static_cast<std::int32_t>(t.nodes.size()));
+      if (added) {
+        t.nodes.push_back({a, b});
+        t.faces.push_back({static_cast<std::int32_t>(f), -1});
+      } else if (t.faces[static_cast<std::size_t>(it->second)][1] < 0) {
+        t.faces[static_cast<std::size_t>(it->second)][1] = static_cast<std::int32_t>(f);
+      }
+    }
+  }
+  return t;
+}
+
+std::vector<Vec2> face_circumcentres(const QuadMesh& mesh, const EdgeTable& edges) {
+  const std::size_t nf = face_count(mesh);
+  // Interior sides of each face, as (midpoint, unit direction).
+  std::vector<std::vector<std::pair<Vec2, Vec2>>> interior(nf);
+  for (std::size_t e = 0; e < edges.nodes.size(); ++e) {
+    if (edges.faces[e][1] < 0) continue;
+    const Vec2 a = mesh.nodes[edges.nodes[e][0]], b = mesh.nodes[edges.nodes[e][1]];
+    const double len = distance(a, b);
+    if (!(len > 0)) continue;
+    for (auto f : edges.faces[e]) interior[static_cast<std::size_t>(f)].push_back({0.5 * (a + b), (1.0 / len) * (b - a)});
+  }
+  std::vector<Vec2> centres(nf);
+  std::vector<Vec2> poly;
+  for (std::size_t f = 0; f < nf; ++f) {
+    const int n = face_size(mesh, f);
+    poly.clear();
+    Vec2 mean{0, 0};
+    for (int k = 0; k < n; ++k) {
+      poly.push_back(mesh.nodes[face_node(mesh, f, k)]);
+      mean = mean + poly.back();
+    }
+    mean = (1.0 / n) * mean;
+    Vec2 c = mean;
+    if (n == 3) {
+      const Vec2 d1 = poly[1] - poly[0], d2 = poly[2] - poly[0];
+      const double den = 2 * cross(d1, d2);
+      if (den != 0)
+        c = poly[0] + (1.0 / den) * Vec2{d2.y * dot(d1, d1) - d1.y * dot(d2, d2), d1.x * dot(d2, d2) - d2.x * dot(d1, d1)};
+    } else if (interior[f].empty()) {
+      // Centroid of the area (a face with no neighbour carries no link).
+      const double area = face_area(mesh, f);
+      if (area != 0) {
+        Vec2 s{0, 0};
+        for (int k = 0; k < n; ++k) {
+          const Vec2 p = poly[static_cast<std::size_t>(k)], q = poly[static_cast<std::size_t>((k + 1) % n)];
+          s = s + cross(p, q) * (p + q);
+        }
+        c = (1.0 / (6 * area)) * s;
+      }
+    } else if (interior[f].size() >= 2) {
+      for (int iter = 0; iter < 100; ++iter) {
+        const Vec2 previous = c;
+        for (const auto& [mid, dir] : interior[f]) c = c + (-0.1 * dot(previous - mid, dir)) * dir;
+        if (iter > 0 && distance(c, previous) < 1e-15) break;
+      }
+    }
+    if (!point_in_ring(c, poly)) {
+      // Back along mean -> c to the first side it crosses.
+      double best = INFINITY;
+      const Vec2 d = c - mean;
+      for (int k = 0; k < n; ++k) {
+        const Vec2 p = poly[static_cast<std::size_t>(k)], q = poly[static_cast<std::size_t>((k + 1) % n)];
+        const double den = cross(d, q - p);
+        if (den == 0) continue;
+        const double t = cross(p - mean, q - p) / den, u = cross(p - mean, d) / den;
+        if (t >= 0 && t <= 1 && u >= 0 && u <= 1) best = std::min(best, t);
+      }
+      if (best <= 1) c = mean + best * d;
+    }
+    centres[f] = c;
+  }
+  return centres;
+}
+
+std::vector<double> edge_orthogonality(const QuadMesh& mesh, const EdgeTable& edges, const std::vector<Vec2>& centres) {
+  std::vector<double> o(edges.nodes.size(), -1.0);
+  for (std::size_t e = 0; e < edges.nodes.size(); ++e) {
+    if (edges.faces[e][1] < 0) continue;
+    const Vec2 t = mesh.nodes[edges.nodes[e][1]] - mesh.nodes[edges.nodes[e][0]];
+    const Vec2 link = centres[static_cast<std::size_t>(edges.faces[e][1])] - centres[static_cast<std::size_t>(edges.faces[e][0])];
+    const double l = norm(t) * norm(link);
+    // Coinciding centres give no direction: counted as the worst (1), as the solver cannot use that link.
+    o[e] = l > 0 ? std::min(1.0, std::abs(dot(t, link)) / l) : 1.0;
+  }
+  return o;
+}
+
+FiniteVolumeQuality finite_volume_quality(const QuadMesh& mesh, double orthogonality_limit) {
+  FiniteVolumeQuality r;
+  r.orthogonality_limit = orthogonality_limit;
+  const EdgeTable edges = edge_table(mesh);
+  const std::vector<Vec2> centres = face_circumcentres(mesh, edges);
+  const std::vector<double> ortho = edge_orthogonality(mesh, edges, centres);
+  std::vector<double> o, s;
+  double worst_o = -1, worst_s = -1;
+  for (std::size_t e = 0; e < edges.nodes.size(); ++e) {
+    if (edges.faces[e][1] < 0) continue;
+    const Vec2 mid = 0.5 * (mesh.nodes[edges.nodes[e][0]] + mesh.nodes[edges.nodes[e][1]]);
+    o.push_back(ortho[e]);
+    if (ortho[e] > orthogonality_limit) r.orthogonality_above++;
+    if (ortho[e] > worst_o) { worst_o = ortho[e]; r.orthogonality_worst_at = mid; }
+    const double a = std::abs(face_area(mesh, static_cast<std::size_t>(edges.faces[e][0])));
+    const double b = std::abs(face_area(mesh, static_cast<std::size_t>(edges.faces[e][1])));
+    const double ratio = std::min(a, b) > 0 ? std::max(a, b) / std::min(a, b) : INFINITY;
+    s.push_back(ratio);
+    if (ratio > worst_s) { worst_s = ratio; r.smoothness_worst_at = mid; }
+  }
+  r.interior_edges = o.size();
+  r.orthogonality = stats_of(o);
+  r.smoothness = stats_of(s);
+  return r;
+}
+
+nlohmann::json to_json(const FiniteVolumeQuality& q) {
+  auto st = [](const Stats& s) { return nlohmann::json{{"min", s.min}, {"avg", s.avg}, {"max", s.max}, {"std", s.std}}; };
+  return {{"interior_edges", q.interior_edges}, {"orthogonality", st(q.orthogonality)},
+          {"orthogonality_limit", q.orthogonality_limit}, {"orthogonality_above_limit", q.orthogonality_above},
+          {"orthogonality_worst_at", {q.orthogonality_worst_at.x, q.orthogonality_worst_at.y}},
+          {"smoothness", st(q.smoothness)},
+          {"smoothness_worst_at", {q.smoothness_worst_at.x, q.smoothness_worst_at.y}}};
+}
+
+std::string format_finite_volume_text(const FiniteVolumeQuality& q) {
+  std::ostringstream os;
+  os.precision(4);
+  os << "  finite volume (D-Flow FM, " << q.interior_edges << " interior edges): orthogonality max "
+     << q.orthogonality.max << " avg " << q.orthogonality.avg << ", " << q.orthogonality_above << " above "
+     << q.orthogonality_limit;
+  os.precision(10);
+  os << " (worst at " << q.orthogonality_worst_at.x << ", " << q.orthogonality_worst_at.y << ")";
+  os.precision(4);
+  os << "; smoothness (area ratio) max " << q.smoothness.max << " avg " << q.smoothness.avg << "\n";
+  return os.str();
+}
+
 nlohmann::json to_json(const QualityReport& q) {
   auto st = [](const Stats& s) { return nlohmann::json{{"min", s.min}, {"avg", s.avg}, {"max", s.max}, {"std", s.std}}; };
   return {{"nodes", q.nodes}, {"quads", q.quads}, {"triangles", q.triangles}, {"inverted", q.inverted},

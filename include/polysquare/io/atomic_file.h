@@ -13,6 +13,11 @@ namespace polysquare {
 void write_file_atomically(const std::filesystem::path& target, const std::function<void(std::ostream&)>& write,
                            bool binary);
 
+/// The same for writers that need a path rather than a stream (netCDF): `write` creates the temporary path it is
+/// given; it is renamed onto `target` when `write` returns, removed when it throws.
+void write_path_atomically(const std::filesystem::path& target,
+                           const std::function<void(const std::filesystem::path&)>& write);
+
 /// The whole content of a file; throws InputError naming the path when it cannot be read.
 std::string read_file(const std::filesystem::path& path);
 

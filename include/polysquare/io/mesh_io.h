@@ -1,8 +1,10 @@
-// Mesh files: Gmsh MSH (read 2.2 and 4.1, ASCII and binary; write 4.1), VTK XML .vtu (write; read ASCII).
+// Mesh files: Gmsh MSH (read 2.2 and 4.1, ASCII and binary; write 2.2 and 4.1), VTK XML .vtu (write; read ASCII);
+// solver files (write only): SCHISM .gr3, D-Flow FM UGRID .nc, SMS .2dm (solver_files.h).
 #pragma once
 
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "polysquare/core/quad_mesh.h"
 #include "polysquare/core/region.h"
@@ -26,6 +28,13 @@ struct MeshWriteOptions {
   bool binary = false;                         ///< binary MSH instead of ASCII
   MshFeatures msh_features = MshFeatures::nodes;
   MshVersion msh_version = MshVersion::v2_2;
+  /// #nodes water depth below the datum, positive down (empty: none). SCHISM .gr3 writes it as its depth column
+  /// (0 when empty), UGRID .nc as mesh2d_node_z = -depth (bed level, positive up; left out when empty), .2dm as
+  /// the ND z value (0 when empty).
+  std::vector<double> depth;
+  /// The CRS the input was read in (InputNotes::input_crs). When it is geographic, a .gr3 gets its lon/lat
+  /// companion `<stem>.ll` (hgrid.gr3 -> hgrid.ll) next to it, nodes projected back from mesh.crs to EPSG:4326.
+  std::string input_crs;
 };
 
 /// Reads a mesh by extension (.msh, .vtu). Quads and triangles are kept; lines of physical curves named
@@ -44,8 +53,12 @@ QuadMesh parse_vtu(const std::string& xml, const std::string& name);
 /// Writes by extension, atomically. .msh = Gmsh MSH 2.2 or 4.1: the quads are physical surface "domain" (tag 1),
 /// boundary ring r is physical curve "boundary_ring_<r>" of line elements (tags 2, 3, ... in ring order, which
 /// deal.II and MFEM take as boundary ids), feature curve c is "feature_<c>" (the next tags) as options say;
-/// .vtu = VTK XML with per-cell quality fields.
+/// .vtu = VTK XML with per-cell quality fields; .gr3 = SCHISM hgrid (write_gr3), .nc = D-Flow FM UGRID-1.0 net
+/// file (write_ugrid), .2dm = SMS (write_2dm), see solver_files.h.
 void write_mesh(const std::filesystem::path& path, const QuadMesh& mesh, const MeshWriteOptions& options = {});
+/// The extension of `path` in lower case, with its dot (".msh"; empty when there is none).
+std::string lower_extension(const std::filesystem::path& path);
+
 void write_msh(const std::filesystem::path& path, const QuadMesh& mesh, const MeshWriteOptions& options = {});
 void write_vtu(const std::filesystem::path& path, const QuadMesh& mesh);
 

@@ -7,6 +7,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "polysquare/core/geometry.h"
 #include "polysquare/core/quad_mesh.h"
 #include "polysquare/core/region.h"
 
@@ -65,6 +66,44 @@ struct DomainDistance {
   std::size_t sharp_vertices_total = 0, sharp_vertices_missing = 0;
 };
 DomainDistance domain_distance(const QuadMesh& mesh, const Region& region, const DomainDistanceOptions& options = {});
+
+/// Faces are the quads (indices 0 .. #quads-1) then the triangles (#quads ..). Edges in order of first appearance
+/// along the faces' sides, each oriented as the first face that has it walks it.
+struct EdgeTable {
+  std::vector<std::array<std::int32_t, 2>> nodes;  ///< #edges by 2 node indices
+  std::vector<std::array<std::int32_t, 2>> faces;  ///< #edges by 2 face indices; faces[e][1] = -1 on the boundary
+                                                   ///< (and for the third face of a non-manifold edge, not kept)
+};
+EdgeTable edge_table(const QuadMesh& mesh);
+
+/// #faces cell centres as D-Flow FM and MeshKernel (MeshFaceCenters, default settings) define them, the points
+/// the finite-volume fluxes are exchanged between: a triangle's circumcentre; a face with two or more interior
+/// edges (edges shared with another face) starts at the mean of its nodes and takes 100 relaxation steps (or
+/// until it moves less than 1e-15) that pull it a tenth of the way onto the perpendicular bisector of each interior
+/// edge in turn, from the previous step's point (towards the least-squares point of those bisectors; the centre
+/// of a parallelogram, where it starts, is that point); with
+/// one interior edge the mean of its nodes, with none the centroid of its area. A centre that ends outside its
+/// face is moved back along the line from the mean of the nodes to where that line leaves the face.
+std::vector<Vec2> face_circumcentres(const QuadMesh& mesh, const EdgeTable& edges);
+
+/// D-Flow FM's grid checks, per interior edge (MeshKernel's MeshOrthogonality and MeshSmoothness):
+/// orthogonality = |cos| of the angle between the edge and the link joining the circumcentres of its two faces
+/// (0 is ideal; D-Flow FM refuses nets above 0.5); smoothness = the larger over the smaller area of its two faces.
+struct FiniteVolumeQuality {
+  std::size_t interior_edges = 0;
+  double orthogonality_limit = 0.5;
+  Stats orthogonality;                  ///< over interior edges
+  std::size_t orthogonality_above = 0;  ///< interior edges with orthogonality > orthogonality_limit
+  Vec2 orthogonality_worst_at{};        ///< midpoint of the edge with the largest orthogonality
+  Stats smoothness;                     ///< over interior edges
+  Vec2 smoothness_worst_at{};           ///< midpoint of the edge with the largest smoothness
+};
+FiniteVolumeQuality finite_volume_quality(const QuadMesh& mesh, double orthogonality_limit = 0.5);
+/// #edges orthogonality of each edge of `edges` (-1 on boundary edges), from `centres` (face_circumcentres).
+std::vector<double> edge_orthogonality(const QuadMesh& mesh, const EdgeTable& edges, const std::vector<Vec2>& centres);
+
+nlohmann::json to_json(const FiniteVolumeQuality& q);
+std::string format_finite_volume_text(const FiniteVolumeQuality& q);
 
 nlohmann::json to_json(const QualityReport& q);
 nlohmann::json to_json(const DomainDistance& d);

@@ -1,0 +1,566 @@
+// Solver files (SCHISM .gr3/.ll, D-Flow FM UGRID .nc, SMS .2dm) read back by readers that are not ours and compared
+// node for node with the mesh; D-Flow FM's finite-volume figures on meshes whose answer follows from geometry.
+//
+// The gr3 and 2dm parsers below follow the formats' documentation (SCHISM manual, "hgrid.gr3": NE NP, nodes
+// "id x y depth", elements "id i34 n1..n4", then NOPE, NETA, per open segment its count and nodes, NBOU, NVEL, per
+// land segment "count flag" and nodes; SMS 2dm: cards MESH2D, E4Q id n1..n4 mat, ND id x y z, NS node ids with the
+// last one negative), not our writers. UGRID is read by python3-netcdf4.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <numbers>
+#include <set>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "polysquare/core/error.h"
+#include "polysquare/input/read_region.h"
+#include "polysquare/io/mesh_io.h"
+#include "polysquare/io/solver_files.h"
+#include "polysquare/pipeline/mesh_region.h"
+#include "polysquare/quality/quality.h"
+
+using namespace polysquare;
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path temp(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("polysquare_solver_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  return dir / name;
+}
+
+struct Case {
+  Region region;
+  QuadMesh mesh;
+};
+Case mesh_case(const std::string& name, double size) {
+  Case c;
+  c.region = read_region(std::string(POLYSQUARE_DATA_DIR) + "/cases/" + name + ".geojson");
+  MeshOptions o;
+  o.size = size;
+  c.mesh = mesh_region(c.region, o).mesh;
+  return c;
+}
+const Case& key_case() {  // one outer ring and one hole
+  static const Case c = mesh_case("key", 2.0);
+  return c;
+}
+const Case& dam_case() {  // one outer ring, feature curves
+  static const Case c = mesh_case("dam_channel", 2.0);
+  return c;
+}
+
+// Writes `mesh` by the extension of `name` (in the test folder) with a constant depth; returns the path.
+fs::path write_with_depth(const std::string& name, const QuadMesh& mesh, double depth) {
+  const fs::path p = temp(name);
+  MeshWriteOptions o;
+  o.depth.assign(mesh.nodes.size(), depth);
+  write_mesh(p, mesh, o);
+  return p;
+}
+
+using Edge = std::pair<std::int32_t, std::int32_t>;  // 0-based, sorted
+Edge sorted(std::int32_t a, std::int32_t b) { return {std::min(a, b), std::max(a, b)}; }
+
+// Edges of one quad, computed here from the quads alone.
+std::set<Edge> one_quad_edges(const QuadMesh& m) {
+  std::map<Edge, int> count;
+  for (const auto& q : m.quads)
+    for (int k = 0; k < 4; ++k) count[sorted(q[k], q[(k + 1) % 4])]++;
+  std::set<Edge> out;
+  for (const auto& [e, c] : count)
+    if (c == 1) out.insert(e);
+  return out;
+}
+std::set<Edge> all_edges(const QuadMesh& m) {
+  std::set<Edge> out;
+  for (const auto& q : m.quads)
+    for (int k = 0; k < 4; ++k) out.insert(sorted(q[k], q[(k + 1) % 4]));
+  return out;
+}
+double signed_area(const std::vector<Vec2>& p) {
+  double s = 0;
+  for (std::size_t i = 0; i < p.size(); ++i) s += cross(p[i], p[(i + 1) % p.size()]);
+  return 0.5 * s;
+}
+
+// ---- SCHISM hgrid.gr3, parsed from the format's description ----
+struct Gr3 {
+  std::string header;
+  std::vector<Vec2> xy;
+  std::vector<double> depth;
+  std::vector<std::vector<std::int32_t>> elements;  // 1-based as in the file
+  std::vector<std::vector<std::int32_t>> open;
+  std::vector<std::vector<std::int32_t>> land;
+  std::vector<int> land_flag;
+  long neta = -1, nvel = -1;
+};
+// The leading integer of a line ("12 = Number of open boundaries" -> 12).
+long leading(std::istream& in, std::string* rest = nullptr) {
+  std::string line;
+  if (!std::getline(in, line)) throw std::runtime_error("gr3: truncated");
+  std::istringstream ls(line);
+  long v = 0;
+  if (!(ls >> v)) throw std::runtime_error("gr3: expected a number in '" + line + "'");
+  if (rest) std::getline(ls, *rest);
+  return v;
+}
+Gr3 parse_gr3(const fs::path& p) {
+  std::ifstream in(p);
+  Gr3 g;
+  std::getline(in, g.header);
+  long ne = 0, np = 0;
+  in >> ne >> np;
+  for (long i = 0; i < np; ++i) {
+    long id = 0;
+    std::string x, y, d;
+    in >> id >> x >> y >> d;
+    if (id != i + 1) throw std::runtime_error("gr3: node ids out of order");
+    g.xy.push_back({std::strtod(x.c_str(), nullptr), std::strtod(y.c_str(), nullptr)});
+    g.depth.push_back(std::strtod(d.c_str(), nullptr));
+  }
+  for (long i = 0; i < ne; ++i) {
+    long id = 0, i34 = 0;
+    in >> id >> i34;
+    std::vector<std::int32_t> e(static_cast<std::size_t>(i34));
+    for (auto& v : e) in >> v;
+    if (id != i + 1) throw std::runtime_error("gr3: element ids out of order");
+    g.elements.push_back(e);
+  }
+  std::string rest;
+  std::getline(in, rest);  // end of the last element line
+  const long nope = leading(in);
+  g.neta = leading(in);
+  for (long k = 0; k < nope; ++k) {
+    std::vector<std::int32_t> seg(static_cast<std::size_t>(leading(in)));
+    for (auto& v : seg) v = static_cast<std::int32_t>(leading(in));
+    g.open.push_back(seg);
+  }
+  const long nbou = leading(in);
+  g.nvel = leading(in);
+  for (long k = 0; k < nbou; ++k) {
+    const long count = leading(in, &rest);
+    std::istringstream flag(rest);
+    int f = -1;
+    flag >> f;
+    std::vector<std::int32_t> seg(static_cast<std::size_t>(count));
+    for (auto& v : seg) v = static_cast<std::int32_t>(leading(in));
+    g.land.push_back(seg);
+    g.land_flag.push_back(f);
+  }
+  return g;
+}
+
+void expect_gr3_matches(const Gr3& g, const Case& c, double depth, std::size_t holes) {
+  const QuadMesh& m = c.mesh;
+  ASSERT_EQ(g.xy.size(), m.nodes.size());
+  ASSERT_EQ(g.elements.size(), m.quads.size());
+  for (std::size_t i = 0; i < m.nodes.size(); ++i) {
+    ASSERT_TRUE(g.xy[i] == m.nodes[i]) << "node " << i + 1;
+    ASSERT_EQ(g.depth[i], depth) << "node " << i + 1;
+  }
+  for (std::size_t q = 0; q < m.quads.size(); ++q) {
+    ASSERT_EQ(g.elements[q].size(), 4u) << "element " << q + 1;
+    std::vector<Vec2> corners;
+    for (int k = 0; k < 4; ++k) {
+      ASSERT_EQ(g.elements[q][static_cast<std::size_t>(k)], m.quads[q][static_cast<std::size_t>(k)] + 1) << "element " << q + 1;
+      corners.push_back(g.xy[static_cast<std::size_t>(g.elements[q][static_cast<std::size_t>(k)] - 1)]);
+    }
+    ASSERT_GT(signed_area(corners), 0.0) << "element " << q + 1 << " is not counter-clockwise";
+  }
+  // No named open segments yet: all land, one segment per ring, islands flagged and clockwise.
+  EXPECT_TRUE(g.open.empty());
+  EXPECT_EQ(g.neta, 0);
+  long listed = 0;
+  std::size_t islands = 0;
+  std::set<Edge> covered;
+  for (std::size_t k = 0; k < g.land.size(); ++k) {
+    const auto& seg = g.land[k];
+    listed += static_cast<long>(seg.size());
+    ASSERT_TRUE(g.land_flag[k] == 0 || g.land_flag[k] == 1);
+    // The loop's nodes once each: the outer land boundary is listed closed (its first node repeated at the end),
+    // an island closes on itself.
+    std::vector<std::int32_t> ring(seg.begin(), seg.end());
+    if (g.land_flag[k] == 0) {
+      ASSERT_EQ(seg.front(), seg.back()) << "land segment " << k + 1;
+      ring.pop_back();
+    } else {
+      ++islands;
+    }
+    std::vector<Vec2> pts;
+    for (auto v : ring) pts.push_back(g.xy[static_cast<std::size_t>(v - 1)]);
+    if (g.land_flag[k] == 1) EXPECT_LT(signed_area(pts), 0.0) << "island " << k + 1 << " is not clockwise";
+    else EXPECT_GT(signed_area(pts), 0.0) << "land boundary " << k + 1 << " is not counter-clockwise";
+    for (std::size_t i = 0; i < ring.size(); ++i) {
+      const Edge e = sorted(ring[i] - 1, ring[(i + 1) % ring.size()] - 1);
+      EXPECT_TRUE(covered.insert(e).second) << "edge listed twice in land boundary " << k + 1;
+    }
+  }
+  EXPECT_EQ(g.nvel, listed);
+  EXPECT_EQ(islands, holes);
+  EXPECT_EQ(g.land.size(), holes + 1);
+  EXPECT_EQ(covered, one_quad_edges(m));  // every boundary edge, and nothing else, is on a land boundary
+}
+
+// ---- SMS 2dm ----
+struct Sms {
+  std::map<long, Vec2> nodes;
+  std::map<long, double> z;
+  std::map<long, std::vector<long>> e4q;
+  std::vector<std::vector<long>> strings;
+  bool mesh2d = false;
+};
+Sms parse_2dm(const fs::path& p) {
+  std::ifstream in(p);
+  Sms s;
+  std::string line;
+  std::vector<long> current;
+  while (std::getline(in, line)) {
+    std::istringstream ls(line);
+    std::string card;
+    ls >> card;
+    if (card == "MESH2D") s.mesh2d = true;
+    if (card == "ND") {
+      long id = 0;
+      std::string x, y, z;
+      ls >> id >> x >> y >> z;
+      s.nodes[id] = {std::strtod(x.c_str(), nullptr), std::strtod(y.c_str(), nullptr)};
+      s.z[id] = std::strtod(z.c_str(), nullptr);
+    }
+    if (card == "E4Q") {
+      long id = 0;
+      std::vector<long> n(4);
+      ls >> id >> n[0] >> n[1] >> n[2] >> n[3];
+      s.e4q[id] = n;
+    }
+    if (card == "NS") {
+      long v = 0;
+      while (ls >> v) {
+        current.push_back(std::abs(v));
+        if (v < 0) {
+          s.strings.push_back(current);
+          current.clear();
+        }
+      }
+    }
+  }
+  if (!current.empty()) throw std::runtime_error("2dm: a nodestring without its negative last node");
+  return s;
+}
+
+// Runs a shell command, returns its stdout (and stderr with `with_stderr`).
+std::string output_of(const std::string& cmd, int* code = nullptr, bool with_stderr = false) {
+  const fs::path out = temp("cmd.out");
+  const int status = std::system((cmd + " > " + out.string() + (with_stderr ? " 2>&1" : "")).c_str());
+  if (code) *code = WEXITSTATUS(status);
+  std::ifstream in(out);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+// python3-netcdf4 dumps what a UGRID reader needs as JSON (raw values: no masking, no start_index applied).
+nlohmann::json read_ugrid_with_netcdf4(const fs::path& nc) {
+  const fs::path script = temp("read_ugrid.py");
+  std::ofstream(script) << R"(import json, sys
+import netCDF4
+ds = netCDF4.Dataset(sys.argv[1])
+ds.set_auto_mask(False)
+out = {"dimensions": {k: len(v) for k, v in ds.dimensions.items()}, "attributes": {}, "data": {}, "format": ds.data_model}
+for name, var in ds.variables.items():
+    out["attributes"][name] = {a: (var.getncattr(a).item() if hasattr(var.getncattr(a), "item") else var.getncattr(a)) for a in var.ncattrs()}
+    out["data"][name] = var[...].tolist()
+out["global"] = {a: ds.getncattr(a) for a in ds.ncattrs()}
+print(json.dumps(out))
+)";
+  int code = 0;
+  const std::string text = output_of("/usr/bin/python3 " + script.string() + " " + nc.string(), &code);
+  if (code != 0) throw std::runtime_error("python3-netcdf4 could not read " + nc.string() + " (run scripts/install-deps)");
+  return nlohmann::json::parse(text);
+}
+
+}  // namespace
+
+TEST(SolverFiles, BoundaryLoopsFollowTheRingsWithTheDomainOnTheLeft) {
+  const QuadMesh& m = key_case().mesh;
+  const std::vector<BoundaryLoop> loops = boundary_loops(m);
+  ASSERT_EQ(loops.size(), 2u);
+  std::set<Edge> covered;
+  for (const BoundaryLoop& l : loops) {
+    std::vector<Vec2> pts;
+    for (auto v : l.nodes) pts.push_back(m.nodes[static_cast<std::size_t>(v)]);
+    EXPECT_EQ(signed_area(pts) < 0, l.inner);
+    for (std::size_t i = 0; i < l.nodes.size(); ++i) covered.insert(sorted(l.nodes[i], l.nodes[(i + 1) % l.nodes.size()]));
+    // Each loop carries the ring index its tagged edges have, and the ring's kind.
+    ASSERT_GE(l.ring, 0);
+    EXPECT_EQ(key_case().region.rings[static_cast<std::size_t>(l.ring)].hole, l.inner);
+  }
+  EXPECT_EQ(loops[0].ring, 0);
+  EXPECT_EQ(covered, one_quad_edges(m));
+}
+
+TEST(SolverFiles, Gr3ReadBackNodeForNodeWithLandBoundariesAndIsland) {
+  const Case& c = key_case();
+  const fs::path p = write_with_depth("hgrid.gr3", c.mesh, 7.5);
+  expect_gr3_matches(parse_gr3(p), c, 7.5, 1);
+  EXPECT_FALSE(fs::exists(temp("hgrid.ll"))) << "planar input gets no lon/lat companion";
+  // Without a depth the column is 0.
+  write_mesh(p, c.mesh);
+  expect_gr3_matches(parse_gr3(p), c, 0.0, 1);
+}
+
+TEST(SolverFiles, Gr3WithGeographicInputGetsLonLatCompanion) {
+  Case c = dam_case();
+  c.mesh.crs = "EPSG:32616";
+  const fs::path p = temp("geo/hgrid.gr3");
+  fs::create_directories(p.parent_path());
+  MeshWriteOptions o;
+  o.input_crs = "EPSG:4326";
+  write_mesh(p, c.mesh, o);
+  const fs::path ll = temp("geo/hgrid.ll");
+  ASSERT_TRUE(fs::exists(ll));
+  const Gr3 g = parse_gr3(p), l = parse_gr3(ll);
+  expect_gr3_matches(g, c, 0.0, 0);
+  ASSERT_EQ(l.xy.size(), g.xy.size());
+  EXPECT_EQ(l.elements, g.elements);
+  EXPECT_EQ(l.land, g.land);
+  // GDAL's own command-line tool takes the lon/lat back to UTM 16N: the nodes again.
+  const fs::path in = temp("geo/lonlat.txt");
+  {
+    std::ofstream os(in);
+    os.precision(17);
+    for (Vec2 p2 : l.xy) os << p2.x << " " << p2.y << "\n";
+  }
+  int code = 0;
+  std::istringstream back(output_of("gdaltransform -s_srs EPSG:4326 -t_srs EPSG:32616 -output_xy < " + in.string(), &code));
+  ASSERT_EQ(code, 0) << "gdaltransform (gdal-bin) failed";
+  for (std::size_t i = 0; i < g.xy.size(); ++i) {
+    Vec2 p2;
+    ASSERT_TRUE(back >> p2.x >> p2.y) << "node " << i + 1;
+    EXPECT_NEAR(p2.x, g.xy[i].x, 1e-5) << "node " << i + 1;
+    EXPECT_NEAR(p2.y, g.xy[i].y, 1e-5) << "node " << i + 1;
+    EXPECT_GT(l.xy[i].x, -96.0) << "longitude inside UTM zone 16";
+    EXPECT_LT(l.xy[i].x, -84.0);
+  }
+}
+
+TEST(SolverFiles, TwoDmReadBackNodeForNodeWithNodestrings) {
+  const Case& c = key_case();
+  const fs::path p = write_with_depth("mesh.2dm", c.mesh, 3.25);
+  const Sms s = parse_2dm(p);
+  EXPECT_TRUE(s.mesh2d);
+  ASSERT_EQ(s.nodes.size(), c.mesh.nodes.size());
+  ASSERT_EQ(s.e4q.size(), c.mesh.quads.size());
+  for (std::size_t i = 0; i < c.mesh.nodes.size(); ++i) {
+    ASSERT_TRUE(s.nodes.at(static_cast<long>(i + 1)) == c.mesh.nodes[i]) << "node " << i + 1;
+    ASSERT_EQ(s.z.at(static_cast<long>(i + 1)), 3.25);
+  }
+  for (std::size_t q = 0; q < c.mesh.quads.size(); ++q)
+    for (int k = 0; k < 4; ++k)
+      ASSERT_EQ(s.e4q.at(static_cast<long>(q + 1))[static_cast<std::size_t>(k)], c.mesh.quads[q][static_cast<std::size_t>(k)] + 1);
+  // One closed nodestring per boundary ring, together covering exactly the boundary edges.
+  ASSERT_EQ(s.strings.size(), 2u);
+  std::set<Edge> covered;
+  for (const auto& ns : s.strings) {
+    EXPECT_EQ(ns.front(), ns.back()) << "a ring's nodestring is closed";
+    for (std::size_t i = 0; i + 1 < ns.size(); ++i)
+      EXPECT_TRUE(covered.insert(sorted(static_cast<std::int32_t>(ns[i] - 1), static_cast<std::int32_t>(ns[i + 1] - 1))).second);
+  }
+  EXPECT_EQ(covered, one_quad_edges(c.mesh));
+}
+
+TEST(SolverFiles, UgridReadBackByNetcdf4NodeForNode) {
+  Case c = dam_case();
+  c.mesh.crs = "EPSG:32616";
+  const fs::path p = write_with_depth("dam_net.nc", c.mesh, 4.0);
+  const nlohmann::json j = read_ugrid_with_netcdf4(p);
+  const QuadMesh& m = c.mesh;
+  EXPECT_EQ(j["format"], "NETCDF3_64BIT_OFFSET");
+  EXPECT_EQ(j["dimensions"]["mesh2d_nNodes"], m.nodes.size());
+  EXPECT_EQ(j["dimensions"]["mesh2d_nFaces"], m.quads.size());
+  EXPECT_EQ(j["dimensions"]["mesh2d_nMax_face_nodes"], 4);
+  const std::set<Edge> edges = all_edges(m);
+  EXPECT_EQ(j["dimensions"]["mesh2d_nEdges"], edges.size());
+  const auto& topo = j["attributes"]["mesh2d"];
+  EXPECT_EQ(topo["cf_role"], "mesh_topology");
+  EXPECT_EQ(topo["topology_dimension"], 2);
+  EXPECT_EQ(topo["node_coordinates"], "mesh2d_node_x mesh2d_node_y");
+  EXPECT_EQ(topo["face_node_connectivity"], "mesh2d_face_nodes");
+  EXPECT_EQ(topo["edge_node_connectivity"], "mesh2d_edge_nodes");
+  EXPECT_EQ(topo["face_coordinates"], "mesh2d_face_x mesh2d_face_y");
+  EXPECT_EQ(topo["edge_coordinates"], "mesh2d_edge_x mesh2d_edge_y");
+  const auto& crs = j["attributes"]["projected_coordinate_system"];
+  EXPECT_EQ(crs["epsg"], 32616);
+  EXPECT_EQ(crs["EPSG_code"], "EPSG:32616");
+  EXPECT_FALSE(j["attributes"].contains("wgs84"));
+  // Nodes, faces and edges node for node.
+  const auto& x = j["data"]["mesh2d_node_x"];
+  const auto& y = j["data"]["mesh2d_node_y"];
+  const auto& z = j["data"]["mesh2d_node_z"];
+  ASSERT_EQ(x.size(), m.nodes.size());
+  for (std::size_t i = 0; i < m.nodes.size(); ++i) {
+    ASSERT_EQ(x[i].get<double>(), m.nodes[i].x);
+    ASSERT_EQ(y[i].get<double>(), m.nodes[i].y);
+    ASSERT_EQ(z[i].get<double>(), -4.0) << "bed level is minus the depth";
+  }
+  EXPECT_EQ(j["attributes"]["mesh2d_node_z"]["standard_name"], "altitude");
+  const auto& fn_att = j["attributes"]["mesh2d_face_nodes"];
+  EXPECT_EQ(fn_att["cf_role"], "face_node_connectivity");
+  EXPECT_EQ(fn_att["_FillValue"], -999);
+  const int start = fn_att["start_index"].get<int>();
+  EXPECT_EQ(start, 1);
+  const auto& fn = j["data"]["mesh2d_face_nodes"];
+  ASSERT_EQ(fn.size(), m.quads.size());
+  for (std::size_t q = 0; q < m.quads.size(); ++q) {
+    std::vector<Vec2> corners;
+    for (int k = 0; k < 4; ++k) {
+      const int v = fn[q][static_cast<std::size_t>(k)].get<int>() - start;
+      ASSERT_EQ(v, m.quads[q][static_cast<std::size_t>(k)]) << "face " << q;
+      corners.push_back({x[static_cast<std::size_t>(v)].get<double>(), y[static_cast<std::size_t>(v)].get<double>()});
+    }
+    ASSERT_GT(signed_area(corners), 0.0) << "face " << q << " is not counter-clockwise";
+  }
+  const int edge_start = j["attributes"]["mesh2d_edge_nodes"]["start_index"].get<int>();
+  std::set<Edge> read_edges;
+  for (const auto& e : j["data"]["mesh2d_edge_nodes"])
+    EXPECT_TRUE(read_edges.insert(sorted(e[0].get<int>() - edge_start, e[1].get<int>() - edge_start)).second);
+  EXPECT_EQ(read_edges, edges);
+  EXPECT_NE(j["global"]["Conventions"].get<std::string>().find("UGRID-1.0"), std::string::npos);
+}
+
+TEST(SolverFiles, UgridWithoutDepthOrCrs) {
+  const Case& c = key_case();  // planar: no CRS
+  const fs::path p = temp("key_net.nc");
+  write_mesh(p, c.mesh);
+  const nlohmann::json j = read_ugrid_with_netcdf4(p);
+  EXPECT_FALSE(j["data"].contains("mesh2d_node_z"));
+  EXPECT_EQ(j["attributes"]["projected_coordinate_system"]["epsg"], 0);
+}
+
+TEST(SolverFiles, OutputPathCheckedBeforeMeshing) {
+  EXPECT_NO_THROW(check_output_path(temp("ok.gr3")));
+  EXPECT_NO_THROW(check_output_path(temp("ok_net.nc")));
+  EXPECT_NO_THROW(check_output_path(temp("OK.2DM")));
+  EXPECT_THROW(check_output_path(temp("mesh.foo")), InputError);
+  EXPECT_THROW(check_output_path(temp("no_such_dir/mesh.nc")), InputError);
+  EXPECT_THROW(check_output_path(temp("mesh")), InputError);  // no extension
+  const fs::path ro = temp("read_only");
+  fs::create_directories(ro);
+  fs::permissions(ro, fs::perms::owner_read | fs::perms::owner_exec);
+  if (::geteuid() != 0) EXPECT_THROW(check_output_path(ro / "mesh.gr3"), InputError);  // root writes anyway
+  fs::permissions(ro, fs::perms::owner_all);
+  // The CLI refuses at once, with one error line and exit code 2, before reading the input.
+  int code = 0;
+  const std::string err = output_of(std::string(POLYSQUARE_CLI) + " mesh " + POLYSQUARE_DATA_DIR +
+                                    "/cases/delta_box.geojson --size 200 -o " + temp("no_such_dir/x.nc").string(),
+                                    &code, true);
+  EXPECT_EQ(code, 2);
+  EXPECT_EQ(err.rfind("error: ", 0), 0u) << err;
+  EXPECT_NE(err.find("does not exist"), std::string::npos) << err;
+}
+
+TEST(SolverFiles, CliWritesNetFileWithDepthAndReportsFiniteVolumeQuality) {
+  const fs::path nc = temp("cli_net.nc"), report = temp("cli_report.json");
+  int code = 0;
+  const std::string out = output_of(std::string(POLYSQUARE_CLI) + " mesh " + POLYSQUARE_DATA_DIR +
+                                    "/cases/letter_M.geojson --size 2 --depth 12 -o " + nc.string() + " --report " +
+                                    report.string(), &code);
+  ASSERT_EQ(code, 0);
+  EXPECT_NE(out.find("orthogonality"), std::string::npos) << out;
+  const nlohmann::json j = read_ugrid_with_netcdf4(nc);
+  for (const auto& z : j["data"]["mesh2d_node_z"]) EXPECT_EQ(z.get<double>(), -12.0);
+  std::ifstream in(report);
+  const nlohmann::json r = nlohmann::json::parse(in);
+  const auto& fv = r["quality"]["finite_volume"];
+  EXPECT_GT(fv["interior_edges"].get<int>(), 0);
+  EXPECT_LE(fv["orthogonality"]["max"].get<double>(), 1.0);
+  EXPECT_GE(fv["smoothness"]["min"].get<double>(), 1.0);
+  // The quality command reads a mesh file and gives the same figures.
+  const fs::path msh = temp("cli.msh");
+  ASSERT_EQ(std::system((std::string(POLYSQUARE_CLI) + " mesh " + POLYSQUARE_DATA_DIR + "/cases/letter_M.geojson --size 2 -o " +
+                         msh.string() + " > /dev/null").c_str()), 0);
+  const nlohmann::json q = nlohmann::json::parse(output_of(std::string(POLYSQUARE_CLI) + " quality --json " + msh.string()));
+  EXPECT_EQ(q["finite_volume"]["interior_edges"], fv["interior_edges"]);
+  EXPECT_NEAR(q["finite_volume"]["orthogonality"]["max"].get<double>(), fv["orthogonality"]["max"].get<double>(), 1e-9);
+}
+
+// ---- D-Flow FM finite-volume figures on lattices whose answer is known ----
+namespace {
+// nx by ny cells with corner (i, j) at i * a + j * b (+ column widths for `widths`).
+QuadMesh lattice(int nx, int ny, Vec2 a, Vec2 b, const std::vector<double>& widths = {}) {
+  QuadMesh m;
+  std::vector<double> xs{0};
+  for (int i = 0; i < nx; ++i) xs.push_back(xs.back() + (widths.empty() ? 1.0 : widths[static_cast<std::size_t>(i)]));
+  for (int j = 0; j <= ny; ++j)
+    for (int i = 0; i <= nx; ++i) m.nodes.push_back(xs[static_cast<std::size_t>(i)] * a + static_cast<double>(j) * b);
+  auto id = [&](int i, int j) { return static_cast<std::int32_t>(j * (nx + 1) + i); };
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) m.quads.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)});
+  return m;
+}
+}  // namespace
+
+TEST(FiniteVolumeQuality, SquaresAreOrthogonalAndSmooth) {
+  const FiniteVolumeQuality q = finite_volume_quality(lattice(6, 5, {1, 0}, {0, 1}));
+  EXPECT_EQ(q.interior_edges, static_cast<std::size_t>(5 * 5 + 6 * 4));
+  EXPECT_LT(q.orthogonality.max, 1e-12);
+  EXPECT_EQ(q.orthogonality_above, 0u);
+  EXPECT_NEAR(q.smoothness.max, 1.0, 1e-12);
+}
+
+TEST(FiniteVolumeQuality, ParallelogramsGiveTheCosineOfTheirAngle) {
+  // Sheared cells: between two cells away from the boundary the centres (by symmetry, the cells' centres) are one
+  // step `a` apart across a side along `b`, so the orthogonality there is |cos| of the angle between a and b.
+  const double angle = 50.0 * std::numbers::pi / 180.0;
+  const Vec2 a{1, 0}, b{std::cos(angle), std::sin(angle)};
+  const QuadMesh m = lattice(7, 7, a, b);
+  const EdgeTable edges = edge_table(m);
+  const std::vector<Vec2> centres = face_circumcentres(m, edges);
+  // Cell (3, 3) and its centre.
+  const std::size_t cell = 3 * 7 + 3;
+  const Vec2 expected = 3.5 * a + 3.5 * b;
+  EXPECT_NEAR(centres[cell].x, expected.x, 1e-9);
+  EXPECT_NEAR(centres[cell].y, expected.y, 1e-9);
+  const std::vector<double> ortho = edge_orthogonality(m, edges, centres);
+  bool found = false;
+  for (std::size_t e = 0; e < edges.nodes.size(); ++e) {
+    const auto f = edges.faces[e];
+    if ((f[0] == static_cast<std::int32_t>(cell) && f[1] == static_cast<std::int32_t>(cell + 1)) ||
+        (f[1] == static_cast<std::int32_t>(cell) && f[0] == static_cast<std::int32_t>(cell + 1))) {
+      EXPECT_NEAR(ortho[e], std::abs(std::cos(angle)), 1e-9);
+      found = true;
+    }
+  }
+  EXPECT_TRUE(found);
+  const FiniteVolumeQuality q = finite_volume_quality(m);
+  EXPECT_GE(q.orthogonality.max, std::abs(std::cos(angle)) - 1e-9);
+  EXPECT_GT(q.orthogonality_above, 0u);  // cos 50 degrees = 0.64 > 0.5
+}
+
+TEST(FiniteVolumeQuality, SmoothnessIsTheAreaRatioOfNeighbours) {
+  const FiniteVolumeQuality q = finite_volume_quality(lattice(4, 3, {1, 0}, {0, 1}, {1, 1, 3, 3}));
+  EXPECT_NEAR(q.smoothness.max, 3.0, 1e-12);
+  EXPECT_NEAR(q.smoothness_worst_at.x, 2.0, 1e-12);  // on the line between the widths 1 and 3
+  EXPECT_LT(q.orthogonality.max, 1e-12);            // rectangles stay orthogonal
+}
+
+TEST(FiniteVolumeQuality, TrianglesUseTheirCircumcentre) {
+  // Two equilateral triangles sharing an edge: the circumcentres' link is perpendicular to it.
+  QuadMesh m;
+  m.nodes = {{0, 0}, {1, 0}, {0.5, std::sqrt(3.0) / 2}, {0.5, -std::sqrt(3.0) / 2}};
+  m.triangles = {{0, 1, 2}, {1, 0, 3}};
+  const FiniteVolumeQuality q = finite_volume_quality(m);
+  EXPECT_EQ(q.interior_edges, 1u);
+  EXPECT_LT(q.orthogonality.max, 1e-12);
+  const EdgeTable edges = edge_table(m);
+  const std::vector<Vec2> c = face_circumcentres(m, edges);
+  EXPECT_NEAR(c[0].y, std::sqrt(3.0) / 6, 1e-12);
+}
