@@ -12,6 +12,7 @@
 #include "polysquare/core/version.h"
 #include "polysquare/input/read_region.h"
 #include "polysquare/io/atomic_file.h"
+#include "polysquare/io/bathymetry.h"
 #include "polysquare/io/mesh_io.h"
 #include "polysquare/io/solver_files.h"
 #include "polysquare/io/svg.h"
@@ -35,6 +36,7 @@ struct MeshArgs {
   bool binary = false, bend_interfaces = false;
   double depth = 0.0;  ///< constant water depth (positive down) for solver files, when depth_given
   bool depth_given = false;
+  std::string bathymetry, bathymetry_positive = "up";  ///< raster of elevations (up) or depths (down)
   std::string msh_version = "2.2", msh_features = "nodes";
   InputOptions input_options;
   MeshOptions options;
@@ -43,8 +45,11 @@ struct MeshArgs {
 int run_mesh(const MeshArgs& args) {
   check_output_path(args.output);  // before minutes of meshing
   const std::string out_ext = lower_extension(args.output);
-  if (args.depth_given && (out_ext == ".msh" || out_ext == ".vtu"))
-    std::cerr << "warning: --depth is written to .gr3, .nc and .2dm files only, not to " << args.output << "\n";
+  if ((args.depth_given || !args.bathymetry.empty()) && (out_ext == ".msh" || out_ext == ".vtu"))
+    std::cerr << "warning: depths are written to .gr3, .nc and .2dm files only, not to " << args.output << "\n";
+  if (args.depth_given && !args.bathymetry.empty()) throw InputError("--depth and --bathymetry exclude each other");
+  if (!args.bathymetry.empty() && !fs::is_regular_file(args.bathymetry))
+    throw InputError(args.bathymetry + ": the bathymetry raster does not exist");
   InputNotes notes;
   const Region region = read_input(args.input, args.input_options, notes);
   for (const std::string& r : notes.repairs) std::cerr << "warning: repaired: " << r << "\n";
@@ -76,8 +81,11 @@ int run_mesh(const MeshArgs& args) {
                                args.msh_features == "lines" ? MshFeatures::lines
                                : args.msh_features == "none" ? MshFeatures::none : MshFeatures::nodes,
                                args.msh_version == "4.1" ? MshVersion::v4_1 : MshVersion::v2_2,
-                               args.depth_given ? std::vector<double>(result.mesh.nodes.size(), args.depth)
-                                                : std::vector<double>{},
+                               !args.bathymetry.empty()
+                                   ? sample_bathymetry(args.bathymetry, result.mesh.nodes, result.mesh.crs,
+                                                       {args.bathymetry_positive == "down"})
+                               : args.depth_given ? std::vector<double>(result.mesh.nodes.size(), args.depth)
+                                                  : std::vector<double>{},
                                notes.input_crs};
   write_mesh(args.output, result.mesh, write);
   if (out_ext == ".nc" && fv.orthogonality_above > 0)
@@ -189,6 +197,12 @@ int main(int argc, char** argv) {
   cmd_mesh->add_option("--depth", mesh.depth,
                        "constant water depth, positive down, for .gr3 (depth column), .nc (mesh2d_node_z = -depth) "
                        "and .2dm files");
+  cmd_mesh->add_option("--bathymetry", mesh.bathymetry,
+                       "raster GDAL reads (GeoTIFF, netCDF, ASCII grid, ...) sampled bilinearly at the nodes, in the "
+                       "raster's CRS, for the depths of .gr3, .nc and .2dm files");
+  cmd_mesh->add_option("--bathymetry-positive", mesh.bathymetry_positive,
+                       "up: the raster holds elevations (depth = -value, as GEBCO and DEMs); down: it holds depths")
+      ->check(CLI::IsMember({"up", "down"}))->capture_default_str();
   cmd_mesh->add_option("--report", mesh.report, "write a JSON report (options, timings, counts, quality)");
   cmd_mesh->add_option("--picture", mesh.picture, "write an SVG picture of the mesh coloured by scaled Jacobian");
   cmd_mesh->add_option("--parts", mesh.options.parts,

@@ -23,6 +23,7 @@
 
 #include "polysquare/core/error.h"
 #include "polysquare/input/read_region.h"
+#include "polysquare/io/bathymetry.h"
 #include "polysquare/io/mesh_io.h"
 #include "polysquare/io/solver_files.h"
 #include "polysquare/pipeline/mesh_region.h"
@@ -465,6 +466,14 @@ TEST(SolverFiles, OutputPathCheckedBeforeMeshing) {
   EXPECT_EQ(code, 2);
   EXPECT_EQ(err.rfind("error: ", 0), 0u) << err;
   EXPECT_NE(err.find("does not exist"), std::string::npos) << err;
+  // So is a bathymetry raster that is not there, and --depth beside --bathymetry.
+  const std::string mesh_cmd = std::string(POLYSQUARE_CLI) + " mesh " + POLYSQUARE_DATA_DIR +
+                               "/cases/delta_box.geojson --size 200 -o " + temp("x.gr3").string();
+  output_of(mesh_cmd + " --bathymetry " + temp("no_raster.tif").string(), &code, true);
+  EXPECT_EQ(code, 2);
+  output_of(mesh_cmd + " --depth 3 --bathymetry " + temp("no_raster.tif").string(), &code, true);
+  EXPECT_EQ(code, 2);
+  EXPECT_FALSE(fs::exists(temp("x.gr3")));
 }
 
 TEST(SolverFiles, CliWritesNetFileWithDepthAndReportsFiniteVolumeQuality) {
@@ -563,4 +572,82 @@ TEST(FiniteVolumeQuality, TrianglesUseTheirCircumcentre) {
   const EdgeTable edges = edge_table(m);
   const std::vector<Vec2> c = face_circumcentres(m, edges);
   EXPECT_NEAR(c[0].y, std::sqrt(3.0) / 6, 1e-12);
+}
+
+// ---- Bathymetry rasters ----
+namespace {
+// A raster of z = a x + b y + c sampled at the cell centres, covering `box` with two cells to spare on every side:
+// written as an ESRI ASCII grid, made a Float64 GeoTIFF (in `srs` when given) by GDAL's gdal_translate.
+fs::path linear_grid(const std::string& name, Box2 box, double cell, double a, double b, double c, bool hole = false,
+                     const std::string& srs = "") {
+  const fs::path p = temp(name + ".asc"), tif = temp(name + ".tif");
+  const double x0 = box.lo.x - 2 * cell, y0 = box.lo.y - 2 * cell;
+  const int nx = static_cast<int>(std::ceil((box.hi.x - x0) / cell)) + 2;
+  const int ny = static_cast<int>(std::ceil((box.hi.y - y0) / cell)) + 2;
+  std::ofstream os(p);
+  os.precision(17);
+  os << "ncols " << nx << "\nnrows " << ny << "\nxllcorner " << x0 << "\nyllcorner " << y0 << "\ncellsize " << cell
+     << "\nNODATA_value -9999\n";
+  for (int j = 0; j < ny; ++j) {  // rows from the top
+    for (int i = 0; i < nx; ++i) {
+      const double x = x0 + (i + 0.5) * cell, y = y0 + (ny - j - 0.5) * cell;
+      os << ((hole && i == nx / 2 && j == ny / 2) ? -9999.0 : a * x + b * y + c) << " ";
+    }
+    os << "\n";
+  }
+  os.close();
+  const std::string cmd = "gdal_translate -q -oo DATATYPE=Float64 -ot Float64 " + (srs.empty() ? "" : "-a_srs " + srs + " ") +
+                          p.string() + " " + tif.string();
+  if (std::system(cmd.c_str()) != 0) throw std::runtime_error("gdal_translate failed: " + cmd);
+  return tif;
+}
+Box2 box_of(const std::vector<Vec2>& pts) {
+  Box2 b;
+  for (Vec2 p : pts) b.add(p);
+  return b;
+}
+}  // namespace
+
+TEST(Bathymetry, BilinearReproducesALinearSurfaceAtEveryNode) {
+  const QuadMesh& m = key_case().mesh;
+  const fs::path grid = linear_grid("linear", box_of(m.nodes), 0.7, 0.5, -0.25, -3.0);
+  const std::vector<double> up = sample_bathymetry(grid, m.nodes, "");
+  const std::vector<double> down = sample_bathymetry(grid, m.nodes, "", {true});
+  ASSERT_EQ(up.size(), m.nodes.size());
+  for (std::size_t i = 0; i < m.nodes.size(); ++i) {
+    const double z = 0.5 * m.nodes[i].x - 0.25 * m.nodes[i].y - 3.0;
+    EXPECT_NEAR(up[i], -z, 1e-9) << "node " << i + 1;  // elevations: depth = -z
+    EXPECT_NEAR(down[i], z, 1e-9) << "node " << i + 1;
+  }
+  // A no-data cell is left out, not read as a depth of 9999.
+  const fs::path holed = linear_grid("holed", box_of(m.nodes), 0.7, 0.5, -0.25, -3.0, true);
+  for (double d : sample_bathymetry(holed, m.nodes, "")) EXPECT_LT(std::abs(d), 100.0);
+  // Nodes outside the raster are an error naming the node.
+  Box2 small = box_of(m.nodes);
+  small.hi.x = 0.5 * (small.lo.x + small.hi.x);
+  const fs::path half = linear_grid("half", small, 0.7, 0.5, -0.25, -3.0);
+  EXPECT_THROW(sample_bathymetry(half, m.nodes, ""), InputError);
+  EXPECT_THROW(sample_bathymetry(temp("missing.tif"), m.nodes, ""), InputError);
+}
+
+TEST(Bathymetry, NodesAreTransformedIntoTheRastersCrs) {
+  // The mesh in UTM 16N, the raster in lon/lat (GeoTIFF made by gdal_translate): a surface linear in lon/lat is
+  // reproduced at the nodes' lon/lat as GDAL's own gdaltransform computes them.
+  QuadMesh m = dam_case().mesh;
+  for (Vec2& p : m.nodes) p = p + Vec2{400000.0, 3200000.0};
+  const fs::path xy = temp("utm.txt");
+  {
+    std::ofstream os(xy);
+    os.precision(17);
+    for (Vec2 p : m.nodes) os << p.x << " " << p.y << "\n";
+  }
+  int code = 0;
+  std::istringstream ll(output_of("gdaltransform -s_srs EPSG:32616 -t_srs EPSG:4326 -output_xy < " + xy.string(), &code));
+  ASSERT_EQ(code, 0);
+  std::vector<Vec2> lonlat(m.nodes.size());
+  for (Vec2& p : lonlat) ASSERT_TRUE(ll >> p.x >> p.y);
+  const fs::path tif = linear_grid("lonlat", box_of(lonlat), 1e-4, 2000.0, -1000.0, 5.0, false, "EPSG:4326");
+  const std::vector<double> d = sample_bathymetry(tif, m.nodes, "EPSG:32616", {true});
+  for (std::size_t i = 0; i < m.nodes.size(); ++i)
+    EXPECT_NEAR(d[i], 2000.0 * lonlat[i].x - 1000.0 * lonlat[i].y + 5.0, 1e-6) << "node " << i + 1;
 }
