@@ -268,6 +268,23 @@ std::string output_of(const std::string& cmd, int* code = nullptr, bool with_std
   return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
 }
 
+// `points` transformed by GDAL's own command-line tool gdaltransform (gdal-bin), e.g. from "EPSG:4326".
+std::vector<Vec2> gdaltransform(const std::vector<Vec2>& points, const std::string& from, const std::string& to) {
+  const fs::path in = temp("gdaltransform.txt");
+  {
+    std::ofstream os(in);
+    os.precision(17);
+    for (Vec2 p : points) os << p.x << " " << p.y << "\n";
+  }
+  int code = 0;
+  std::istringstream out(output_of("gdaltransform -s_srs " + from + " -t_srs " + to + " -output_xy < " + in.string(), &code));
+  if (code != 0) throw std::runtime_error("gdaltransform (gdal-bin) failed");
+  std::vector<Vec2> result(points.size());
+  for (Vec2& p : result)
+    if (!(out >> p.x >> p.y)) throw std::runtime_error("gdaltransform gave fewer points than it was given");
+  return result;
+}
+
 // python3-netcdf4 dumps what a UGRID reader needs as JSON (raw values: no masking, no start_index applied).
 nlohmann::json read_ugrid_with_netcdf4(const fs::path& nc) {
   const fs::path script = temp("read_ugrid.py");
@@ -334,18 +351,9 @@ TEST(SolverFiles, Gr3WithGeographicInputGetsLonLatCompanion) {
   EXPECT_EQ(l.elements, g.elements);
   EXPECT_EQ(l.land, g.land);
   // GDAL's own command-line tool takes the lon/lat back to UTM 16N: the nodes again.
-  const fs::path in = temp("geo/lonlat.txt");
-  {
-    std::ofstream os(in);
-    os.precision(17);
-    for (Vec2 p2 : l.xy) os << p2.x << " " << p2.y << "\n";
-  }
-  int code = 0;
-  std::istringstream back(output_of("gdaltransform -s_srs EPSG:4326 -t_srs EPSG:32616 -output_xy < " + in.string(), &code));
-  ASSERT_EQ(code, 0) << "gdaltransform (gdal-bin) failed";
+  const std::vector<Vec2> back = gdaltransform(l.xy, "EPSG:4326", "EPSG:32616");
   for (std::size_t i = 0; i < g.xy.size(); ++i) {
-    Vec2 p2;
-    ASSERT_TRUE(back >> p2.x >> p2.y) << "node " << i + 1;
+    const Vec2 p2 = back[i];
     EXPECT_NEAR(p2.x, g.xy[i].x, 1e-5) << "node " << i + 1;
     EXPECT_NEAR(p2.y, g.xy[i].y, 1e-5) << "node " << i + 1;
     EXPECT_GT(l.xy[i].x, -96.0) << "longitude inside UTM zone 16";
@@ -635,17 +643,7 @@ TEST(Bathymetry, NodesAreTransformedIntoTheRastersCrs) {
   // reproduced at the nodes' lon/lat as GDAL's own gdaltransform computes them.
   QuadMesh m = dam_case().mesh;
   for (Vec2& p : m.nodes) p = p + Vec2{400000.0, 3200000.0};
-  const fs::path xy = temp("utm.txt");
-  {
-    std::ofstream os(xy);
-    os.precision(17);
-    for (Vec2 p : m.nodes) os << p.x << " " << p.y << "\n";
-  }
-  int code = 0;
-  std::istringstream ll(output_of("gdaltransform -s_srs EPSG:32616 -t_srs EPSG:4326 -output_xy < " + xy.string(), &code));
-  ASSERT_EQ(code, 0);
-  std::vector<Vec2> lonlat(m.nodes.size());
-  for (Vec2& p : lonlat) ASSERT_TRUE(ll >> p.x >> p.y);
+  const std::vector<Vec2> lonlat = gdaltransform(m.nodes, "EPSG:32616", "EPSG:4326");
   const fs::path tif = linear_grid("lonlat", box_of(lonlat), 1e-4, 2000.0, -1000.0, 5.0, false, "EPSG:4326");
   const std::vector<double> d = sample_bathymetry(tif, m.nodes, "EPSG:32616", {true});
   for (std::size_t i = 0; i < m.nodes.size(); ++i)
