@@ -119,11 +119,18 @@ std::vector<std::vector<CandidateSpec>> candidate_rounds(const Region& region, c
   // A boundary much longer than a square's of the same area (twice over), or features longer than the rings.
   const bool convoluted = ring_length > 8.0 * std::sqrt(quads) * options.size || perimeter > 2.0 * ring_length;
   if (quads > static_cast<double>(options.search_quads)) {
-    // Large parts: one deterministic path (subregions from size and boundary complexity, failures repaired
-    // locally), with one poly-square beside it (a comb or a square full of square islands is one map with no
-    // singular node; on a coast it fails within the time the partitioned map takes).
-    if (automatic > 1 && quads / automatic >= 16.0) add({automatic});
+    // Large convoluted parts: one deterministic path (subregions from size and boundary complexity, failures
+    // repaired locally), with one poly-square beside it (a comb or a square full of square islands is one map
+    // with no singular node; on a coast it fails within the time the partitioned map takes). A part with a
+    // short boundary (a rectangle at millions of quads) tries the one map alone first: partitioning it only
+    // adds singular nodes, and its subregions' maps cost as much again.
+    const bool partitioned = automatic > 1 && quads / automatic >= 16.0;
+    if (partitioned && convoluted) add({automatic});
     add({1});
+    if (partitioned && !convoluted) {
+      rounds.emplace_back();
+      add({automatic});
+    }
     return rounds;
   }
   // Small parts are cheap to mesh several ways: the automatic count (on convoluted parts), the counts from area
