@@ -208,6 +208,9 @@ int main(int argc, char** argv) {
   cmd_mesh->add_option("--parts", mesh.options.parts,
                        "subregions per polygon part (1 = one poly-square per part, 0 = try several counts and keep the best mesh)")
       ->capture_default_str()->check(CLI::NonNegativeNumber);
+  cmd_mesh->add_option("--split-rounds", mesh.options.map.split_rounds,
+                       "times a subregion whose map fails alone is split into smaller ones before meshing (0 = patch it)")
+      ->capture_default_str()->check(CLI::Range(0, 8));
   cmd_mesh->add_option("--map", mesh.map,
                        "how subregions are mapped: ppm (a poly-square per subregion, singularities where they meet) or "
                        "gpm (one global poly-square, separators as its sides)")
@@ -224,7 +227,7 @@ int main(int argc, char** argv) {
                        "input vertices turning by more than this (degrees) become mesh nodes")
       ->capture_default_str();
   cmd_mesh->add_option("--simplify", mesh.options.simplify,
-                       "first simplify curves finer than the size: drop vertices whose triangle area < (F*size)^2 (0 = off)")
+                       "simplify curves finer than the size first: drop vertices whose triangle area < (F*size)^2, each within size of the result (0 = off: the mesh follows every input vertex)")
       ->capture_default_str();
   cmd_mesh->add_option("--max-quads", mesh.options.max_quads, "refuse sizes that need more quads than this")
       ->capture_default_str();

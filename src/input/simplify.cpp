@@ -141,6 +141,8 @@ SimplifyStats simplify_region(Region& region, const SimplifyOptions& options) {
     if (line_size[l] <= (lines[l].closed ? 4 : 2)) continue;
     if (!shortcut_is_free(v)) { ++stats.refused; pool.locked[v] = 1; continue; }
     const int a = pool.prev[v], b = pool.next[v];
+    // Removals only move a vertex's neighbours apart: once the shortcut is too long, it stays too long.
+    if (options.max_segment > 0.0 && distance(pool.p[a], pool.p[b]) > options.max_segment) { pool.locked[v] = 1; continue; }
     if (options.max_distance > 0.0) {
       // Every input vertex the new segment replaces (those removed before between a and b, and v) stays
       // within max_distance of it; the line's vertices are consecutive in the pool.

@@ -15,6 +15,7 @@
 #include "polysquare/map/extract.h"
 #include "polysquare/map/layout.h"
 #include "polysquare/map/quantize.h"
+#include "polysquare/partition/partition.h"
 
 namespace polysquare {
 namespace {
@@ -469,6 +470,94 @@ std::vector<Subregion> split_subregions(const TriMesh& tri, const std::vector<st
     subs[p] = cut_subregion(tri, triangle_part, g, static_cast<int>(p), triangles[p], name);
   });
   return subs;
+}
+
+int split_unmappable_subregions(const TriMesh& tri, std::vector<std::int32_t>& triangle_part, int parts,
+                                const PolysquareMapOptions& options, const std::string& name, SplitStats& stats) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const double h = options.size;
+  // Subregions known to map, by their triangle set: a later round tests only what changed.
+  std::set<std::vector<std::int32_t>> maps_alone;
+  for (int round = 0; round < options.split_rounds; ++round) {
+    std::vector<std::vector<std::int32_t>> triangles(static_cast<std::size_t>(parts));
+    for (std::size_t t = 0; t < triangle_part.size(); ++t)
+      triangles[static_cast<std::size_t>(triangle_part[t])].push_back(static_cast<std::int32_t>(t));
+    std::vector<Subregion> subs;
+    try {
+      subs = split_subregions(tri, triangle_part, parts, name);
+    } catch (const MeshingError&) {
+      break;  // the caller's map reports it
+    }
+    const std::size_t n = subs.size();
+    // sides[p]: poly-square sides of subregion p's failed map (0 when it maps, or failed before its layout).
+    std::vector<int> failed(n, 0), sides(n, 0);
+    std::vector<std::uint8_t> test(n, 0);
+    for (std::size_t p = 0; p < n; ++p) test[p] = maps_alone.count(triangles[p]) == 0;
+    stats.tested += static_cast<int>(std::count(test.begin(), test.end(), 1));
+    oneapi::tbb::parallel_for(std::size_t{0}, n, [&](std::size_t p) {
+      if (!test[p]) return;
+      try {
+        MappedMesh mm = deform_mesh(subs[p].mesh, options, true);
+        Layout layout = build_layout(subs[p].mesh, subs[p].mesh.vertices, mm.x, options.layout, name);
+        sides[p] = static_cast<int>(layout.segments.size());
+        straighten_to_labels(mm, layout, subs[p].mesh, options);
+        quantize_layout(layout, mm.x, options.quantize, name);
+        if (!check_layout(layout).empty()) throw MeshingError(name + ": invalid quantized layout");
+        snap_to_layout(subs[p].mesh, mm, layout, options, name);
+        sides[p] = 0;
+      } catch (const MeshingError&) {
+        failed[p] = 1;
+      }
+    });
+    std::vector<std::int32_t> before = triangle_part;
+    const int parts_before = parts;
+    int split_now = 0;
+    for (std::size_t p = 0; p < n; ++p) {
+      if (!failed[p]) {
+        maps_alone.insert(triangles[p]);
+        continue;
+      }
+      double area = 0.0;
+      for (std::int32_t t : triangles[p]) {
+        const auto& tr = tri.triangles[static_cast<std::size_t>(t)];
+        area += 0.5 * orient2(tri.vertices[tr[0]], tri.vertices[tr[1]], tri.vertices[tr[2]]);
+      }
+      const int k = std::clamp((sides[p] + options.sides_per_split - 1) / options.sides_per_split, 2, 8);
+      if (area / (h * h) < 16.0 * k || static_cast<int>(triangles[p].size()) < 8 * k) continue;  // pieces of 4 x 4
+      // The subregion's triangles as a mesh of their own (global vertex numbers, the feature curves for the
+      // partition energy); piece 0 keeps the number p, the others are appended.
+      TriMesh piece;
+      piece.vertices = tri.vertices;
+      for (std::int32_t t : triangles[p]) piece.triangles.push_back(tri.triangles[static_cast<std::size_t>(t)]);
+      for (const TriChain& ch : tri.chains)
+        if (ch.kind == TriChain::Kind::feature) piece.chains.push_back(ch);
+      PartitionOptions popt = options.partition;
+      popt.parts = k;
+      const PartitionResult pr = partition_triangles(piece, popt);
+      for (std::size_t i = 0; i < triangles[p].size(); ++i) {
+        const std::int32_t q = pr.triangle_part[i];
+        triangle_part[static_cast<std::size_t>(triangles[p][i])] = q == 0 ? static_cast<std::int32_t>(p) : parts + q - 1;
+      }
+      parts += pr.parts - 1;
+      ++split_now;
+    }
+    if (split_now == 0) break;
+    keep_feature_loops_whole(tri, triangle_part);
+    absorb_pieces_cut_off_by_features(tri, triangle_part);
+    snap_separator_ends_to_corners(tri, triangle_part, options.layout.corner_threshold_deg);
+    parts = merge_enclosed_parts(tri, triangle_part);
+    try {
+      split_subregions(tri, triangle_part, parts, name);
+    } catch (const MeshingError&) {
+      triangle_part = std::move(before);  // this round's pieces cannot be cut apart: keep the last partition
+      parts = parts_before;
+      break;
+    }
+    stats.rounds++;
+    stats.split += split_now;
+  }
+  stats.seconds = seconds_since(t0);
+  return parts;
 }
 
 QuadMesh stitch_quad_meshes(const std::vector<QuadMesh>& meshes, const std::vector<std::size_t>& side_nodes,

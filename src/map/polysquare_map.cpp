@@ -1,5 +1,6 @@
 #include "polysquare/map/polysquare_map.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <complex>
@@ -129,7 +130,15 @@ PartMapResult map_part(const Region& region, const RegionPart& part, const Polys
   std::vector<std::int32_t> triangle_part;
   if (options.partition.parts != 1) {
     t0 = std::chrono::steady_clock::now();
-    PartitionResult pr = partition_triangles(tri, options.partition);
+    const bool reuse = options.composition == MapComposition::ppm && options.triangle_partition &&
+                       options.triangle_partition->size() == tri.triangles.size();
+    PartitionResult pr;
+    if (reuse) {
+      pr.triangle_part = *options.triangle_partition;
+      pr.parts = 1 + *std::max_element(pr.triangle_part.begin(), pr.triangle_part.end());
+    } else {
+      pr = partition_triangles(tri, options.partition);
+    }
     if (options.composition == MapComposition::gpm) {
       st.separators = add_separator_chains(tri, pr.triangle_part);
       straighten_separator_chains(tri, options.separator_straightening);
@@ -140,10 +149,13 @@ PartMapResult map_part(const Region& region, const RegionPart& part, const Polys
       pr.triangle_part = triangle_part;
       if (options.keep_partition) result.background = tri;
     } else {
-      keep_feature_loops_whole(tri, pr.triangle_part);
-      absorb_pieces_cut_off_by_features(tri, pr.triangle_part);
-      snap_separator_ends_to_corners(tri, pr.triangle_part, options.layout.corner_threshold_deg);
-      pr.parts = merge_enclosed_parts(tri, pr.triangle_part);
+      if (!reuse) {
+        keep_feature_loops_whole(tri, pr.triangle_part);
+        absorb_pieces_cut_off_by_features(tri, pr.triangle_part);
+        snap_separator_ends_to_corners(tri, pr.triangle_part, options.layout.corner_threshold_deg);
+        pr.parts = merge_enclosed_parts(tri, pr.triangle_part);
+        pr.parts = split_unmappable_subregions(tri, pr.triangle_part, pr.parts, options, name, st.split);
+      }
       triangle_part = pr.triangle_part;
       if (options.keep_partition) {
         result.background = tri;

@@ -51,6 +51,8 @@ nlohmann::json part_json(const PartMapStats& s) {
                       {"energy_after", s.deform.energy_after},
                       {"alignment_before", s.deform.alignment_before},
                       {"alignment_after", s.deform.alignment_after}}},
+          {"split", {{"rounds", s.split.rounds}, {"subregions_split", s.split.split},
+                     {"maps_tried", s.split.tested}, {"seconds", s.split.seconds}}},
           {"break_points", s.break_points},
           {"segments", s.segments},
           {"quantization_max_relative_deviation", s.quantize.max_relative_deviation},
@@ -66,6 +68,7 @@ nlohmann::json part_json(const PartMapStats& s) {
 struct CandidateSpec {
   int subregions = 1;
   bool bend_interfaces = false;
+  bool split = true;  // failed subregions are split before the joint map (PolysquareMapOptions::split_rounds)
   bool operator==(const CandidateSpec&) const = default;
 };
 
@@ -98,6 +101,10 @@ std::vector<std::vector<CandidateSpec>> candidate_rounds(const Region& region, c
     add_bent_round();
     rounds.emplace_back();
     add({1});
+    if (options.parts > 1 && options.map.split_rounds > 0) {  // the retry round (see below)
+      rounds.emplace_back();
+      add({options.parts, false, false});
+    }
     return rounds;
   }
   // Boundary complexity: the length of the rings and, counted twice (a subregion meets them from both sides),
@@ -127,6 +134,12 @@ std::vector<std::vector<CandidateSpec>> candidate_rounds(const Region& region, c
     const bool partitioned = automatic > 1 && quads / automatic >= 16.0;
     if (partitioned && convoluted) add({automatic});
     add({1});
+    // A retry round, meshed only when every candidate before it failed: the same subregions without splitting
+    // (a split can leave a piece whose repair folds, where the unsplit subregion's patch holds).
+    if (partitioned && convoluted && options.map.split_rounds > 0) {
+      rounds.emplace_back();
+      add({automatic, false, false});
+    }
     if (partitioned && !convoluted) {
       rounds.emplace_back();
       add({automatic});
@@ -221,6 +234,9 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
     for (int round = 0;; ++round) {
       r = make_mesh(repairs);
       const RefineStats refined = refine_flat_corners(r.mesh, options.refine);
+      if (r.stats.split.tested > 0)
+        c.summary["split"] = {{"rounds", r.stats.split.rounds}, {"subregions_split", r.stats.split.split},
+                              {"maps_tried", r.stats.split.tested}, {"seconds", r.stats.split.seconds}};
       c.summary["flat_corners"] = refined.flat_corners;
       c.summary["flat_corners_collapsed"] = refined.collapsed;
       const RefineStats loops = pillow_feature_loops(r.mesh, options.refine);
@@ -324,13 +340,27 @@ Candidate try_candidate(const Region& region, const RegionPart& part, const Poly
                         const MeshOptions& options) {
   const int k = map.partition.parts;
   nlohmann::json summary = {{"part", part.part}, {"subregions", k}};
-  if (k > 1 && map.composition == MapComposition::ppm) summary["bent_interfaces"] = !map.layout.straight_interfaces;
+  if (k > 1 && map.composition == MapComposition::ppm) {
+    summary["bent_interfaces"] = !map.layout.straight_interfaces;
+    summary["split_rounds"] = map.split_rounds;
+  }
+  // Repair rounds remesh the subregions of the first round's partition (after its splits), so the subregion
+  // numbers they name stay valid and the splitting is not paid again.
+  std::shared_ptr<const std::vector<std::int32_t>> partition;
+  SplitStats split;
   return finish_candidate(region, part, options, std::move(summary), [&](const Repairs& repairs) {
     PolysquareMapOptions with_repairs = map;
     with_repairs.patch_subregions.insert(with_repairs.patch_subregions.end(), repairs.patches.begin(), repairs.patches.end());
     with_repairs.matched_patches = repairs.matched;
     with_repairs.grown_patches = repairs.grown;
-    return map_part(region, part, with_repairs);
+    with_repairs.triangle_partition = partition;
+    PartMapResult r = map_part(region, part, with_repairs);
+    if (!partition && r.partition) {
+      partition = std::make_shared<const std::vector<std::int32_t>>(r.partition->triangle_part);
+      split = r.stats.split;
+    }
+    r.stats.split = split;
+    return r;
   });
 }
 
@@ -377,6 +407,7 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
     SimplifyOptions so;
     so.min_area = (options.simplify * options.size) * (options.simplify * options.size);
     so.max_distance = options.size;  // the simplified curves stay within h of the input
+    so.max_segment = options.size;   // and are coarsened to the size, not beyond
     simplify_stats = simplify_region(simplified, so);
     work = &simplified;
   }
@@ -417,6 +448,8 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
     std::vector<Candidate> cands;
     int best = -1;
     for (const std::vector<CandidateSpec>& round : candidate_rounds(*work, parts[k], options)) {
+      const bool retry = std::none_of(round.begin(), round.end(), [](const CandidateSpec& c) { return c.split; });
+      if (retry && best >= 0) continue;
       const std::size_t first = cands.size();
       ks.insert(ks.end(), round.begin(), round.end());
       cands.resize(ks.size());
@@ -426,6 +459,7 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
         PolysquareMapOptions part_map = map;
         part_map.partition.parts = ks[c].subregions;
         part_map.layout.straight_interfaces = !ks[c].bend_interfaces;
+        if (!ks[c].split) part_map.split_rounds = 0;
         cands[c] = try_candidate(*work, parts[k], part_map, options);
       });
       for (std::size_t c = first; c < cands.size(); ++c) {
@@ -584,6 +618,7 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
       {"smooth", {{"sweeps", smooth.sweeps}, {"moves", smooth.moves}, {"curve_moves", smooth.curve_moves}}},
       {"seconds", {{"parts", seconds_parts}}},
   };
+  out.region = work == &region ? region : std::move(simplified);
   return out;
 }
 

@@ -213,7 +213,7 @@ TEST_P(PpmCase, SubregionsAreStitchedConformingly) {
   EXPECT_GT(q.sj.min, 0.2) << name;
   EXPECT_LE(4 * q.interior_singularities, gmsh_singularities) << name;  // the bound: a quarter of Gmsh's
   const Region region = load(name);
-  const DomainDistance d = domain_distance(r.mesh, region);
+  const DomainDistance d = domain_distance(r.mesh, r.region);  // the simplified curves (invariant 4)
   EXPECT_LT(d.boundary_max_relative, 1e-9);
   EXPECT_EQ(d.sharp_vertices_missing, 0u);
   EXPECT_LT(d.feature_node_max_distance, 1e-9 * region.bounding_box().diagonal());

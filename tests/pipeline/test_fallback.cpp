@@ -74,7 +74,7 @@ TEST(Pipeline, CoastlinePartsThatNoMapMeshesFallBackAndAreReported) {
     }
   EXPECT_EQ(kept + r.report["dropped_parts"].size(), static_cast<std::size_t>(region.num_parts));
   EXPECT_GT(fallbacks, 0u);
-  const DomainDistance d = domain_distance(r.mesh, region);
+  const DomainDistance d = domain_distance(r.mesh, r.region);
   EXPECT_LT(d.boundary_max_relative, 1e-9);
   EXPECT_GE(compute_quality(r.mesh).sj.min, o.min_scaled_jacobian);
 }
@@ -106,8 +106,10 @@ TEST(Pipeline, DeltaCasesMeshAt200Metres) {
       }
     DomainDistanceOptions measure;
     for (const auto& d : r.report["dropped_parts"]) measure.skip_parts.push_back(d["part"].get<int>());
-    const DomainDistance d = domain_distance(r.mesh, region, measure);
+    const DomainDistance d = domain_distance(r.mesh, r.region, measure);
     EXPECT_LT(d.boundary_max_relative, 1e-9) << name;
+    // The shorelines were simplified to the size: the mesh boundary stays within h of the input.
+    EXPECT_LE(domain_distance(r.mesh, region, measure).boundary_max_distance, o.size) << name;
     EXPECT_EQ(d.sharp_vertices_missing, 0u) << name;
     EXPECT_LT(d.feature_node_max_distance, 1e-9 * region.bounding_box().diagonal()) << name;
     EXPECT_LE(d.feature_max_distance, 0.1 * o.size) << name;

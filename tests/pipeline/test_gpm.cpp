@@ -38,7 +38,7 @@ TEST_P(GpmCase, SubregionsAreStitchedConformingly) {
   const std::set<std::int32_t> used(r.mesh.quad_part.begin(), r.mesh.quad_part.end());
   EXPECT_EQ(used.size(), static_cast<std::size_t>(parts)) << name;
   const Region region = read_region(std::string(POLYSQUARE_DATA_DIR) + "/cases/" + name + ".geojson");
-  EXPECT_LT(domain_distance(r.mesh, region).feature_node_max_distance, 1e-9 * region.bounding_box().diagonal());
+  EXPECT_LT(domain_distance(r.mesh, r.region).feature_node_max_distance, 1e-9 * region.bounding_box().diagonal());
   ASSERT_EQ(r.background_part.size(), r.background.triangles.size());
   EXPECT_EQ(r.report["partition"].size(), 1u);
 }

@@ -37,7 +37,7 @@ TEST_P(HardGeometry, ValidMeshOrPreciseRefusal) {
       EXPECT_LE(metrics.edge_ratio[k], options.max_edge_ratio) << "quad " << k;
     }
     EXPECT_EQ(compute_quality(result.mesh).inverted, 0u);
-    EXPECT_LT(domain_distance(result.mesh, region).boundary_max_relative, 1e-9);
+    EXPECT_LT(domain_distance(result.mesh, result.region).boundary_max_relative, 1e-9);
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find(GetParam()), std::string::npos) << e.what();
   } catch (const MeshingError& e) {

@@ -96,7 +96,7 @@ TEST(LocalRepair, ASubregionMadeToFailIsPatchedAndOnlyIt) {
   const QualityReport q = compute_quality(r.mesh);
   EXPECT_EQ(q.inverted, 0u);
   EXPECT_GT(q.sj.min, 0.2);
-  const DomainDistance d = domain_distance(r.mesh, region);
+  const DomainDistance d = domain_distance(r.mesh, r.region);
   EXPECT_LT(d.boundary_max_relative, 1e-9);
   EXPECT_EQ(d.sharp_vertices_missing, 0u);
 }
@@ -126,7 +126,7 @@ TEST(LocalRepair, NewCoastsHoldTheInvariantsAndTheSummaryAccountsForEveryQuad) {
     EXPECT_EQ(compute_quality(r.mesh).inverted, 0u) << name;
     DomainDistanceOptions measure;
     for (const auto& d : r.report["dropped_parts"]) measure.skip_parts.push_back(d["part"].get<int>());
-    const DomainDistance d = domain_distance(r.mesh, region, measure);
+    const DomainDistance d = domain_distance(r.mesh, r.region, measure);
     EXPECT_LT(d.boundary_max_relative, 1e-9) << name;
     EXPECT_EQ(d.sharp_vertices_missing, 0u) << name;
     const auto& summary = r.report["summary"];

@@ -13,6 +13,9 @@ struct SimplifyOptions {
                           ///< this are removed, smallest first (region units squared); 0 disables
   double max_distance = 0.0;  ///< a removal is skipped when an input vertex it replaces would lie farther than
                               ///< this from the new segment (region units); 0 = no bound
+  double max_segment = 0.0;   ///< a removal is skipped when the new segment would be longer than this (region
+                              ///< units): curves are coarsened to the target size, never beyond it, so smooth
+                              ///< arcs keep turning gently; 0 = no bound
 };
 
 struct SimplifyStats {

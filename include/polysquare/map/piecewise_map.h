@@ -36,6 +36,15 @@ std::vector<Subregion> split_subregions(const TriMesh& tri, const std::vector<st
 QuadMesh stitch_quad_meshes(const std::vector<QuadMesh>& meshes, const std::vector<std::size_t>& side_nodes,
                             double tolerance);
 
+/// Local repair by splitting (paper Sec. 5.3): every subregion whose map fails on its own (labelling,
+/// deformation, quantization alone, snap) is cut into smaller subregions by a k-way partition of its triangles,
+/// k from its side count (options.sides_per_split), and the new pieces are tested again, options.split_rounds
+/// times; subregions that map keep their triangles. The partition clean-ups run after each round (feature loops
+/// kept whole, cut-off pieces absorbed, enclosed parts merged), and a round whose partition cannot be cut into
+/// subregions is undone. Returns the number of subregions; `triangle_part` is renumbered 0 .. count-1.
+int split_unmappable_subregions(const TriMesh& tri, std::vector<std::int32_t>& triangle_part, int parts,
+                                const PolysquareMapOptions& options, const std::string& name, SplitStats& stats);
+
 /// The PPM of one partitioned part: split, per-subregion deformation and layout (in parallel), one joint
 /// quantization, per-subregion snap and extraction (in parallel), stitching. quad_part = subregion. Fills the
 /// timing and layout figures of `stats`. Throws MeshingError naming `name` and the subregion that failed.

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 
@@ -42,6 +43,14 @@ struct PolysquareMapOptions {
                                       ///< retry for a patch whose first construction left a poor or folded quad
   std::vector<int> grown_patches;     ///< patches rebuilt over their neighbours' area at once (patch_growth): the
                                       ///< retry for a matched patch that still left a folded or poor quad
+  int split_rounds = 2;      ///< PPM: times a subregion whose map fails alone is split into smaller ones before
+                            ///< the joint map (split_unmappable_subregions); 0 = patch it at once
+  int sides_per_split = 12; ///< a failed subregion with s poly-square sides is split into ceil(s / this) pieces
+                            ///< (at least 2, at most 8)
+  /// PPM: the subregion of every background triangle from an earlier map_part of the same part with the same
+  /// options (PartMapResult::partition), reused as it is (no partitioning, no splitting): repair rounds remesh
+  /// the same subregions.
+  std::shared_ptr<const std::vector<std::int32_t>> triangle_partition;
   int patch_growth = 3;  ///< times a patch that cannot be built takes in its neighbouring subregions and is built
                          ///< again over their union (a narrow or odd-counted subregion gains room and a ring piece)
   DeformOptions deform;
@@ -63,6 +72,14 @@ struct SubregionStats {
   Vec2 at{};              ///< its first boundary vertex, to find it
 };
 
+/// What split_unmappable_subregions did.
+struct SplitStats {
+  int rounds = 0;   ///< rounds that split something
+  int split = 0;    ///< subregions split, over all rounds
+  int tested = 0;   ///< subregion maps tried alone
+  double seconds = 0;
+};
+
 struct PartMapStats {
   int part = 0;
   std::size_t triangles = 0, triangle_vertices = 0;
@@ -73,6 +90,7 @@ struct PartMapStats {
   std::size_t quads = 0;
   std::size_t separators = 0;      ///< separator chains between subregions
   std::vector<SubregionStats> subregions;  ///< PPM: every subregion, in order
+  SplitStats split;                        ///< PPM: subregions split before the joint map
   double seconds_partition = 0;
   double seconds_triangulate = 0, seconds_deform = 0, seconds_quantize = 0, seconds_snap = 0, seconds_extract = 0;
 };

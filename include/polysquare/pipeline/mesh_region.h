@@ -19,9 +19,10 @@ struct MeshOptions {
   int threads = 0;               ///< worker threads; 0 = all cores. The mesh does not depend on it.
   std::uint64_t seed = 1;        ///< seed of every randomized stage (partitioning); the output depends only on it
   double corner_threshold_deg = 30.0;  ///< input vertices turning by more than this are mesh nodes
-  double simplify = 0.0;         ///< simplify curves first: remove vertices whose triangle area is below
-                                 ///< (simplify * size)^2, keeping topology (coastlines: 0.5); the report gives the
-                                 ///< largest distance moved and the area change; 0 = off
+  double simplify = 0.5;         ///< simplify curves finer than the size first: remove vertices whose triangle area
+                                 ///< is below (simplify * size)^2, keeping topology and every vertex within size of
+                                 ///< the simplified curve; the mesh follows the simplified curves (MeshResult::region)
+                                 ///< and the report gives the largest distance moved and the area change; 0 = off
   std::size_t max_quads = 50'000'000;  ///< refuse sizes whose estimated quad count exceeds this
   int parts = 0;                 ///< subregions per polygon part. 0 = automatic: a part above search_quads quads
                                  ///< is meshed one way, with max(its quads / target_quads_per_part, its boundary
@@ -61,6 +62,8 @@ struct MeshResult {
   std::vector<std::int32_t> background_part;  ///< #background triangles, global subregion index
   std::vector<PartMapStats> parts;  ///< per polygon part, in part order
   nlohmann::json report;            ///< options, timings, counts (quality is added by the caller's choice)
+  Region region;                    ///< the region the mesh conforms to: the input with curves simplified
+                                    ///< (MeshOptions::simplify); the design invariants hold against it
 };
 
 /// Meshes every polygon part of a validated region (parts in parallel with oneTBB), assembles them in part
