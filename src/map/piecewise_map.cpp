@@ -514,6 +514,7 @@ int split_unmappable_subregions(const TriMesh& tri, std::vector<std::int32_t>& t
     int split_now = 0;
     for (std::size_t p = 0; p < n; ++p) {
       if (!failed[p]) {
+        if (round > 0 && test[p]) stats.pieces_mapped++;
         maps_alone.insert(triangles[p]);
         continue;
       }
@@ -524,6 +525,7 @@ int split_unmappable_subregions(const TriMesh& tri, std::vector<std::int32_t>& t
       }
       const int k = std::clamp((sides[p] + options.sides_per_split - 1) / options.sides_per_split, 2, 8);
       if (area / (h * h) < 16.0 * k || static_cast<int>(triangles[p].size()) < 8 * k) continue;  // pieces of 4 x 4
+      if (parts + k - 1 > options.split_max_subregions) continue;
       // The subregion's triangles as a mesh of their own (global vertex numbers, the feature curves for the
       // partition energy); piece 0 keeps the number p, the others are appended.
       TriMesh piece;
@@ -533,7 +535,12 @@ int split_unmappable_subregions(const TriMesh& tri, std::vector<std::int32_t>& t
         if (ch.kind == TriChain::Kind::feature) piece.chains.push_back(ch);
       PartitionOptions popt = options.partition;
       popt.parts = k;
-      const PartitionResult pr = partition_triangles(piece, popt);
+      PartitionResult pr;
+      try {
+        pr = partition_triangles(piece, popt);
+      } catch (const MeshingError&) {
+        continue;  // METIS refuses some pieces (too few triangles for k balanced parts): it stays as it is
+      }
       for (std::size_t i = 0; i < triangles[p].size(); ++i) {
         const std::int32_t q = pr.triangle_part[i];
         triangle_part[static_cast<std::size_t>(triangles[p][i])] = q == 0 ? static_cast<std::int32_t>(p) : parts + q - 1;
@@ -546,6 +553,7 @@ int split_unmappable_subregions(const TriMesh& tri, std::vector<std::int32_t>& t
     absorb_pieces_cut_off_by_features(tri, triangle_part);
     snap_separator_ends_to_corners(tri, triangle_part, options.layout.corner_threshold_deg);
     parts = merge_enclosed_parts(tri, triangle_part);
+    if (separate_pinched_parts(tri, triangle_part) > 0) parts = merge_enclosed_parts(tri, triangle_part);
     try {
       split_subregions(tri, triangle_part, parts, name);
     } catch (const MeshingError&) {
@@ -768,15 +776,35 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
     try {
       if (!members_now().empty()) st.quantize = solve(members_now());
     } catch (const MeshingError&) {
-      std::vector<std::size_t> kept;
-      for (std::size_t p : members_now()) {
-        kept.push_back(p);
+      // The first subregion (in order) that makes the program infeasible is found by bisection over the rest,
+      // so c culprits among n subregions cost about c log n solves, not n.
+      auto feasible = [&](const std::vector<std::size_t>& members) {
         try {
-          st.quantize = solve(kept);
+          st.quantize = solve(members);
+          return true;
         } catch (const MeshingError&) {
-          kept.pop_back();
-          failure[p] = sub_name(p) + ": its sides cannot take the counts its neighbours need (" + joint.what() + ")";
+          return false;
         }
+      };
+      std::vector<std::size_t> kept, rest = members_now();
+      while (!rest.empty()) {
+        std::vector<std::size_t> all = kept;
+        all.insert(all.end(), rest.begin(), rest.end());
+        if (feasible(all)) {
+          kept = std::move(all);
+          break;
+        }
+        std::size_t lo = 0, hi = rest.size() - 1;  // kept + rest[0..hi] is infeasible, kept alone is not
+        while (lo < hi) {
+          const std::size_t mid = (lo + hi) / 2;
+          std::vector<std::size_t> trial = kept;
+          trial.insert(trial.end(), rest.begin(), rest.begin() + static_cast<std::ptrdiff_t>(mid) + 1);
+          if (feasible(trial)) lo = mid + 1; else hi = mid;
+        }
+        const std::size_t p = rest[lo];
+        failure[p] = sub_name(p) + ": its sides cannot take the counts its neighbours need (" + joint.what() + ")";
+        kept.insert(kept.end(), rest.begin(), rest.begin() + static_cast<std::ptrdiff_t>(lo));
+        rest.erase(rest.begin(), rest.begin() + static_cast<std::ptrdiff_t>(lo) + 1);
       }
       if (!kept.empty()) st.quantize = solve(kept);  // the last solve may have been a failed one
     }

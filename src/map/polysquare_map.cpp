@@ -154,6 +154,7 @@ PartMapResult map_part(const Region& region, const RegionPart& part, const Polys
         absorb_pieces_cut_off_by_features(tri, pr.triangle_part);
         snap_separator_ends_to_corners(tri, pr.triangle_part, options.layout.corner_threshold_deg);
         pr.parts = merge_enclosed_parts(tri, pr.triangle_part);
+        if (separate_pinched_parts(tri, pr.triangle_part) > 0) pr.parts = merge_enclosed_parts(tri, pr.triangle_part);
         pr.parts = split_unmappable_subregions(tri, pr.triangle_part, pr.parts, options, name, st.split);
       }
       triangle_part = pr.triangle_part;

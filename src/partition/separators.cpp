@@ -402,3 +402,133 @@ int merge_enclosed_parts(const TriMesh& mesh, std::vector<std::int32_t>& triangl
 }
 
 }  // namespace polysquare
+
+namespace polysquare {
+
+std::size_t separate_pinched_parts(const TriMesh& mesh, std::vector<std::int32_t>& triangle_part, int max_rounds) {
+  const auto owners = edge_owners(mesh);  // edge -> its (one or two) triangles
+  const std::size_t nv = mesh.vertices.size(), nt = mesh.triangles.size();
+  std::vector<std::size_t> off(nv + 1, 0);
+  for (const auto& t : mesh.triangles)
+    for (std::int32_t v : t) off[static_cast<std::size_t>(v) + 1]++;
+  for (std::size_t v = 0; v < nv; ++v) off[v + 1] += off[v];
+  std::vector<std::int32_t> around(off.back());
+  {
+    std::vector<std::size_t> fill(off.begin(), off.end() - 1);
+    for (std::size_t t = 0; t < nt; ++t)
+      for (std::int32_t v : mesh.triangles[t]) around[fill[static_cast<std::size_t>(v)]++] = static_cast<std::int32_t>(t);
+  }
+  auto across = [&](std::int32_t t, std::int32_t a, std::int32_t b) {
+    const auto& o = owners.at(edge_key(a, b));
+    return o[0] == t ? o[1] : o[0];
+  };
+  // Whether part p's triangles are still one piece through shared edges.
+  auto connected = [&](std::int32_t p) {
+    std::vector<std::int32_t> members;
+    for (std::size_t t = 0; t < nt; ++t)
+      if (triangle_part[t] == p) members.push_back(static_cast<std::int32_t>(t));
+    if (members.empty()) return false;
+    std::unordered_set<std::int32_t> seen{members.front()};
+    std::vector<std::int32_t> stack{members.front()};
+    while (!stack.empty()) {
+      const std::int32_t t = stack.back();
+      stack.pop_back();
+      const auto& tr = mesh.triangles[static_cast<std::size_t>(t)];
+      for (int k = 0; k < 3; ++k) {
+        const std::int32_t n = across(t, tr[k], tr[(k + 1) % 3]);
+        if (n >= 0 && triangle_part[static_cast<std::size_t>(n)] == p && seen.insert(n).second) stack.push_back(n);
+      }
+    }
+    return seen.size() == members.size();
+  };
+  std::size_t moved = 0;
+  for (int round = 0; round < max_rounds; ++round) {
+    bool changed = false;
+    for (std::size_t v = 0; v < nv; ++v) {
+      // Fans of each part around v: its triangles there joined through the edges at v they share.
+      const auto vi = static_cast<std::int32_t>(v);
+      std::map<std::int32_t, std::vector<std::vector<std::int32_t>>> fans;
+      std::set<std::int32_t> done;
+      for (std::size_t i = off[v]; i < off[v + 1]; ++i) {
+        const std::int32_t start = around[i];
+        if (done.count(start)) continue;
+        const std::int32_t p = triangle_part[static_cast<std::size_t>(start)];
+        std::vector<std::int32_t> fan{start}, stack{start};
+        done.insert(start);
+        while (!stack.empty()) {
+          const std::int32_t t = stack.back();
+          stack.pop_back();
+          for (std::int32_t w : mesh.triangles[static_cast<std::size_t>(t)]) {
+            if (w == vi) continue;
+            const std::int32_t n = across(t, vi, w);
+            if (n >= 0 && triangle_part[static_cast<std::size_t>(n)] == p && done.insert(n).second) {
+              fan.push_back(n);
+              stack.push_back(n);
+            }
+          }
+        }
+        fans[p].push_back(std::move(fan));
+      }
+      bool v_changed = false;  // fans of v are stale after a change: the next round looks again
+      for (auto& [p, list] : fans) {
+        if (v_changed) break;
+        if (list.size() < 2) continue;
+        std::sort(list.begin(), list.end(), [](const auto& a, const auto& b) { return a.size() > b.size(); });
+        for (std::size_t f = 1; f < list.size(); ++f) {
+          // The smaller fan goes to the part it borders most around v, if p stays one piece without it.
+          std::map<std::int32_t, int> border;
+          for (std::int32_t t : list[f])
+            for (std::int32_t w : mesh.triangles[static_cast<std::size_t>(t)]) {
+              if (w == vi) continue;
+              const std::int32_t n = across(t, vi, w);
+              if (n >= 0 && triangle_part[static_cast<std::size_t>(n)] != p) border[triangle_part[static_cast<std::size_t>(n)]]++;
+            }
+          if (border.empty()) continue;
+          const std::int32_t to = std::max_element(border.begin(), border.end(), [](const auto& a, const auto& b) {
+                                    return a.second < b.second;
+                                  })->first;
+          for (std::int32_t t : list[f]) triangle_part[static_cast<std::size_t>(t)] = to;
+          if (connected(p)) {
+            moved += list[f].size();
+            changed = true;
+            continue;
+          }
+          for (std::int32_t t : list[f]) triangle_part[static_cast<std::size_t>(t)] = p;
+          // The fan is p's only link between its sides: p takes a neighbouring part's fan at v instead (the
+          // smallest whose part stays one piece), which joins its fans around v.
+          std::vector<std::pair<std::size_t, std::pair<std::int32_t, std::size_t>>> others;
+          for (const auto& [q, qlist] : fans)
+            if (q != p)
+              for (std::size_t g = 0; g < qlist.size(); ++g) others.push_back({qlist[g].size(), {q, g}});
+          std::sort(others.begin(), others.end());
+          for (const auto& [count, which] : others) {
+            const auto& fan = fans[which.first][which.second];
+            for (std::int32_t t : fan) triangle_part[static_cast<std::size_t>(t)] = p;
+            if (connected(which.first)) {
+              moved += fan.size();
+              changed = v_changed = true;
+              break;
+            }
+            for (std::int32_t t : fan) triangle_part[static_cast<std::size_t>(t)] = which.first;
+          }
+          if (!v_changed && !others.empty()) {
+            // No fan can change hands: the smallest part around v joins p whole (the caller renumbers).
+            std::map<std::int32_t, std::size_t> size;
+            for (std::size_t t = 0; t < nt; ++t) size[triangle_part[t]]++;
+            std::int32_t q = -1;
+            for (const auto& [count, which] : others)
+              if (q < 0 || size[which.first] < size[q]) q = which.first;
+            for (std::size_t t = 0; t < nt; ++t)
+              if (triangle_part[t] == q) triangle_part[t] = p, ++moved;
+            changed = v_changed = true;
+          }
+          break;
+        }
+      }
+    }
+    if (!changed) break;
+  }
+  return moved;
+}
+
+}  // namespace polysquare

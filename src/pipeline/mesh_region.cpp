@@ -52,7 +52,8 @@ nlohmann::json part_json(const PartMapStats& s) {
                       {"alignment_before", s.deform.alignment_before},
                       {"alignment_after", s.deform.alignment_after}}},
           {"split", {{"rounds", s.split.rounds}, {"subregions_split", s.split.split},
-                     {"maps_tried", s.split.tested}, {"seconds", s.split.seconds}}},
+                     {"maps_tried", s.split.tested}, {"pieces_mapped", s.split.pieces_mapped},
+                     {"seconds", s.split.seconds}}},
           {"break_points", s.break_points},
           {"segments", s.segments},
           {"quantization_max_relative_deviation", s.quantize.max_relative_deviation},
@@ -236,7 +237,8 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
       const RefineStats refined = refine_flat_corners(r.mesh, options.refine);
       if (r.stats.split.tested > 0)
         c.summary["split"] = {{"rounds", r.stats.split.rounds}, {"subregions_split", r.stats.split.split},
-                              {"maps_tried", r.stats.split.tested}, {"seconds", r.stats.split.seconds}};
+                              {"maps_tried", r.stats.split.tested}, {"pieces_mapped", r.stats.split.pieces_mapped},
+                              {"seconds", r.stats.split.seconds}};
       c.summary["flat_corners"] = refined.flat_corners;
       c.summary["flat_corners_collapsed"] = refined.collapsed;
       const RefineStats loops = pillow_feature_loops(r.mesh, options.refine);

@@ -45,6 +45,8 @@ struct PolysquareMapOptions {
                                       ///< retry for a matched patch that still left a folded or poor quad
   int split_rounds = 2;      ///< PPM: times a subregion whose map fails alone is split into smaller ones before
                             ///< the joint map (split_unmappable_subregions); 0 = patch it at once
+  int split_max_subregions = 80;  ///< no split takes a part beyond this many subregions: the joint quantization's
+                                  ///< time grows steeply with the count (GLPK; delta_box at 200 m passed 13 min)
   int sides_per_split = 12; ///< a failed subregion with s poly-square sides is split into ceil(s / this) pieces
                             ///< (at least 2, at most 8)
   /// PPM: the subregion of every background triangle from an earlier map_part of the same part with the same
@@ -77,6 +79,7 @@ struct SplitStats {
   int rounds = 0;   ///< rounds that split something
   int split = 0;    ///< subregions split, over all rounds
   int tested = 0;   ///< subregion maps tried alone
+  int pieces_mapped = 0;  ///< pieces of split subregions whose maps then succeeded alone
   double seconds = 0;
 };
 

@@ -83,6 +83,13 @@ int merge_enclosed_parts(const TriMesh& mesh, std::vector<std::int32_t>& triangl
 /// hold); a move that would disconnect a part is undone. Returns the number of triangles moved.
 std::size_t keep_feature_loops_whole(const TriMesh& mesh, std::vector<std::int32_t>& triangle_part);
 
+/// Makes every part meet each vertex in one fan: where a part's triangles around a vertex form two or more
+/// fans (the part touches itself there, and its boundary is no simple loop), a smaller fan moves to the part it
+/// borders most if the part stays one piece without it; otherwise the part takes the smallest fan of another
+/// part there that stays one piece without it; otherwise the smallest part around the vertex joins it whole
+/// (part numbers then have gaps: renumber, e.g. with merge_enclosed_parts). At most max_rounds passes.
+/// Returns the number of triangles moved.
+std::size_t separate_pinched_parts(const TriMesh& mesh, std::vector<std::int32_t>& triangle_part, int max_rounds = 3);
 /// Moves separator ends that meet a ring within `max_edges` ring edges of a sharp corner (an input vertex turning
 /// by more than corner_threshold_deg) onto the corner, by handing the triangles around the ring vertices in
 /// between to the neighbouring part (kept only if both parts stay connected): otherwise the corner and the end
