@@ -274,11 +274,16 @@ TriMesh triangulate_part(const Region& region, const RegionPart& part, const Tri
   // curves would otherwise refine without end.
   Mesher mesher(cdt, Criteria(options.shape_bound, options.max_edge));
   mesher.init(true);
-  const std::size_t vertex_budget = options.max_triangles / 2 + 3;
+  // A graded mesh has a few dozen triangles per curve vertex at most; far more means curves closer than the
+  // size (a hole touching a ring), where refinement would run to the memory guard first.
+  const double graded = 64.0 * (static_cast<double>(cdt.number_of_vertices()) +
+                                part_area(region, part) / (options.max_edge * options.max_edge)) + 10000.0;
+  const std::size_t vertex_budget =
+      static_cast<std::size_t>(std::min(graded, static_cast<double>(options.max_triangles))) / 2 + 3;
   for (std::size_t step = 1; mesher.try_one_step_refine_mesh(); ++step)
     if (step % 4096 == 0 && cdt.number_of_vertices() > vertex_budget)
       throw MeshingError("triangulation of part " + std::to_string(part.part) + " needs more than " +
-                         std::to_string(options.max_triangles) + " triangles (the limit; about " +
+                         std::to_string(2 * vertex_budget) + " triangles (its budget; about " +
                          std::to_string(cdt.number_of_vertices()) + " vertices so far): curves closer to each " +
                          "other than the size, or a size too small for the region");
 
