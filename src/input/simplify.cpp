@@ -142,7 +142,19 @@ SimplifyStats simplify_region(Region& region, const SimplifyOptions& options) {
     if (!shortcut_is_free(v)) { ++stats.refused; pool.locked[v] = 1; continue; }
     const int a = pool.prev[v], b = pool.next[v];
     // Removals only move a vertex's neighbours apart: once the shortcut is too long, it stays too long.
-    if (options.max_segment > 0.0 && distance(pool.p[a], pool.p[b]) > options.max_segment) { pool.locked[v] = 1; continue; }
+    // A vertex crowding its neighbour goes even past max_segment, unless the shortcut leaves a spike (a corner
+    // below 20 degrees at a or b) where there was none.
+    auto opening = [&](int from, int at, int to) {
+      if (from < 0 || to < 0) return 180.0;
+      const Vec2 u = pool.p[from] - pool.p[at], w = pool.p[to] - pool.p[at];
+      return std::abs(std::atan2(cross(u, w), dot(u, w))) * 180.0 / 3.14159265358979323846;
+    };
+    const bool crowded = std::min(distance(pool.p[a], pool.p[v]), distance(pool.p[v], pool.p[b])) < 0.1 * options.max_segment &&
+                         opening(pool.prev[a], a, b) >= 20.0 && opening(a, b, pool.next[b]) >= 20.0;
+    if (options.max_segment > 0.0 && !crowded && distance(pool.p[a], pool.p[b]) > options.max_segment) {
+      pool.locked[v] = 1;
+      continue;
+    }
     if (options.max_distance > 0.0) {
       // Every input vertex the new segment replaces (those removed before between a and b, and v) stays
       // within max_distance of it; the line's vertices are consecutive in the pool.

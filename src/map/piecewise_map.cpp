@@ -472,10 +472,67 @@ std::vector<Subregion> split_subregions(const TriMesh& tri, const std::vector<st
   return subs;
 }
 
+int split_listed_subregions(const TriMesh& tri, std::vector<std::int32_t>& triangle_part, int parts,
+                            const std::vector<std::pair<int, int>>& listed, const PolysquareMapOptions& options,
+                            const std::string& name, int& split) {
+  split = 0;
+  const double h = options.size;
+  std::vector<std::vector<std::int32_t>> triangles(static_cast<std::size_t>(parts));
+  for (std::size_t t = 0; t < triangle_part.size(); ++t)
+    triangles[static_cast<std::size_t>(triangle_part[t])].push_back(static_cast<std::int32_t>(t));
+  const std::vector<std::int32_t> before = triangle_part;
+  const int parts_before = parts;
+  for (const auto& [p, sides] : listed) {
+    const auto& mine = triangles[static_cast<std::size_t>(p)];
+    double area = 0.0;
+    for (std::int32_t t : mine) {
+      const auto& tr = tri.triangles[static_cast<std::size_t>(t)];
+      area += 0.5 * orient2(tri.vertices[tr[0]], tri.vertices[tr[1]], tri.vertices[tr[2]]);
+    }
+    const int k = std::clamp((sides + options.sides_per_split - 1) / options.sides_per_split, 2, 8);
+    if (area / (h * h) < 16.0 * k || static_cast<int>(mine.size()) < 8 * k) continue;  // pieces of 4 x 4
+    if (parts + k - 1 > options.split_max_subregions) continue;
+    // The subregion's triangles as a mesh of their own (global vertex numbers, the feature curves for the
+    // partition energy); piece 0 keeps the number p, the others are appended.
+    TriMesh piece;
+    piece.vertices = tri.vertices;
+    for (std::int32_t t : mine) piece.triangles.push_back(tri.triangles[static_cast<std::size_t>(t)]);
+    for (const TriChain& ch : tri.chains)
+      if (ch.kind == TriChain::Kind::feature) piece.chains.push_back(ch);
+    PartitionOptions popt = options.partition;
+    popt.parts = k;
+    PartitionResult pr;
+    try {
+      pr = partition_triangles(piece, popt);
+    } catch (const MeshingError&) {
+      continue;  // METIS refuses some pieces (too few triangles for k balanced parts): it stays as it is
+    }
+    for (std::size_t i = 0; i < mine.size(); ++i) {
+      const std::int32_t q = pr.triangle_part[i];
+      triangle_part[static_cast<std::size_t>(mine[i])] = q == 0 ? static_cast<std::int32_t>(p) : parts + q - 1;
+    }
+    parts += pr.parts - 1;
+    ++split;
+  }
+  if (split == 0) return parts;
+  keep_feature_loops_whole(tri, triangle_part);
+  absorb_pieces_cut_off_by_features(tri, triangle_part);
+  snap_separator_ends_to_corners(tri, triangle_part, options.layout.corner_threshold_deg);
+  parts = merge_enclosed_parts(tri, triangle_part);
+  if (separate_pinched_parts(tri, triangle_part) > 0) parts = merge_enclosed_parts(tri, triangle_part);
+  try {
+    split_subregions(tri, triangle_part, parts, name);
+  } catch (const MeshingError&) {
+    triangle_part = before;  // the pieces cannot be cut apart: keep the partition as it was
+    split = 0;
+    return parts_before;
+  }
+  return parts;
+}
+
 int split_unmappable_subregions(const TriMesh& tri, std::vector<std::int32_t>& triangle_part, int parts,
                                 const PolysquareMapOptions& options, const std::string& name, SplitStats& stats) {
   const auto t0 = std::chrono::steady_clock::now();
-  const double h = options.size;
   // Subregions known to map, by their triangle set: a later round tests only what changed.
   std::set<std::vector<std::int32_t>> maps_alone;
   for (int round = 0; round < options.split_rounds; ++round) {
@@ -509,58 +566,18 @@ int split_unmappable_subregions(const TriMesh& tri, std::vector<std::int32_t>& t
         failed[p] = 1;
       }
     });
-    std::vector<std::int32_t> before = triangle_part;
-    const int parts_before = parts;
-    int split_now = 0;
+    std::vector<std::pair<int, int>> listed;  // failed subregion, its sides
     for (std::size_t p = 0; p < n; ++p) {
       if (!failed[p]) {
         if (round > 0 && test[p]) stats.pieces_mapped++;
         maps_alone.insert(triangles[p]);
         continue;
       }
-      double area = 0.0;
-      for (std::int32_t t : triangles[p]) {
-        const auto& tr = tri.triangles[static_cast<std::size_t>(t)];
-        area += 0.5 * orient2(tri.vertices[tr[0]], tri.vertices[tr[1]], tri.vertices[tr[2]]);
-      }
-      const int k = std::clamp((sides[p] + options.sides_per_split - 1) / options.sides_per_split, 2, 8);
-      if (area / (h * h) < 16.0 * k || static_cast<int>(triangles[p].size()) < 8 * k) continue;  // pieces of 4 x 4
-      if (parts + k - 1 > options.split_max_subregions) continue;
-      // The subregion's triangles as a mesh of their own (global vertex numbers, the feature curves for the
-      // partition energy); piece 0 keeps the number p, the others are appended.
-      TriMesh piece;
-      piece.vertices = tri.vertices;
-      for (std::int32_t t : triangles[p]) piece.triangles.push_back(tri.triangles[static_cast<std::size_t>(t)]);
-      for (const TriChain& ch : tri.chains)
-        if (ch.kind == TriChain::Kind::feature) piece.chains.push_back(ch);
-      PartitionOptions popt = options.partition;
-      popt.parts = k;
-      PartitionResult pr;
-      try {
-        pr = partition_triangles(piece, popt);
-      } catch (const MeshingError&) {
-        continue;  // METIS refuses some pieces (too few triangles for k balanced parts): it stays as it is
-      }
-      for (std::size_t i = 0; i < triangles[p].size(); ++i) {
-        const std::int32_t q = pr.triangle_part[i];
-        triangle_part[static_cast<std::size_t>(triangles[p][i])] = q == 0 ? static_cast<std::int32_t>(p) : parts + q - 1;
-      }
-      parts += pr.parts - 1;
-      ++split_now;
+      listed.push_back({static_cast<int>(p), sides[p]});
     }
+    int split_now = 0;
+    parts = split_listed_subregions(tri, triangle_part, parts, listed, options, name, split_now);
     if (split_now == 0) break;
-    keep_feature_loops_whole(tri, triangle_part);
-    absorb_pieces_cut_off_by_features(tri, triangle_part);
-    snap_separator_ends_to_corners(tri, triangle_part, options.layout.corner_threshold_deg);
-    parts = merge_enclosed_parts(tri, triangle_part);
-    if (separate_pinched_parts(tri, triangle_part) > 0) parts = merge_enclosed_parts(tri, triangle_part);
-    try {
-      split_subregions(tri, triangle_part, parts, name);
-    } catch (const MeshingError&) {
-      triangle_part = std::move(before);  // this round's pieces cannot be cut apart: keep the last partition
-      parts = parts_before;
-      break;
-    }
     stats.rounds++;
     stats.split += split_now;
   }
@@ -941,6 +958,11 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
   st.seconds_extract = seconds_since(t0);
   st.separators = couplings.size();
   st.subregions.assign(n, {});
+  st.failed_maps.clear();
+  for (std::size_t p = 0; p < n; ++p)
+    if (!failure[p].empty() && std::find(options.patch_subregions.begin(), options.patch_subregions.end(),
+                                         static_cast<int>(p)) == options.patch_subregions.end())
+      st.failed_maps.push_back({static_cast<int>(p), static_cast<int>(layouts[p].segments.size())});
   for (std::size_t p = 0; p < n; ++p) {
     SubregionStats& s = st.subregions[p];
     s.subregion = static_cast<int>(p);

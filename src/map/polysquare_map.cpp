@@ -128,9 +128,10 @@ PartMapResult map_part(const Region& region, const RegionPart& part, const Polys
   // vertices are identical on both sides by construction (eq. 12) and one quantization serves all subregions.
   // PPM (Sec. 5.2): the subregions are cut apart and mapped in their own frames (map_piecewise).
   std::vector<std::int32_t> triangle_part;
+  bool reuse = false;
   if (options.partition.parts != 1) {
     t0 = std::chrono::steady_clock::now();
-    const bool reuse = options.composition == MapComposition::ppm && options.triangle_partition &&
+    reuse = options.composition == MapComposition::ppm && options.triangle_partition &&
                        options.triangle_partition->size() == tri.triangles.size();
     PartitionResult pr;
     if (reuse) {
@@ -172,6 +173,41 @@ PartMapResult map_part(const Region& region, const RegionPart& part, const Polys
   t0 = std::chrono::steady_clock::now();
   if (options.composition == MapComposition::ppm && result.partition) {
     result.mesh = map_piecewise(tri, triangle_part, result.partition->parts, options, name, st);
+    // Failures the joint map found (counts a subregion's snap cannot reach, an infeasible quantization) are
+    // repaired where they are: those subregions are split and the part is mapped again, kept when more of its
+    // quads come from maps. A reused partition is final (repair rounds name its subregions).
+    auto mapped_fraction = [](const PartMapStats& s) {
+      std::size_t mapped = 0, all = 0;
+      for (const SubregionStats& r : s.subregions) {
+        all += r.quads;
+        mapped += r.mapped ? r.quads : 0;
+      }
+      return all > 0 ? static_cast<double>(mapped) / static_cast<double>(all) : 0.0;
+    };
+    for (int round = 0; !reuse && round < options.joint_split_rounds && !st.failed_maps.empty(); ++round) {
+      std::vector<std::int32_t> tp = triangle_part;
+      int split = 0;
+      const int parts = split_listed_subregions(tri, tp, result.partition->parts, st.failed_maps, options, name, split);
+      if (split == 0) break;
+      PartMapStats trial = st;
+      QuadMesh mesh;
+      try {
+        mesh = map_piecewise(tri, tp, parts, options, name, trial);
+      } catch (const MeshingError&) {
+        break;  // a patch of the new partition cannot be built: keep the last one
+      }
+      if (mapped_fraction(trial) <= mapped_fraction(st)) break;
+      trial.joint_splits = st.joint_splits + 1;
+      st = std::move(trial);
+      result.mesh = std::move(mesh);
+      triangle_part = std::move(tp);
+      result.partition->triangle_part = triangle_part;
+      result.partition->parts = parts;
+      if (options.keep_partition) {
+        result.background = tri;
+        st.separators = add_separator_chains(result.background, triangle_part);
+      }
+    }
     st.quads = result.mesh.quads.size();
     return result;
   }

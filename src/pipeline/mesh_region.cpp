@@ -36,6 +36,7 @@ nlohmann::json part_json(const PartMapStats& s) {
   nlohmann::json subregions = nlohmann::json::array();
   for (const SubregionStats& r : s.subregions) {
     nlohmann::json j = {{"subregion", r.subregion}, {"quads", r.quads}, {"meshed_by", r.mapped ? "map" : "patch"}};
+    if (r.local_patch_quads > 0) j["local_patch_quads"] = r.local_patch_quads;
     if (!r.mapped) {
       j["reason"] = r.reason;
       j["at"] = {r.at.x, r.at.y};
@@ -53,7 +54,7 @@ nlohmann::json part_json(const PartMapStats& s) {
                       {"alignment_after", s.deform.alignment_after}}},
           {"split", {{"rounds", s.split.rounds}, {"subregions_split", s.split.split},
                      {"maps_tried", s.split.tested}, {"pieces_mapped", s.split.pieces_mapped},
-                     {"seconds", s.split.seconds}}},
+                     {"seconds", s.split.seconds}, {"after_joint_map", s.joint_splits}}},
           {"break_points", s.break_points},
           {"segments", s.segments},
           {"quantization_max_relative_deviation", s.quantize.max_relative_deviation},
@@ -218,6 +219,8 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
     // meshed again as a patch, with the subregions patched before; the rest of the part keeps its maps.
     Repairs repairs;
     PartMapResult r;
+    std::vector<std::uint8_t> local_patched;  // #quads: made by a local patch (refine/local_patch.h)
+    LocalPatchStats local_stats;
     QuadMetrics metrics;
     std::vector<std::uint8_t> pinned;
     // "in subregion s (mapped|patch)" for the quad q of a partitioned part's mesh, empty otherwise.
@@ -235,10 +238,10 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
     for (int round = 0;; ++round) {
       r = make_mesh(repairs);
       const RefineStats refined = refine_flat_corners(r.mesh, options.refine);
-      if (r.stats.split.tested > 0)
+      if (r.stats.split.tested > 0 || r.stats.joint_splits > 0)
         c.summary["split"] = {{"rounds", r.stats.split.rounds}, {"subregions_split", r.stats.split.split},
                               {"maps_tried", r.stats.split.tested}, {"pieces_mapped", r.stats.split.pieces_mapped},
-                              {"seconds", r.stats.split.seconds}};
+                              {"seconds", r.stats.split.seconds}, {"after_joint_map", r.stats.joint_splits}};
       c.summary["flat_corners"] = refined.flat_corners;
       c.summary["flat_corners_collapsed"] = refined.collapsed;
       const RefineStats loops = pillow_feature_loops(r.mesh, options.refine);
@@ -249,20 +252,46 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
       SmoothOptions smooth = options.smooth;
       smooth.feature_tolerance = options.feature_tolerance * options.size;
       c.smooth = smooth_quads(r.mesh, smooth, &region);
-      const InvariantReport inv = check_invariants(r.mesh);
-      metrics = quad_metrics(r.mesh);
-      // The gates judge the quads the mesher controls: quads pinned by an input corner sharper than the SJ gate
-      // are only counted (they cannot do better in any conforming mesh).
-      pinned = quads_pinned_by_sharp_input(r.mesh, options.min_scaled_jacobian, options.size);
-      // Subregions holding a folded quad, or an unpinned one below the SJ gate, are meshed again (a mapped one
-      // as a patch, a patch by the matching construction); the rest of the part keeps its maps.
+      InvariantReport inv;
+      // Folded quads, and unpinned ones below the SJ gate. The gates judge the quads the mesher controls: quads
+      // pinned by an input corner sharper than the SJ gate are only counted (no conforming mesh does better).
+      std::vector<std::uint8_t> poor;
+      auto measure = [&] {
+        inv = check_invariants(r.mesh);
+        metrics = quad_metrics(r.mesh);
+        pinned = quads_pinned_by_sharp_input(r.mesh, options.min_scaled_jacobian, options.size);
+        poor.assign(metrics.sj.size(), 0);
+        bool any = false;
+        for (std::size_t q = 0; q < metrics.sj.size(); ++q) {
+          poor[q] = metrics.sj[q] <= 0.0 || (!pinned[q] && metrics.sj[q] < options.min_scaled_jacobian);
+          any = any || poor[q];
+        }
+        return any;
+      };
+      local_patched.clear();
+      // First the neighbourhoods of the poor quads are meshed again (a few rings of quads, the rest of their
+      // subregions keeps its map), then smoothed with the whole part.
+      if (measure() && options.local_patch.enabled) {
+        LocalPatchOptions lp = options.local_patch;
+        lp.size = options.size;
+        const LocalPatchStats done = remesh_poor_quads(r.mesh, poor, lp, local_patched);
+        local_stats.clusters += done.clusters;
+        local_stats.patched += done.patched;
+        local_stats.quads_added += done.quads_added;
+        local_stats.quads_removed += done.quads_removed;
+        if (done.patched > 0) {
+          c.smooth = smooth_quads(r.mesh, smooth, &region);
+          measure();
+        }
+      }
+      // Subregions still holding a poor quad are meshed again (a mapped one as a patch, a patch by the matching
+      // construction); the rest of the part keeps its maps.
       std::set<int> bad;
       std::size_t first_folded = metrics.sj.size();
       for (std::size_t q = 0; q < metrics.sj.size(); ++q) {
         const bool folded = metrics.sj[q] <= 0.0;
         if (folded && first_folded == metrics.sj.size()) first_folded = q;
-        if ((folded || (!pinned[q] && metrics.sj[q] < options.min_scaled_jacobian)) && subregion_of(q) >= 0)
-          bad.insert(subregion_of(q));
+        if (poor[q] && subregion_of(q) >= 0) bad.insert(subregion_of(q));
       }
       if (round < options.repair_rounds && repairs.add(bad, r.stats)) continue;
       if (!inv.ok())
@@ -281,13 +310,26 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
     const double mean_area = area / static_cast<double>(r.mesh.quads.size()) / (options.size * options.size);
     c.size_deviation = std::abs(std::log(mean_area));
     c.summary["quads"] = r.mesh.quads.size();
+    if (local_stats.clusters > 0)
+      c.summary["local_patches"] = {{"clusters", local_stats.clusters}, {"patched", local_stats.patched},
+                                    {"quads_removed", local_stats.quads_removed}, {"quads_added", local_stats.quads_added}};
     if (!c.summary.contains("fallback")) {
-      std::size_t patched = 0, all = 0;
-      for (const SubregionStats& sr : r.stats.subregions) {
-        all += sr.quads;
-        if (!sr.mapped) patched += sr.quads;
+      // Quads of mapped subregions, less those local patches made; subregion figures follow the final mesh.
+      for (SubregionStats& sr : r.stats.subregions) sr.quads = sr.local_patch_quads = 0;
+      std::size_t unstructured = 0;
+      for (std::size_t q = 0; q < r.mesh.quads.size(); ++q) {
+        const bool local = q < local_patched.size() && local_patched[q];
+        const int s = subregion_of(q);
+        if (s >= 0) {
+          SubregionStats& sr = r.stats.subregions[static_cast<std::size_t>(s)];
+          sr.quads++;
+          sr.local_patch_quads += local;
+          unstructured += local || !sr.mapped;
+        } else {
+          unstructured += local;
+        }
       }
-      c.structured = all > 0 ? 1.0 - static_cast<double>(patched) / static_cast<double>(all) : 1.0;
+      c.structured = r.mesh.quads.empty() ? 1.0 : 1.0 - static_cast<double>(unstructured) / static_cast<double>(r.mesh.quads.size());
     }
     c.summary["structured_fraction"] = c.structured;
     c.summary["min_scaled_jacobian"] = c.min_sj;
@@ -350,6 +392,7 @@ Candidate try_candidate(const Region& region, const RegionPart& part, const Poly
   // numbers they name stay valid and the splitting is not paid again.
   std::shared_ptr<const std::vector<std::int32_t>> partition;
   SplitStats split;
+  int joint_splits = 0;
   return finish_candidate(region, part, options, std::move(summary), [&](const Repairs& repairs) {
     PolysquareMapOptions with_repairs = map;
     with_repairs.patch_subregions.insert(with_repairs.patch_subregions.end(), repairs.patches.begin(), repairs.patches.end());
@@ -360,8 +403,10 @@ Candidate try_candidate(const Region& region, const RegionPart& part, const Poly
     if (!partition && r.partition) {
       partition = std::make_shared<const std::vector<std::int32_t>>(r.partition->triangle_part);
       split = r.stats.split;
+      joint_splits = r.stats.joint_splits;
     }
     r.stats.split = split;
+    r.stats.joint_splits = joint_splits;
     return r;
   });
 }
@@ -563,7 +608,7 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
   for (const auto& s : out.parts) parts_json.push_back(part_json(s));
   // The summary outside checks read: how much of the mesh is semi-structured, and where it is not.
   double structured_quads = 0.0;
-  std::size_t subregion_count = 0;
+  std::size_t subregion_count = 0, local_patch_quads = 0;
   nlohmann::json unstructured = nlohmann::json::array();
   for (std::size_t k = 0; k < parts.size(); ++k) {
     const PartMapStats& st = results[k]->stats;
@@ -578,6 +623,7 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
     }
     for (const SubregionStats& sr : st.subregions) {
       ++subregion_count;
+      local_patch_quads += sr.mapped ? sr.local_patch_quads : 0;
       if (!sr.mapped)
         unstructured.push_back({{"part", st.part}, {"subregion", sr.subregion}, {"quads", sr.quads},
                                 {"meshed_by", "patch"}, {"at", {sr.at.x, sr.at.y}}, {"reason", sr.reason}});
@@ -588,6 +634,7 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
       {"structured_fraction", mesh.quads.empty() ? 0.0 : structured_quads / static_cast<double>(mesh.quads.size())},
       {"subregions", subregion_count},
       {"unstructured_subregions", unstructured.size()},
+      {"local_patch_quads", local_patch_quads},
       {"seconds", std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count()},
       {"version", library_version()}};
   out.report = {

@@ -1,1 +1,1 @@
-list(APPEND MODULE_SOURCES refine.cpp)
+list(APPEND MODULE_SOURCES refine.cpp local_patch.cpp)

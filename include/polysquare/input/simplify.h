@@ -15,7 +15,9 @@ struct SimplifyOptions {
                               ///< this from the new segment (region units); 0 = no bound
   double max_segment = 0.0;   ///< a removal is skipped when the new segment would be longer than this (region
                               ///< units): curves are coarsened to the target size, never beyond it, so smooth
-                              ///< arcs keep turning gently; 0 = no bound
+                              ///< arcs keep turning gently; 0 = no bound. A vertex closer than a tenth of it
+                              ///< to a neighbour is removed all the same (the shortcut is then at most 1.1 times
+                              ///< this): two mesh nodes that close leave an edge ratio no mesh can avoid
 };
 
 struct SimplifyStats {

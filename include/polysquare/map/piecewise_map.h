@@ -45,6 +45,15 @@ QuadMesh stitch_quad_meshes(const std::vector<QuadMesh>& meshes, const std::vect
 int split_unmappable_subregions(const TriMesh& tri, std::vector<std::int32_t>& triangle_part, int parts,
                                 const PolysquareMapOptions& options, const std::string& name, SplitStats& stats);
 
+/// Splits each listed subregion (subregion, its poly-square side count or 0) by a k-way partition of its
+/// triangles, k = ceil(sides / options.sides_per_split) in [2, 8], unless its pieces would be smaller than 4 x 4
+/// elements or the part would pass options.split_max_subregions; then the partition clean-ups. Returns the new
+/// subregion count and sets `split` to the number split (0 and the partition unchanged when the pieces cannot be
+/// cut into subregions).
+int split_listed_subregions(const TriMesh& tri, std::vector<std::int32_t>& triangle_part, int parts,
+                            const std::vector<std::pair<int, int>>& listed, const PolysquareMapOptions& options,
+                            const std::string& name, int& split);
+
 /// The PPM of one partitioned part: split, per-subregion deformation and layout (in parallel), one joint
 /// quantization, per-subregion snap and extraction (in parallel), stitching. quad_part = subregion. Fills the
 /// timing and layout figures of `stats`. Throws MeshingError naming `name` and the subregion that failed.

@@ -6,6 +6,8 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "polysquare/core/quad_mesh.h"
 #include "polysquare/core/region.h"
@@ -45,6 +47,9 @@ struct PolysquareMapOptions {
                                       ///< retry for a matched patch that still left a folded or poor quad
   int split_rounds = 2;      ///< PPM: times a subregion whose map fails alone is split into smaller ones before
                             ///< the joint map (split_unmappable_subregions); 0 = patch it at once
+  int joint_split_rounds = 2;  ///< PPM: times the subregions whose map still fails in the joint map (a snap the
+                               ///< joint counts cannot reach, an infeasible quantization) are split and the part
+                               ///< mapped again; the new partition is kept when more quads come from maps
   int split_max_subregions = 80;  ///< no split takes a part beyond this many subregions: the joint quantization's
                                   ///< time grows steeply with the count (GLPK; delta_box at 200 m passed 13 min)
   int sides_per_split = 12; ///< a failed subregion with s poly-square sides is split into ceil(s / this) pieces
@@ -70,6 +75,8 @@ struct SubregionStats {
   int subregion = 0;
   bool mapped = true;     ///< false: its map failed and an unstructured patch repairs it (fallback/patch.h)
   std::size_t quads = 0;
+  std::size_t local_patch_quads = 0;  ///< of a mapped subregion's quads, those made by local patches around poor
+                                      ///< quads (refine/local_patch.h)
   std::string reason;     ///< why its map failed (patches only)
   Vec2 at{};              ///< its first boundary vertex, to find it
 };
@@ -94,6 +101,9 @@ struct PartMapStats {
   std::size_t separators = 0;      ///< separator chains between subregions
   std::vector<SubregionStats> subregions;  ///< PPM: every subregion, in order
   SplitStats split;                        ///< PPM: subregions split before the joint map
+  std::vector<std::pair<int, int>> failed_maps;  ///< PPM: subregions whose own map failed in the joint map (not
+                                                 ///< requested patches), with their poly-square side counts
+  int joint_splits = 0;                    ///< PPM: rounds that split failed subregions after the joint map
   double seconds_partition = 0;
   double seconds_triangulate = 0, seconds_deform = 0, seconds_quantize = 0, seconds_snap = 0, seconds_extract = 0;
 };

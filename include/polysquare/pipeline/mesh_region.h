@@ -9,6 +9,7 @@
 #include "polysquare/core/quad_mesh.h"
 #include "polysquare/core/region.h"
 #include "polysquare/map/polysquare_map.h"
+#include "polysquare/refine/local_patch.h"
 #include "polysquare/refine/refine.h"
 #include "polysquare/smooth/smooth.h"
 
@@ -53,6 +54,9 @@ struct MeshOptions {
                                        ///< mesh edges along it that smoothing allows (SmoothOptions::feature_tolerance)
   PolysquareMapOptions map;      ///< stages 2 and 4-6 (map.size and map.layout.corner_threshold_deg are set from above)
   RefineOptions refine;          ///< stage 8 templates at flattened boundary corners (before smoothing)
+  LocalPatchOptions local_patch; ///< after smoothing, poor or folded quads are meshed again with a few rings
+                                 ///< around them, before a repair round turns their whole subregion into a patch
+                                 ///< (local_patch.size is set from size)
   SmoothOptions smooth;          ///< stage 7 smoothing
 };
 

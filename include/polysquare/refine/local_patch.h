@@ -1,0 +1,40 @@
+// Stage 8 (local repair of a finished quad mesh, paper Sec. 5.3's patch templates applied where distortion is
+// high): the quads around a cluster of poor or folded quads are cut out of the mesh and the hole is meshed again
+// by an unstructured patch (fallback/patch.h) on exactly the nodes of its boundary loop, so the rest of the
+// subregion keeps its mapped quads. Without it, one poor quad next to a sharp coastline vertex turned a whole
+// mapped subregion of hundreds of quads into an unstructured patch.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "polysquare/core/quad_mesh.h"
+
+namespace polysquare {
+
+struct LocalPatchOptions {
+  bool enabled = true;          ///< false: poor quads are left to the coarser repairs (whole subregions as patches)
+  double size = 1.0;            ///< target quad edge length h (patch interior vertices follow it)
+  int max_rings = 3;            ///< rings of quads grown around a cluster, one at a time, until its patch builds
+  std::size_t max_quads = 300;  ///< a region grown past this many quads is left to the caller's coarser repair
+};
+
+struct LocalPatchStats {
+  std::size_t clusters = 0;       ///< clusters of flagged quads (quads sharing a node belong to one)
+  std::size_t patched = 0;        ///< clusters whose region was meshed again
+  std::size_t quads_removed = 0;  ///< quads cut out of the mesh
+  std::size_t quads_added = 0;    ///< patch quads that replaced them
+};
+
+/// Meshes again the neighbourhood of every cluster of quads flagged in `poor` (#quads): the cluster grows by rings
+/// of edge-neighbours, never across a feature edge, until it is a disk without feature or boundary edges inside
+/// and the patch on its boundary loop builds with no folded quad (the split and the matching construction are
+/// both tried, the one with the better worst corner kept). Nodes outside the regions and every tagged edge keep
+/// their indices' meaning (nodes are renumbered, tags follow); patch quads take the subregion (quad_part) that
+/// held most of their region. `unstructured` (#quads, in/out; empty = none) flags quads made by patches: it is
+/// carried for the quads that stay and set for the new ones. Deterministic: clusters in quad order.
+LocalPatchStats remesh_poor_quads(QuadMesh& mesh, const std::vector<std::uint8_t>& poor, const LocalPatchOptions& options,
+                                  std::vector<std::uint8_t>& unstructured);
+
+}  // namespace polysquare

@@ -1,0 +1,290 @@
+#include "polysquare/refine/local_patch.h"
+
+#include <algorithm>
+#include <map>
+#include <unordered_map>
+#include <unordered_set>
+
+#include "polysquare/core/error.h"
+#include "polysquare/fallback/patch.h"
+
+namespace polysquare {
+namespace {
+
+double worst_corner(const QuadMesh& m) {
+  double worst = 1.0;
+  for (const auto& q : m.quads)
+    worst = std::min(worst, quad_min_sj(m.nodes[q[0]], m.nodes[q[1]], m.nodes[q[2]], m.nodes[q[3]]));
+  return worst;
+}
+
+// A region of quads that can be meshed again: one simple boundary loop (counter-clockwise, the region on its
+// left), no feature edge inside, every interior node of kind interior.
+struct QuadRegion {
+  std::vector<std::int32_t> quads;
+  std::vector<std::int32_t> loop;      // boundary nodes in order
+  std::vector<std::int32_t> interior;  // nodes of the region not on its loop
+};
+
+class Cutter {
+ public:
+  explicit Cutter(const QuadMesh& m) : m_(m) {
+    for (std::size_t q = 0; q < m.quads.size(); ++q)
+      for (int i = 0; i < 4; ++i) {
+        const auto key = edge_key(m.quads[q][i], m.quads[q][(i + 1) % 4]);
+        auto [it, inserted] = across_.try_emplace(key, std::array<std::int32_t, 2>{static_cast<std::int32_t>(q), -1});
+        if (!inserted) it->second[1] = static_cast<std::int32_t>(q);
+      }
+    for (std::size_t e = 0; e < m.feature_edges.size(); ++e)
+      feature_[edge_key(m.feature_edges[e][0], m.feature_edges[e][1])] = m.feature_edge_curve[e];
+    for (std::size_t e = 0; e < m.boundary_edges.size(); ++e)
+      boundary_[edge_key(m.boundary_edges[e][0], m.boundary_edges[e][1])] = m.boundary_edge_ring[e];
+    node_quads_.resize(m.nodes.size());
+    for (std::size_t q = 0; q < m.quads.size(); ++q)
+      for (auto v : m.quads[q]) node_quads_[static_cast<std::size_t>(v)].push_back(static_cast<std::int32_t>(q));
+  }
+
+  // The quad across edge i of quad q, or -1.
+  std::int32_t neighbour(std::int32_t q, int i) const {
+    const auto& o = across_.at(edge_key(m_.quads[q][i], m_.quads[q][(i + 1) % 4]));
+    return o[0] == q ? o[1] : o[0];
+  }
+  bool feature_edge(std::int32_t a, std::int32_t b) const { return feature_.count(edge_key(a, b)) > 0; }
+  const std::vector<std::int32_t>& quads_at(std::int32_t v) const { return node_quads_[static_cast<std::size_t>(v)]; }
+
+  // Grows `in` by one ring of edge neighbours (not across feature edges, not into `blocked`), then fills quads
+  // with two or more edges on the region (notches that would pinch its loop).
+  void grow(std::vector<std::uint8_t>& in, std::vector<std::int32_t>& quads, const std::vector<std::uint8_t>& blocked) const {
+    const std::size_t before = quads.size();
+    for (std::size_t k = 0; k < before; ++k)
+      for (int i = 0; i < 4; ++i) {
+        const std::int32_t q = quads[k], n = neighbour(q, i);
+        if (n < 0 || in[n] || blocked[n] || feature_edge(m_.quads[q][i], m_.quads[q][(i + 1) % 4])) continue;
+        in[n] = 1;
+        quads.push_back(n);
+      }
+    for (bool again = true; again;) {
+      again = false;
+      for (std::size_t k = 0; k < quads.size(); ++k)
+        for (int i = 0; i < 4; ++i) {
+          const std::int32_t n = neighbour(quads[k], i);
+          if (n < 0 || in[n] || blocked[n]) continue;
+          int sides = 0;
+          for (int j = 0; j < 4; ++j) {
+            const std::int32_t o = neighbour(n, j);
+            sides += o >= 0 && in[o] && !feature_edge(m_.quads[n][j], m_.quads[n][(j + 1) % 4]);
+          }
+          if (sides < 2) continue;
+          in[n] = 1;
+          quads.push_back(n);
+          again = true;
+        }
+    }
+  }
+
+  // The region of `quads` when it is a disk with one simple loop and nothing tagged inside.
+  bool cut(const std::vector<std::int32_t>& quads, const std::vector<std::uint8_t>& in, QuadRegion& r) const {
+    std::unordered_map<std::int32_t, std::int32_t> next;
+    std::unordered_set<std::int32_t> nodes;
+    for (std::int32_t q : quads)
+      for (int i = 0; i < 4; ++i) {
+        const std::int32_t a = m_.quads[q][i], b = m_.quads[q][(i + 1) % 4], n = neighbour(q, i);
+        nodes.insert(a);
+        if (n >= 0 && in[n]) {
+          if (feature_edge(a, b)) return false;  // a feature would be lost inside the patch
+          continue;
+        }
+        if (!next.try_emplace(a, b).second) return false;  // the region touches itself at a
+      }
+    if (next.empty()) return false;
+    std::int32_t start = next.begin()->first;
+    for (const auto& [a, b] : next) start = std::min(start, a);
+    r = QuadRegion{};
+    r.quads = quads;
+    for (std::int32_t v = start;;) {
+      r.loop.push_back(v);
+      v = next.at(v);
+      if (v == start) break;
+      if (r.loop.size() > next.size()) return false;
+    }
+    if (r.loop.size() != next.size()) return false;  // more than one loop: a hole
+    for (std::int32_t v : nodes) {
+      if (next.count(v)) continue;
+      if (!m_.node_kind.empty() && m_.node_kind[static_cast<std::size_t>(v)] != NodeKind::interior) return false;
+      r.interior.push_back(v);
+    }
+    std::sort(r.interior.begin(), r.interior.end());
+    return true;
+  }
+
+  PatchInput patch_input(const QuadRegion& r) const {
+    PatchInput in;
+    PatchCurve c;
+    c.closed = c.loop = true;
+    const std::size_t n = r.loop.size();
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::int32_t a = r.loop[i], b = r.loop[(i + 1) % n];
+      in.nodes.push_back(m_.nodes[static_cast<std::size_t>(a)]);
+      in.kind.push_back(m_.node_kind.empty() ? NodeKind::interior : m_.node_kind[static_cast<std::size_t>(a)]);
+      c.nodes.push_back(static_cast<std::int32_t>(i));
+      const auto key = edge_key(a, b);
+      if (auto it = boundary_.find(key); it != boundary_.end()) {
+        c.role.push_back(PatchEdgeRole::boundary);
+        c.tag.push_back(it->second);
+      } else if (auto f = feature_.find(key); f != feature_.end()) {
+        c.role.push_back(PatchEdgeRole::feature);
+        c.tag.push_back(f->second);
+      } else {
+        c.role.push_back(PatchEdgeRole::none);
+        c.tag.push_back(-1);
+      }
+    }
+    in.curves.push_back(std::move(c));
+    return in;
+  }
+
+ private:
+  const QuadMesh& m_;
+  std::unordered_map<std::uint64_t, std::array<std::int32_t, 2>> across_;
+  std::unordered_map<std::uint64_t, std::int32_t> feature_, boundary_;
+  std::vector<std::vector<std::int32_t>> node_quads_;
+};
+
+// The better of the two patch constructions on `in`, or nothing when neither builds without a folded quad.
+bool best_patch(const PatchInput& in, double size, QuadMesh& out) {
+  double best = 0.0;
+  bool found = false;
+  for (PatchMethod method : {PatchMethod::split, PatchMethod::matching}) {
+    PatchOptions po;
+    po.size = size;
+    po.method = method;
+    try {
+      QuadMesh p = mesh_patch(in, po);
+      const double w = worst_corner(p);
+      if (w > best) {
+        best = w;
+        out = std::move(p);
+        found = true;
+      }
+    } catch (const MeshingError&) {
+    }
+  }
+  return found;
+}
+
+}  // namespace
+
+LocalPatchStats remesh_poor_quads(QuadMesh& mesh, const std::vector<std::uint8_t>& poor, const LocalPatchOptions& options,
+                                  std::vector<std::uint8_t>& unstructured) {
+  LocalPatchStats st;
+  const std::size_t nq = mesh.quads.size();
+  if (unstructured.size() != nq) unstructured.assign(nq, 0);
+  const Cutter cutter(mesh);
+  std::vector<std::uint8_t> used(nq, 0), seen(nq, 0);
+  struct Done {
+    QuadRegion region;
+    QuadMesh patch;
+    std::int32_t part = 0;
+  };
+  std::vector<Done> done;
+  for (std::size_t q0 = 0; q0 < nq; ++q0) {
+    if (!poor[q0] || seen[q0]) continue;
+    // The cluster: flagged quads sharing a node, in quad order.
+    std::vector<std::int32_t> cluster{static_cast<std::int32_t>(q0)};
+    seen[q0] = 1;
+    for (std::size_t k = 0; k < cluster.size(); ++k)
+      for (std::int32_t v : mesh.quads[cluster[k]])
+        for (std::int32_t n : cutter.quads_at(v))
+          if (poor[n] && !seen[n]) {
+            seen[n] = 1;
+            cluster.push_back(n);
+          }
+    ++st.clusters;
+    std::vector<std::uint8_t> in(nq, 0);
+    std::vector<std::int32_t> quads;
+    for (std::int32_t q : cluster)
+      if (!used[q]) {
+        in[q] = 1;
+        quads.push_back(q);
+      }
+    if (quads.empty()) continue;  // already inside another cluster's region
+    for (int ring = 1; ring <= options.max_rings; ++ring) {
+      cutter.grow(in, quads, used);
+      if (quads.size() > options.max_quads) break;
+      QuadRegion r;
+      if (!cutter.cut(quads, in, r)) continue;
+      QuadMesh patch;
+      if (!best_patch(cutter.patch_input(r), options.size, patch)) continue;
+      // The subregion that held most of the region names the patch quads.
+      std::map<std::int32_t, std::size_t> votes;
+      for (std::int32_t q : r.quads) votes[mesh.quad_part.empty() ? 0 : mesh.quad_part[static_cast<std::size_t>(q)]]++;
+      const auto part = std::max_element(votes.begin(), votes.end(), [](const auto& a, const auto& b) {
+                          return a.second < b.second;
+                        })->first;
+      for (std::int32_t q : r.quads) used[q] = 1;
+      done.push_back({std::move(r), std::move(patch), part});
+      break;
+    }
+  }
+  if (done.empty()) return st;
+
+  // Rebuild: nodes inside the regions go, patch interior nodes come at the end; tagged edges keep their nodes.
+  std::vector<std::uint8_t> drop(mesh.nodes.size(), 0);
+  for (const Done& d : done)
+    for (std::int32_t v : d.region.interior) drop[static_cast<std::size_t>(v)] = 1;
+  std::vector<std::int32_t> index(mesh.nodes.size(), -1);
+  QuadMesh out;
+  out.crs = mesh.crs;
+  out.units = mesh.units;
+  const bool kinds = !mesh.node_kind.empty();
+  for (std::size_t v = 0; v < mesh.nodes.size(); ++v) {
+    if (drop[v]) continue;
+    index[v] = static_cast<std::int32_t>(out.nodes.size());
+    out.nodes.push_back(mesh.nodes[v]);
+    if (kinds) out.node_kind.push_back(mesh.node_kind[v]);
+  }
+  std::vector<std::uint8_t> flags;
+  const bool parts = !mesh.quad_part.empty();
+  for (std::size_t q = 0; q < nq; ++q) {
+    if (used[q]) continue;
+    const auto& quad = mesh.quads[q];
+    out.quads.push_back({index[quad[0]], index[quad[1]], index[quad[2]], index[quad[3]]});
+    if (parts) out.quad_part.push_back(mesh.quad_part[q]);
+    flags.push_back(unstructured[q]);
+  }
+  for (const Done& d : done) {
+    const std::size_t given = d.region.loop.size();
+    std::vector<std::int32_t> map(d.patch.nodes.size());
+    for (std::size_t i = 0; i < d.patch.nodes.size(); ++i) {
+      if (i < given) {
+        map[i] = index[d.region.loop[i]];
+        continue;
+      }
+      map[i] = static_cast<std::int32_t>(out.nodes.size());
+      out.nodes.push_back(d.patch.nodes[i]);
+      if (kinds) out.node_kind.push_back(NodeKind::interior);
+    }
+    for (const auto& quad : d.patch.quads) {
+      out.quads.push_back({map[quad[0]], map[quad[1]], map[quad[2]], map[quad[3]]});
+      if (parts) out.quad_part.push_back(d.part);
+      flags.push_back(1);
+    }
+    st.quads_removed += d.region.quads.size();
+    st.quads_added += d.patch.quads.size();
+    ++st.patched;
+  }
+  for (std::size_t e = 0; e < mesh.boundary_edges.size(); ++e) {
+    out.boundary_edges.push_back({index[mesh.boundary_edges[e][0]], index[mesh.boundary_edges[e][1]]});
+    out.boundary_edge_ring.push_back(mesh.boundary_edge_ring[e]);
+  }
+  for (std::size_t e = 0; e < mesh.feature_edges.size(); ++e) {
+    out.feature_edges.push_back({index[mesh.feature_edges[e][0]], index[mesh.feature_edges[e][1]]});
+    out.feature_edge_curve.push_back(mesh.feature_edge_curve[e]);
+  }
+  out.triangles = mesh.triangles;
+  mesh = std::move(out);
+  unstructured = std::move(flags);
+  return st;
+}
+
+}  // namespace polysquare

@@ -1,0 +1,115 @@
+// Local patches (refine/local_patch.h): the neighbourhood of poor quads is meshed again and only it; features
+// and the boundary are kept, the mesh stays conforming, and on a real coast more of the mesh stays mapped.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <set>
+
+#include "polysquare/input/read_region.h"
+#include "polysquare/pipeline/invariants.h"
+#include "polysquare/pipeline/mesh_region.h"
+#include "polysquare/refine/local_patch.h"
+
+using namespace polysquare;
+
+namespace {
+
+// An n x n grid of unit quads, its border a tagged ring, the row y = n / 2 a feature curve.
+QuadMesh grid_with_feature(int n) {
+  QuadMesh m;
+  auto id = [&](int i, int j) { return static_cast<std::int32_t>(j * (n + 1) + i); };
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) {
+      m.nodes.push_back({static_cast<double>(i), static_cast<double>(j)});
+      const bool border = i == 0 || j == 0 || i == n || j == n;
+      const bool corner = (i == 0 || i == n) && (j == 0 || j == n);
+      m.node_kind.push_back(corner ? NodeKind::corner
+                                   : border ? NodeKind::boundary : (j == n / 2 ? NodeKind::feature : NodeKind::interior));
+    }
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      m.quads.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)});
+      m.quad_part.push_back(0);
+    }
+  for (int k = 0; k < n; ++k) {
+    for (auto e : {std::array{id(k, 0), id(k + 1, 0)}, std::array{id(n, k), id(n, k + 1)},
+                   std::array{id(n - k, n), id(n - k - 1, n)}, std::array{id(0, n - k), id(0, n - k - 1)}}) {
+      m.boundary_edges.push_back(e);
+      m.boundary_edge_ring.push_back(0);
+    }
+    m.feature_edges.push_back({id(k, n / 2), id(k + 1, n / 2)});
+    m.feature_edge_curve.push_back(0);
+  }
+  return m;
+}
+
+std::vector<std::uint8_t> poor_quads(const QuadMesh& m, double gate) {
+  std::vector<std::uint8_t> poor(m.quads.size());
+  for (std::size_t q = 0; q < m.quads.size(); ++q) {
+    const auto& x = m.quads[q];
+    poor[q] = quad_min_sj(m.nodes[x[0]], m.nodes[x[1]], m.nodes[x[2]], m.nodes[x[3]]) < gate;
+  }
+  return poor;
+}
+
+double area(const QuadMesh& m) {
+  double a = 0;
+  for (const auto& x : m.quads) a += 0.5 * cross(m.nodes[x[2]] - m.nodes[x[0]], m.nodes[x[3]] - m.nodes[x[1]]);
+  return a;
+}
+
+}  // namespace
+
+TEST(LocalPatch, RemeshesTheNeighbourhoodOfPoorQuadsAndKeepsTheFeature) {
+  const int n = 12;
+  QuadMesh m = grid_with_feature(n);
+  // Pull node (3, 3) almost onto (4, 4): two of its quads fold, the others are poor.
+  m.nodes[3 * (n + 1) + 3] = {3.95, 3.95};
+  const std::vector<std::uint8_t> poor = poor_quads(m, 0.2);
+  ASSERT_GT(std::count(poor.begin(), poor.end(), 1), 0);
+  const Vec2 corner = m.nodes[0];
+  std::vector<std::uint8_t> made;
+  LocalPatchOptions o;
+  o.size = 1.0;
+  const LocalPatchStats st = remesh_poor_quads(m, poor, o, made);
+  EXPECT_EQ(st.clusters, 1u);
+  ASSERT_EQ(st.patched, 1u);
+  const InvariantReport inv = check_invariants(m);
+  EXPECT_TRUE(inv.ok()) << inv.first_problem;
+  ASSERT_EQ(made.size(), m.quads.size());
+  const auto patch_quads = static_cast<std::size_t>(std::count(made.begin(), made.end(), 1));
+  EXPECT_EQ(patch_quads, st.quads_added);
+  EXPECT_LT(st.quads_removed, m.quads.size() / 2);  // local: a few rings, not the mesh
+  const std::vector<std::uint8_t> folded = poor_quads(m, 1e-9);
+  EXPECT_EQ(std::count(folded.begin(), folded.end(), 1), 0);  // nothing folded
+  EXPECT_NEAR(area(m), n * n, 1e-9);
+  EXPECT_EQ(m.nodes[0], corner);
+  EXPECT_EQ(m.boundary_edges.size(), static_cast<std::size_t>(4 * n));
+  // The feature row is still a chain of quad edges, and no patch quad lies across it.
+  std::set<std::uint64_t> edges;
+  for (const auto& x : m.quads)
+    for (int i = 0; i < 4; ++i) edges.insert(edge_key(x[i], x[(i + 1) % 4]));
+  for (const auto& e : m.feature_edges) {
+    EXPECT_TRUE(edges.count(edge_key(e[0], e[1])));
+    EXPECT_DOUBLE_EQ(m.nodes[e[0]].y, n / 2);
+  }
+  for (std::size_t q = 0; q < m.quads.size(); ++q)
+    if (made[q])
+      for (auto v : m.quads[q]) EXPECT_LE(m.nodes[v].y, n / 2 + 1e-12);
+}
+
+TEST(LocalPatch, KeepMoreOfACoastMapped) {
+  // estuary (GSHHG) at 400 m: poor quads next to sharp shoreline vertices are repaired by local patches instead
+  // of turning their whole subregion into a patch, so the structured fraction rises.
+  const Region region = read_region(std::string(POLYSQUARE_DATA_DIR) + "/cases/estuary.geojson");
+  MeshOptions o;
+  o.size = 400.0;
+  const MeshResult with = mesh_region(region, o);
+  EXPECT_TRUE(check_invariants(with.mesh).ok());
+  EXPECT_GT(with.report["summary"]["local_patch_quads"].get<std::size_t>(), 0u);
+  MeshOptions off = o;
+  off.local_patch.enabled = false;
+  const MeshResult without = mesh_region(region, off);
+  EXPECT_GT(with.report["summary"]["structured_fraction"].get<double>(),
+            without.report["summary"]["structured_fraction"].get<double>() + 0.02);
+}
