@@ -501,6 +501,7 @@ int split_listed_subregions(const TriMesh& tri, std::vector<std::int32_t>& trian
       if (ch.kind == TriChain::Kind::feature) piece.chains.push_back(ch);
     PartitionOptions popt = options.partition;
     popt.parts = k;
+    if (popt.min_face_area <= 0) popt.min_face_area = 16.0 * h * h;  // as map_part
     PartitionResult pr;
     try {
       pr = partition_triangles(piece, popt);

@@ -138,7 +138,9 @@ PartMapResult map_part(const Region& region, const RegionPart& part, const Polys
       pr.triangle_part = *options.triangle_partition;
       pr.parts = 1 + *std::max_element(pr.triangle_part.begin(), pr.triangle_part.end());
     } else {
-      pr = partition_triangles(tri, options.partition);
+      PartitionOptions popt = options.partition;
+      if (popt.min_face_area <= 0) popt.min_face_area = 16.0 * h * h;  // a face must hold a subregion of 4 x 4 quads
+      pr = partition_triangles(tri, popt);
     }
     if (options.composition == MapComposition::gpm) {
       st.separators = add_separator_chains(tri, pr.triangle_part);

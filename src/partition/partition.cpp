@@ -6,6 +6,7 @@
 #include <mutex>
 #include <cmath>
 #include <deque>
+#include <map>
 #include <fstream>
 #include <numbers>
 #include <random>
@@ -141,8 +142,10 @@ bool stays_connected(const Topology& topo, const std::vector<std::int32_t>& part
   return false;
 }
 
-// Moves every triangle outside its part's largest component to the neighbouring part it shares most edge with.
-std::size_t make_parts_connected(const Topology& topo, std::vector<std::int32_t>& part, int k) {
+// Moves every triangle outside its part's largest component to the neighbouring part it shares most edge with,
+// among the parts of the same face (part_face[p]: the face of part p).
+std::size_t make_parts_connected(const Topology& topo, std::vector<std::int32_t>& part, int k,
+                                 const std::vector<std::int32_t>& part_face) {
   std::size_t moved = 0;
   for (int round = 0; round < 100; ++round) {
     const std::size_t nt = part.size();
@@ -185,7 +188,8 @@ std::size_t make_parts_connected(const Topology& topo, std::vector<std::int32_t>
       std::int32_t target = -1;
       double best = -1;
       for (const auto& [p, len] : shared)
-        if (len > best || (len == best && p < target)) { best = len; target = p; }
+        if (part_face[static_cast<std::size_t>(p)] == part_face[static_cast<std::size_t>(comp_part[c])] &&
+            (len > best || (len == best && p < target))) { best = len; target = p; }
       if (target < 0) continue;
       for (std::size_t t = 0; t < nt; ++t)
         if (comp[t] == static_cast<std::int32_t>(c)) { part[t] = target; ++moved; }
@@ -194,6 +198,77 @@ std::size_t make_parts_connected(const Topology& topo, std::vector<std::int32_t>
     if (!changed) break;
   }
   return moved;
+}
+
+// Feature faces: components of triangles joined across edges that are not feature edges. A face enclosed by one
+// other face (no ring edge, one neighbour) or smaller than min_area merges into the neighbour it shares the most
+// feature length with, repeatedly. Faces are numbered by their first triangle.
+std::vector<std::int32_t> feature_faces(const Topology& topo, double min_area, int& count) {
+  const std::size_t nt = topo.area.size();
+  std::vector<std::int32_t> comp(nt, -1);
+  int nc = 0;
+  for (std::size_t s = 0; s < nt; ++s) {
+    if (comp[s] >= 0) continue;
+    std::vector<std::int32_t> stack{static_cast<std::int32_t>(s)};
+    comp[s] = nc;
+    while (!stack.empty()) {
+      const std::int32_t t = stack.back();
+      stack.pop_back();
+      for (int e = 0; e < 3; ++e) {
+        const std::int32_t n = topo.neighbour(static_cast<std::size_t>(t), e);
+        if (n >= 0 && comp[n] < 0 && !topo.edges[topo.tri_edges[t][e]].feature) { comp[n] = nc; stack.push_back(n); }
+      }
+    }
+    ++nc;
+  }
+  std::vector<std::int32_t> parent(static_cast<std::size_t>(nc));
+  for (int c = 0; c < nc; ++c) parent[c] = c;
+  auto find = [&](std::int32_t c) {
+    while (parent[c] != c) c = parent[c] = parent[parent[c]];
+    return c;
+  };
+  for (bool changed = nc > 1; changed;) {
+    changed = false;
+    std::vector<double> area(static_cast<std::size_t>(nc), 0.0);
+    std::vector<std::uint8_t> ring(static_cast<std::size_t>(nc), 0);
+    std::vector<std::map<std::int32_t, double>> shared(static_cast<std::size_t>(nc));  // neighbour -> feature length
+    for (std::size_t t = 0; t < nt; ++t) area[find(comp[t])] += topo.area[t];
+    for (const auto& e : topo.edges) {
+      if (e.t1 < 0) { ring[find(comp[e.t0])] = 1; continue; }
+      const std::int32_t a = find(comp[e.t0]), b = find(comp[e.t1]);
+      if (a == b) continue;
+      shared[a][b] += e.length;
+      shared[b][a] += e.length;
+    }
+    std::vector<std::int32_t> order;
+    for (int c = 0; c < nc; ++c)
+      if (find(c) == c && !shared[c].empty()) order.push_back(c);
+    std::sort(order.begin(), order.end(), [&](std::int32_t a, std::int32_t b) {
+      return area[a] < area[b] || (area[a] == area[b] && a < b);
+    });
+    std::vector<std::uint8_t> received(static_cast<std::size_t>(nc), 0);
+    for (std::int32_t c : order) {
+      const bool enclosed = !ring[c] && shared[c].size() == 1;
+      if (!enclosed && !(area[c] < min_area)) continue;
+      std::int32_t target = -1;
+      double best = -1;
+      for (const auto& [n, len] : shared[c])
+        if (len > best) { best = len; target = n; }
+      // A face that took others in, or merged away, waits for the next pass (its figures are stale).
+      if (received[c] || find(target) != target) continue;
+      parent[c] = target;
+      received[target] = 1;
+      changed = true;
+    }
+  }
+  std::vector<std::int32_t> number(static_cast<std::size_t>(nc), -1), face(nt);
+  count = 0;
+  for (std::size_t t = 0; t < nt; ++t) {
+    auto& f = number[find(comp[t])];
+    if (f < 0) f = count++;
+    face[t] = f;
+  }
+  return face;
 }
 
 }  // namespace
@@ -211,47 +286,109 @@ PartitionResult partition_triangles(const TriMesh& mesh, const PartitionOptions&
                             : static_cast<int>(std::max<std::size_t>(1, (nt + options.target_triangles_per_part / 2) /
                                                                            std::max<std::size_t>(1, options.target_triangles_per_part)));
   k = std::max(1, std::min<int>(k, static_cast<int>(nt)));
+  // Feature faces, each partitioned on its own: k parts dealt to them by half their share of area and half their
+  // share of boundary length (ring and feature edges, seen from each side), at least one part per face.
+  int nf = 1;
+  const std::vector<std::int32_t> face = feature_faces(topo, options.min_face_area, nf);
+  std::vector<std::vector<std::int32_t>> face_tris(static_cast<std::size_t>(nf));
+  for (std::size_t t = 0; t < nt; ++t) face_tris[face[t]].push_back(static_cast<std::int32_t>(t));
+  std::vector<double> face_area(static_cast<std::size_t>(nf), 0.0), face_length(static_cast<std::size_t>(nf), 0.0);
+  double total_area = 0, total_length = 0;
+  for (std::size_t t = 0; t < nt; ++t) {
+    face_area[face[t]] += topo.area[t];
+    total_area += topo.area[t];
+    for (int e = 0; e < 3; ++e) {
+      const auto& ed = topo.edges[topo.tri_edges[t][e]];
+      if (ed.t1 < 0 || ed.feature) { face_length[face[t]] += ed.length; total_length += ed.length; }
+    }
+  }
+  k = std::max(k, nf);
+  std::vector<int> face_parts(static_cast<std::size_t>(nf), k);
+  if (nf > 1) {
+    std::vector<double> quota(static_cast<std::size_t>(nf));
+    int sum = 0;
+    for (int f = 0; f < nf; ++f) {
+      const double share = 0.5 * face_area[f] / std::max(total_area, 1e-300) +
+                           0.5 * (total_length > 0 ? face_length[f] / total_length : face_area[f] / std::max(total_area, 1e-300));
+      quota[f] = k * share;
+      face_parts[f] = std::clamp(static_cast<int>(std::floor(quota[f])), 1, static_cast<int>(face_tris[f].size()));
+      sum += face_parts[f];
+    }
+    // Largest remainders up to k; a face over its quota (the minimum of one) is paid by the smallest remainders.
+    while (sum != k) {
+      int pick = -1;
+      for (int f = 0; f < nf; ++f) {
+        const double r = quota[f] - face_parts[f];
+        if (sum < k ? face_parts[f] < static_cast<int>(face_tris[f].size()) &&
+                          (pick < 0 || r > quota[pick] - face_parts[pick])
+                    : face_parts[f] > 1 && (pick < 0 || r < quota[pick] - face_parts[pick]))
+          pick = f;
+      }
+      if (pick < 0) break;
+      face_parts[pick] += sum < k ? 1 : -1;
+      sum += sum < k ? 1 : -1;
+    }
+    k = sum;
+  }
+  std::vector<int> face_first(static_cast<std::size_t>(nf) + 1, 0);
+  for (int f = 0; f < nf; ++f) face_first[f + 1] = face_first[f] + face_parts[f];
+  std::vector<std::int32_t> part_face(static_cast<std::size_t>(k));
+  for (int f = 0; f < nf; ++f)
+    for (int p = face_first[f]; p < face_first[f + 1]; ++p) part_face[p] = f;
   res.parts = k;
+  res.faces = nf;
   res.triangle_part.assign(nt, 0);
-  if (k > 1) {
+  for (std::size_t t = 0; t < nt; ++t) res.triangle_part[t] = face_first[face[t]];
+  if (k > nf) {
     // METIS wants integer weights: areas and lengths relative to their means, in hundredths.
     double mean_area = 0;
     for (double a : topo.area) mean_area += a;
     mean_area /= static_cast<double>(nt);
-    std::vector<idx_t> xadj{0}, adjncy, vwgt, adjwgt;
-    for (std::size_t t = 0; t < nt; ++t) {
-      vwgt.push_back(std::max<idx_t>(1, static_cast<idx_t>(std::lround(100.0 * topo.area[t] / mean_area))));
-      for (int e = 0; e < 3; ++e) {
-        const std::int32_t n = topo.neighbour(t, e);
-        if (n < 0) continue;
-        adjncy.push_back(n);
-        adjwgt.push_back(std::max<idx_t>(1, static_cast<idx_t>(std::lround(topo.edges[topo.tri_edges[t][e]].length))));
-      }
-      xadj.push_back(static_cast<idx_t>(adjncy.size()));
-    }
-    idx_t nv = static_cast<idx_t>(nt), ncon = 1, nparts = k, objval = 0;
-    idx_t opts[METIS_NOPTIONS];
-    METIS_SetDefaultOptions(opts);
-    opts[METIS_OPTION_SEED] = static_cast<idx_t>(options.seed % 1000003);
-    opts[METIS_OPTION_CONTIG] = 1;
-    std::vector<idx_t> part(nt, 0);
     // METIS draws from one process-wide random state (GKlib): concurrent calls (parts and candidates are
     // partitioned from several threads) would make the partition depend on timing, so they are serialized.
     static std::mutex metis_mutex;
-    const std::lock_guard<std::mutex> lock(metis_mutex);
-    const int status = METIS_PartGraphKway(&nv, &ncon, xadj.data(), adjncy.data(), vwgt.data(), nullptr, adjwgt.data(),
-                                           &nparts, nullptr, nullptr, opts, &objval, part.data());
-    if (status != METIS_OK) throw MeshingError("partitioning: METIS failed with status " + std::to_string(status));
-    for (std::size_t t = 0; t < nt; ++t) res.triangle_part[t] = part[t];
-    make_parts_connected(topo, res.triangle_part, k);
+    std::vector<std::int32_t> local(nt, -1);
+    for (int f = 0; f < nf; ++f) {
+      if (face_parts[f] < 2) continue;
+      const auto& tris = face_tris[f];
+      for (std::size_t i = 0; i < tris.size(); ++i) local[tris[i]] = static_cast<std::int32_t>(i);
+      std::vector<idx_t> xadj{0}, adjncy, vwgt, adjwgt;
+      for (std::int32_t t : tris) {
+        vwgt.push_back(std::max<idx_t>(1, static_cast<idx_t>(std::lround(100.0 * topo.area[t] / mean_area))));
+        for (int e = 0; e < 3; ++e) {
+          const std::int32_t n = topo.neighbour(static_cast<std::size_t>(t), e);
+          if (n < 0 || face[n] != f) continue;
+          adjncy.push_back(local[n]);
+          adjwgt.push_back(std::max<idx_t>(1, static_cast<idx_t>(std::lround(topo.edges[topo.tri_edges[t][e]].length))));
+        }
+        xadj.push_back(static_cast<idx_t>(adjncy.size()));
+      }
+      idx_t nv = static_cast<idx_t>(tris.size()), ncon = 1, nparts = face_parts[f], objval = 0;
+      idx_t opts[METIS_NOPTIONS];
+      METIS_SetDefaultOptions(opts);
+      opts[METIS_OPTION_SEED] = static_cast<idx_t>(options.seed % 1000003);
+      opts[METIS_OPTION_CONTIG] = 1;
+      std::vector<idx_t> part(tris.size(), 0);
+      const std::lock_guard<std::mutex> lock(metis_mutex);
+      const int status = METIS_PartGraphKway(&nv, &ncon, xadj.data(), adjncy.data(), vwgt.data(), nullptr, adjwgt.data(),
+                                             &nparts, nullptr, nullptr, opts, &objval, part.data());
+      if (status != METIS_OK) throw MeshingError("partitioning: METIS failed with status " + std::to_string(status));
+      for (std::size_t i = 0; i < tris.size(); ++i) res.triangle_part[tris[i]] = face_first[f] + static_cast<std::int32_t>(part[i]);
+    }
+    make_parts_connected(topo, res.triangle_part, k, part_face);
   }
   res.metis = energy_of(mesh, topo, res.triangle_part, options);
 
   // Metropolis-Hastings on E under the balance constraint (eq. 1), keeping the best state.
-  std::vector<double> part_area(static_cast<std::size_t>(k), 0.0);
-  double total_area = 0;
-  for (std::size_t t = 0; t < nt; ++t) { part_area[res.triangle_part[t]] += topo.area[t]; total_area += topo.area[t]; }
-  const double mean = total_area / k, lo = (1 - options.balance) * mean, hi = (1 + options.balance) * mean;
+  // The balance is measured against the mean part area of each face.
+  std::vector<double> part_area(static_cast<std::size_t>(k), 0.0), lo(static_cast<std::size_t>(k)), hi(static_cast<std::size_t>(k));
+  for (std::size_t t = 0; t < nt; ++t) part_area[res.triangle_part[t]] += topo.area[t];
+  std::vector<double> mean(static_cast<std::size_t>(k));
+  for (int p = 0; p < k; ++p) {
+    mean[p] = face_area[part_face[p]] / face_parts[part_face[p]];
+    lo[p] = (1 - options.balance) * mean[p];
+    hi[p] = (1 + options.balance) * mean[p];
+  }
   std::vector<std::int32_t>& part = res.triangle_part;
   std::vector<std::int32_t> best = part;
   double energy = res.metis.energy, best_energy = energy;
@@ -269,7 +406,7 @@ PartitionResult partition_triangles(const TriMesh& mesh, const PartitionOptions&
     }
     return e;
   };
-  for (int sweep = 0; sweep < options.mh_sweeps && k > 1; ++sweep) {
+  for (int sweep = 0; sweep < options.mh_sweeps && k > nf; ++sweep) {
     // Annealing: the inverse temperature grows from lambda_mh by mh_anneal over the sweeps, so the walk explores
     // first and settles into a low-energy state at the end.
     const double beta = options.lambda_mh *
@@ -281,14 +418,15 @@ PartitionResult partition_triangles(const TriMesh& mesh, const PartitionOptions&
       int nc = 0;
       for (int j = 0; j < 3; ++j) {
         const std::int32_t n = topo.neighbour(static_cast<std::size_t>(t), j);
-        if (n >= 0 && part[n] != a && std::find(cand, cand + nc, part[n]) == cand + nc) cand[nc++] = part[n];
+        if (n >= 0 && part[n] != a && part_face[part[n]] == part_face[a] && std::find(cand, cand + nc, part[n]) == cand + nc)
+          cand[nc++] = part[n];
       }
       if (nc == 0) continue;
       const std::int32_t b = cand[std::min(nc - 1, static_cast<int>(unit(rng) * nc))];
       ++res.mh_proposed;
       // Balance: never create or worsen a violation of eq. 1.
       const double na = part_area[a] - topo.area[t], nb = part_area[b] + topo.area[t];
-      if (na < std::min(lo, part_area[a]) || nb > std::max(hi, part_area[b])) continue;
+      if (na < std::min(lo[a], part_area[a]) || nb > std::max(hi[b], part_area[b])) continue;
       if (!stays_connected(topo, part, t, 256)) continue;
       const double before = local(t);
       part[t] = b;
@@ -305,11 +443,11 @@ PartitionResult partition_triangles(const TriMesh& mesh, const PartitionOptions&
     if (energy < best_energy) { best_energy = energy; best = part; }
   }
   part = best;
-  res.repaired_triangles = k > 1 ? make_parts_connected(topo, part, k) : 0;
+  res.repaired_triangles = k > nf ? make_parts_connected(topo, part, k, part_face) : 0;
   res.final = energy_of(mesh, topo, part, options);
   std::fill(part_area.begin(), part_area.end(), 0.0);
   for (std::size_t t = 0; t < nt; ++t) part_area[part[t]] += topo.area[t];
-  res.balance_max_over_avg = *std::max_element(part_area.begin(), part_area.end()) / mean;
+  for (int p = 0; p < k; ++p) res.balance_max_over_avg = std::max(res.balance_max_over_avg, part_area[p] / mean[p]);
   if (topo.feature_length > 0) {
     res.feature_fraction_metis = res.metis.feature_on_separators / topo.feature_length;
     res.feature_fraction_final = res.final.feature_on_separators / topo.feature_length;

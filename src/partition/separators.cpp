@@ -10,12 +10,19 @@ namespace polysquare {
 
 std::size_t add_separator_chains(TriMesh& mesh, const std::vector<std::int32_t>& triangle_part) {
   auto owners = edge_owners(mesh);  // edge -> its (one or two) triangles
+  // Part boundaries along a feature curve are already chains (feature faces): no separator doubles them.
+  std::unordered_set<std::uint64_t> on_feature;
+  for (const TriChain& ch : mesh.chains) {
+    if (ch.kind != TriChain::Kind::feature) continue;
+    const std::size_t n = ch.vertices.size();
+    for (std::size_t i = 0; i + 1 < n + (ch.closed ? 1 : 0); ++i) on_feature.insert(edge_key(ch.vertices[i], ch.vertices[(i + 1) % n]));
+  }
   std::vector<std::vector<std::int32_t>> adj(mesh.vertices.size());
   for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
     for (int k = 0; k < 3; ++k) {
       const std::int32_t a = mesh.triangles[t][k], b = mesh.triangles[t][(k + 1) % 3];
       const auto& o = owners[edge_key(a, b)];
-      if (o[1] < 0 || triangle_part[o[0]] == triangle_part[o[1]] || a > b) continue;
+      if (o[1] < 0 || triangle_part[o[0]] == triangle_part[o[1]] || a > b || on_feature.count(edge_key(a, b))) continue;
       adj[a].push_back(b);
       adj[b].push_back(a);
     }
@@ -166,6 +173,11 @@ std::size_t snap_separator_ends_to_corners(const TriMesh& mesh, std::vector<std:
     return std::int32_t{-1};
   };
   auto connected = [&](std::int32_t part) { return part_connected(mesh, around, triangle_part, part); };
+  // A separator that ends where a feature meets the ring runs along that feature (feature faces): it stays.
+  std::vector<std::uint8_t> on_feature(mesh.vertices.size(), 0);
+  for (const TriChain& ch : mesh.chains)
+    if (ch.kind == TriChain::Kind::feature)
+      for (auto v : ch.vertices) on_feature[v] = 1;
   std::size_t moved = 0;
   for (const TriChain& ch : mesh.chains) {
     if (ch.kind != TriChain::Kind::ring || !ch.closed) continue;
@@ -182,7 +194,7 @@ std::size_t snap_separator_ends_to_corners(const TriMesh& mesh, std::vector<std:
     };
     for (int i = 0; i < n; ++i) {
       const int before = edge_part(i - 1), after = edge_part(i);
-      if (before == after || before < 0 || after < 0 || sharp[i]) continue;
+      if (before == after || before < 0 || after < 0 || sharp[i] || on_feature[ch.vertices[i]]) continue;
       // The nearest sharp corner within max_edges on either side, whose edges all belong to one part.
       for (int d = 1; d <= max_edges; ++d) {
         int dir = 0;

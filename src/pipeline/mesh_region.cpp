@@ -5,6 +5,8 @@
 #include <oneapi/tbb/parallel_for.h>
 
 #include <algorithm>
+#include <cctype>
+#include <map>
 #include <chrono>
 #include <cmath>
 #include <optional>
@@ -15,6 +17,7 @@
 #include "polysquare/core/version.h"
 #include "polysquare/fallback/split_triangles.h"
 #include "polysquare/input/simplify.h"
+#include "polysquare/input/snap_points.h"
 #include "polysquare/pipeline/invariants.h"
 #include "polysquare/quality/quality.h"
 #include "polysquare/triangulate/background_triangulation.h"
@@ -271,10 +274,14 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
       local_patched.clear();
       // First the neighbourhoods of the poor quads are meshed again (a few rings of quads, the rest of their
       // subregions keeps its map), then smoothed with the whole part.
-      if (measure() && options.local_patch.enabled) {
+      // Local patches around the flagged quads, `rings` and `max_quads` as far as they may grow; then the whole
+      // part is smoothed and measured again.
+      auto patch_locally = [&](const std::vector<std::uint8_t>& flagged, int rings, std::size_t max_quads) {
         LocalPatchOptions lp = options.local_patch;
         lp.size = options.size;
-        const LocalPatchStats done = remesh_poor_quads(r.mesh, poor, lp, local_patched);
+        lp.max_rings = rings;
+        lp.max_quads = max_quads;
+        const LocalPatchStats done = remesh_poor_quads(r.mesh, flagged, lp, local_patched);
         local_stats.clusters += done.clusters;
         local_stats.patched += done.patched;
         local_stats.quads_added += done.quads_added;
@@ -283,7 +290,9 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
           c.smooth = smooth_quads(r.mesh, smooth, &region);
           measure();
         }
-      }
+      };
+      if (measure() && options.local_patch.enabled)
+        patch_locally(poor, options.local_patch.max_rings, options.local_patch.max_quads);
       // Subregions still holding a poor quad are meshed again (a mapped one as a patch, a patch by the matching
       // construction); the rest of the part keeps its maps.
       std::set<int> bad;
@@ -294,6 +303,33 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
         if (poor[q] && subregion_of(q) >= 0) bad.insert(subregion_of(q));
       }
       if (round < options.repair_rounds && repairs.add(bad, r.stats)) continue;
+      if (!inv.ok() && first_folded < metrics.sj.size() && options.local_patch.enabled) {
+        // Quads still folded after every repair round: wider local patches around them alone, so that a few
+        // folded quads do not send the whole part to the unstructured fallback.
+        std::vector<std::uint8_t> folded(metrics.sj.size(), 0);
+        for (std::size_t q = 0; q < metrics.sj.size(); ++q) folded[q] = metrics.sj[q] <= 0.0;
+        patch_locally(folded, options.local_patch.wide_rings, options.local_patch.wide_max_quads);
+        first_folded = metrics.sj.size();
+        for (std::size_t q = 0; q < metrics.sj.size() && first_folded == metrics.sj.size(); ++q)
+          if (metrics.sj[q] <= 0.0) first_folded = q;
+      }
+      if (!inv.ok() && !r.stats.subregions.empty()) {
+        // How far the refused candidate got: its mapped and patched subregions, and why the patched ones are.
+        std::size_t mapped = 0, mapped_quads = 0, all_quads = 0;
+        std::map<std::string, int> reasons;
+        for (const SubregionStats& sr : r.stats.subregions) {
+          all_quads += sr.quads;
+          if (sr.mapped) { ++mapped; mapped_quads += sr.quads; continue; }
+          std::string why;  // numbers and coordinates blanked, so that alike reasons count together
+          for (char ch : sr.reason.substr(std::min(sr.reason.size(), name.size())))
+            if (!(std::isdigit(static_cast<unsigned char>(ch)) || ch == '.' || ch == '-') || why.empty() || why.back() != '#')
+              why += std::isdigit(static_cast<unsigned char>(ch)) ? '#' : ch;
+          reasons[why.substr(0, 140)]++;
+        }
+        c.summary["refused_mesh"] = {{"subregions", r.stats.subregions.size()}, {"mapped", mapped},
+                                     {"structured_fraction", all_quads ? double(mapped_quads) / double(all_quads) : 0.0},
+                                     {"patch_reasons", reasons}};
+      }
       if (!inv.ok())
         throw MeshingError(name + ": the mesh breaks an invariant (" + inv.first_problem +
                            (first_folded < metrics.sj.size() ? "; first folded quad" + in_subregion(first_folded) : "") +
@@ -393,6 +429,7 @@ Candidate try_candidate(const Region& region, const RegionPart& part, const Poly
   std::shared_ptr<const std::vector<std::int32_t>> partition;
   SplitStats split;
   int joint_splits = 0;
+  int faces = 0;
   return finish_candidate(region, part, options, std::move(summary), [&](const Repairs& repairs) {
     PolysquareMapOptions with_repairs = map;
     with_repairs.patch_subregions.insert(with_repairs.patch_subregions.end(), repairs.patches.begin(), repairs.patches.end());
@@ -404,9 +441,11 @@ Candidate try_candidate(const Region& region, const RegionPart& part, const Poly
       partition = std::make_shared<const std::vector<std::int32_t>>(r.partition->triangle_part);
       split = r.stats.split;
       joint_splits = r.stats.joint_splits;
+      faces = r.partition->faces;
     }
     r.stats.split = split;
     r.stats.joint_splits = joint_splits;
+    if (r.partition) r.partition->faces = faces;  // a reused partition keeps the first round's count
     return r;
   });
 }
@@ -449,8 +488,13 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
   Region simplified;
   const Region* work = &region;
   SimplifyStats simplify_stats;
+  SnapStats end_snaps;
   if (options.simplify > 0.0) {
     simplified = region;
+    // Feature curves that end a small fraction of the size short of the boundary or of another curve (crossing
+    // points computed in another projection) are joined to it first: a gap far below h cannot be meshed, and a
+    // curve that reaches the boundary splits the part into feature faces for the partition.
+    end_snaps = snap_near_coincident(simplified, 0.1 * options.size / std::max(box.diagonal(), 1e-300), nullptr);
     SimplifyOptions so;
     so.min_area = (options.simplify * options.size) * (options.simplify * options.size);
     so.max_distance = options.size;  // the simplified curves stay within h of the input
@@ -573,7 +617,7 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
         return nlohmann::json{{"separator_length", e.separator_length}, {"angle_deviation", e.angle_deviation},
                               {"feature_on_separators", e.feature_on_separators}, {"energy", e.energy}};
       };
-      partition_json.push_back({{"part", r->stats.part}, {"subregions", pr.parts}, {"separators", r->stats.separators},
+      partition_json.push_back({{"part", r->stats.part}, {"subregions", pr.parts}, {"faces", pr.faces}, {"separators", r->stats.separators},
                                 {"metis", energy(pr.metis)}, {"final", energy(pr.final)},
                                 {"feature_fraction_metis", pr.feature_fraction_metis},
                                 {"feature_fraction_final", pr.feature_fraction_final},
@@ -663,6 +707,8 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
                     {"vertices_after", simplify_stats.vertices_after}, {"refused", simplify_stats.refused},
                     {"max_distance", simplify_stats.max_distance},
                     {"max_distance_over_size", simplify_stats.max_distance / options.size},
+                    {"end_points_snapped", end_snaps.to_vertex + end_snaps.to_segment},
+                    {"largest_snap", end_snaps.largest_move},
                     {"area_change", area != 0.0 ? region_area(*work) / area - 1.0 : 0.0}}},
       {"smooth", {{"sweeps", smooth.sweeps}, {"moves", smooth.moves}, {"curve_moves", smooth.curve_moves}}},
       {"seconds", {{"parts", seconds_parts}}},

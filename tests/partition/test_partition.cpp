@@ -5,6 +5,7 @@
 #include <cmath>
 #include <deque>
 #include <map>
+#include <set>
 #include <numbers>
 
 #include "polysquare/input/read_region.h"
@@ -129,5 +130,138 @@ TEST(Partition, MetropolisHastingsLowersEnergyAndAttractsSeparatorsToFeatures) {
     EXPECT_LT(r.final.energy, r.metis.energy) << name;
     EXPECT_GT(r.feature_fraction_final, r.feature_fraction_metis) << name;
     EXPECT_GT(r.mh_accepted, 0u);
+  }
+}
+
+namespace {
+// Feature faces computed here independently of the library: components of triangles joined across non-feature
+// edges, then a face enclosed by one other face (no ring edge, one neighbour) joins it, repeatedly.
+struct Faces {
+  std::vector<int> raw;         // raw component of each triangle
+  std::vector<double> raw_area;
+  std::vector<char> raw_ring;   // the component has a ring edge
+  std::vector<int> merged;      // face of each raw component after the enclosed ones joined their neighbour
+  int count = 0;                // faces after merging
+};
+
+Faces faces_of(const TriMesh& m) {
+  std::map<std::pair<int, int>, std::vector<int>> by_edge;
+  for (std::size_t t = 0; t < m.triangles.size(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      const int a = m.triangles[t][k], b = m.triangles[t][(k + 1) % 3];
+      by_edge[{std::min(a, b), std::max(a, b)}].push_back(static_cast<int>(t));
+    }
+  std::set<std::pair<int, int>> feature;
+  for (const TriChain& ch : m.chains) {
+    if (ch.kind != TriChain::Kind::feature) continue;
+    const std::size_t n = ch.vertices.size();
+    for (std::size_t i = 0; i + (ch.closed ? 0 : 1) < n; ++i) {
+      const int a = ch.vertices[i], b = ch.vertices[(i + 1) % n];
+      feature.insert({std::min(a, b), std::max(a, b)});
+    }
+  }
+  Faces f;
+  const std::size_t nt = m.triangles.size();
+  std::vector<std::vector<int>> adj(nt);
+  std::vector<std::pair<int, int>> feature_pairs;
+  std::vector<int> ring_tris;
+  for (const auto& [e, ts] : by_edge) {
+    if (ts.size() == 1) ring_tris.push_back(ts[0]);
+    else if (feature.count(e)) feature_pairs.push_back({ts[0], ts[1]});
+    else { adj[ts[0]].push_back(ts[1]); adj[ts[1]].push_back(ts[0]); }
+  }
+  f.raw.assign(nt, -1);
+  for (std::size_t s = 0; s < nt; ++s) {
+    if (f.raw[s] >= 0) continue;
+    const int c = static_cast<int>(f.raw_area.size());
+    f.raw_area.push_back(0);
+    std::deque<int> q{static_cast<int>(s)};
+    f.raw[s] = c;
+    while (!q.empty()) {
+      const int t = q.front();
+      q.pop_front();
+      const auto& tr = m.triangles[t];
+      f.raw_area[c] += 0.5 * orient2(m.vertices[tr[0]], m.vertices[tr[1]], m.vertices[tr[2]]);
+      for (int n : adj[t])
+        if (f.raw[n] < 0) { f.raw[n] = c; q.push_back(n); }
+    }
+  }
+  const std::size_t nc = f.raw_area.size();
+  f.raw_ring.assign(nc, 0);
+  for (int t : ring_tris) f.raw_ring[f.raw[t]] = 1;
+  f.merged.resize(nc);
+  for (std::size_t c = 0; c < nc; ++c) f.merged[c] = static_cast<int>(c);
+  auto root = [&](int c) { while (f.merged[c] != c) c = f.merged[c]; return c; };
+  for (bool changed = true; changed;) {
+    changed = false;
+    std::map<int, std::set<int>> nbs;
+    std::set<int> ring;
+    for (std::size_t c = 0; c < nc; ++c)
+      if (f.raw_ring[c]) ring.insert(root(static_cast<int>(c)));
+    for (const auto& [a, b] : feature_pairs) {
+      const int ra = root(f.raw[a]), rb = root(f.raw[b]);
+      if (ra != rb) { nbs[ra].insert(rb); nbs[rb].insert(ra); }
+    }
+    for (const auto& [c, set] : nbs)
+      if (!ring.count(c) && set.size() == 1 && root(c) == c && root(*set.begin()) == *set.begin()) {
+        f.merged[c] = *set.begin();
+        changed = true;
+        break;  // one at a time: simple, and the order cannot matter for nested loops
+      }
+  }
+  std::map<int, int> number;
+  for (std::size_t c = 0; c < nc; ++c) number.emplace(root(static_cast<int>(c)), 0);
+  for (auto& [r, id] : number) id = f.count++;
+  for (std::size_t c = 0; c < nc; ++c) f.merged[c] = number[root(static_cast<int>(c))];
+  return f;
+}
+}  // namespace
+
+TEST(PartitionFaces, RectFeatureTwoWaysIsTheFeature) {
+  // The feature of rect_feature crosses the rectangle: two faces, and with k = 2 each is one part, so the only
+  // separator is the feature (METIS alone cannot cut there under the 10 % balance).
+  const TriMesh m = triangulated("rect_feature", 4.0);
+  PartitionOptions o;
+  o.parts = 2;
+  const PartitionResult r = partition_triangles(m, o);
+  EXPECT_EQ(r.faces, 2);
+  EXPECT_EQ(r.parts, 2);
+  EXPECT_NEAR(r.feature_fraction_final, 1.0, 1e-12);
+  EXPECT_NEAR(r.balance_max_over_avg, 1.0, 1e-12);  // one part per face: each is its face's mean
+}
+
+TEST(PartitionFaces, DeltaBoxPartsStayInsideFeatureFaces) {
+  // delta_box: shorelines and rivers cross the box and close around islands. Every part lies in one face (an
+  // island face, enclosed by one other face, belongs to that face), every face gets a part, deterministic.
+  const TriMesh m = triangulated("delta_box", 1500.0);
+  const Faces f = faces_of(m);
+  ASSERT_GT(f.count, 3);
+  for (double min_area : {0.0, 16.0 * 200.0 * 200.0}) {
+    PartitionOptions o;
+    o.parts = 24;
+    o.min_face_area = min_area;
+    const PartitionResult r = partition_triangles(m, o);
+    ASSERT_EQ(r.triangle_part.size(), m.triangles.size());
+    EXPECT_GE(r.parts, std::max(24, r.faces));
+    std::map<int, std::set<int>> faces_of_part, parts_of_face;
+    std::map<int, std::set<int>> large_ring_faces_of_part;  // raw faces that touch the ring and are >= min_area
+    for (std::size_t t = 0; t < m.triangles.size(); ++t) {
+      const int p = r.triangle_part[t], c = f.raw[t];
+      faces_of_part[p].insert(f.merged[c]);
+      parts_of_face[f.merged[c]].insert(p);
+      if (f.raw_ring[c] && f.raw_area[c] >= min_area) large_ring_faces_of_part[p].insert(c);
+    }
+    for (const auto& [p, set] : large_ring_faces_of_part)
+      EXPECT_EQ(set.size(), 1u) << "part " << p << " crosses a feature between two faces, min_face_area " << min_area;
+    for (int p = 0; p < r.parts; ++p) EXPECT_EQ(components_of(m, r.triangle_part, p), 1u) << "part " << p;
+    if (min_area == 0.0) {
+      // Only the enclosed faces merge: the faces computed here are exactly the library's.
+      EXPECT_EQ(r.faces, f.count);
+      for (const auto& [p, set] : faces_of_part) EXPECT_EQ(set.size(), 1u) << "part " << p << " spans faces";
+      EXPECT_EQ(static_cast<int>(parts_of_face.size()), f.count);  // every face holds a part
+    } else {
+      EXPECT_LT(r.faces, f.count);  // slivers between the ring and short shorelines merged
+    }
+    EXPECT_EQ(partition_triangles(m, o).triangle_part, r.triangle_part);
   }
 }

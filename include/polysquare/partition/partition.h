@@ -19,6 +19,10 @@ struct PartitionOptions {
   int mh_sweeps = 50;                           ///< sweeps over the triangles on part boundaries
   double mh_anneal = 100.0;                     ///< the inverse temperature grows from lambda_mh to this multiple
   std::uint64_t seed = 1;                       ///< METIS seed and the MH random stream
+  /// Feature faces (connected components of triangles joined across edges that are not feature edges) below this
+  /// area merge into the neighbouring face they share the most feature length with; 0 keeps every face that is
+  /// not enclosed by a single other face. map_part sets 16 h^2 when it is 0 (a subregion of 4 x 4 quads).
+  double min_face_area = 0;
 };
 
 /// The terms of E (eqs. 2, 4, 6), with lengths in hundredths of the mean triangle edge length, so that the
@@ -34,11 +38,12 @@ struct PartitionEnergy {
 
 struct PartitionResult {
   std::vector<std::int32_t> triangle_part;  ///< #T part of each triangle, 0 .. parts-1
-  int parts = 0;
+  int parts = 0;                            ///< max(k, faces): every face gets at least one part
+  int faces = 1;                            ///< feature faces partitioned separately (after merging, see below)
   PartitionEnergy metis, final;             ///< energies of METIS's partition and after MH and repair
   double feature_fraction_metis = 0;        ///< feature length on separators / feature length, METIS alone
   double feature_fraction_final = 0;
-  double balance_max_over_avg = 0;          ///< largest part area / mean part area
+  double balance_max_over_avg = 0;          ///< largest part area / mean part area of its face
   std::size_t mh_proposed = 0, mh_accepted = 0;
   std::size_t repaired_triangles = 0;       ///< triangles moved to make every part connected
 };
@@ -47,6 +52,16 @@ struct PartitionResult {
 /// Metropolis-Hastings moves of boundary triangles on E under the balance constraint, never disconnecting a
 /// part; the lowest-energy state seen is kept; finally every part is made connected. Deterministic given
 /// options.seed, single-threaded.
+///
+/// Feature faces first: when feature curves cut the triangulation into several faces, each face is partitioned
+/// on its own and no part ever spans two faces, so every face boundary (a feature between two faces) is a
+/// separator. A face enclosed by a single other face (an island inside a closed feature loop: its loop has no
+/// junction to close a poly-square on) merges into that face, and so does a face smaller than
+/// options.min_face_area (into the neighbour it shares the most feature length with); repeatedly. The parts,
+/// max(k, faces), are dealt to the faces by half their share of area and half their share of boundary length
+/// (ring and feature edges), at least one each (largest remainders); METIS runs on each face's subgraph, and
+/// Metropolis-Hastings moves and the connectivity repair stay inside faces, with the balance of eq. 1 measured
+/// against the mean part area of each face. One face is exactly the whole-graph partition.
 PartitionResult partition_triangles(const TriMesh& mesh, const PartitionOptions& options);
 
 /// The full energy of a partition (the MH moves use local differences of the same terms).
@@ -93,7 +108,8 @@ std::size_t separate_pinched_parts(const TriMesh& mesh, std::vector<std::int32_t
 /// Moves separator ends that meet a ring within `max_edges` ring edges of a sharp corner (an input vertex turning
 /// by more than corner_threshold_deg) onto the corner, by handing the triangles around the ring vertices in
 /// between to the neighbouring part (kept only if both parts stay connected): otherwise the corner and the end
-/// make a side far shorter than one element. Returns the number of triangles moved.
+/// make a side far shorter than one element. An end where a feature meets the ring stays (the separator runs
+/// along the feature). Returns the number of triangles moved.
 std::size_t snap_separator_ends_to_corners(const TriMesh& mesh, std::vector<std::int32_t>& triangle_part,
                                            double corner_threshold_deg, int max_edges = 2);
 

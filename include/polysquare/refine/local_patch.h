@@ -18,6 +18,10 @@ struct LocalPatchOptions {
   double size = 1.0;            ///< target quad edge length h (patch interior vertices follow it)
   int max_rings = 3;            ///< rings of quads grown around a cluster, one at a time, until its patch builds
   std::size_t max_quads = 300;  ///< a region grown past this many quads is left to the caller's coarser repair
+  /// The last resort for quads still folded when every coarser repair has run (instead of refusing the part):
+  /// the same growth, further.
+  int wide_rings = 12;
+  std::size_t wide_max_quads = 5000;
 };
 
 struct LocalPatchStats {
