@@ -291,8 +291,11 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
           measure();
         }
       };
-      if (measure() && options.local_patch.enabled)
+      if (measure() && options.local_patch.enabled) {
         patch_locally(poor, options.local_patch.max_rings, options.local_patch.max_quads);
+        if (std::find(poor.begin(), poor.end(), std::uint8_t{1}) != poor.end())
+          patch_locally(poor, options.local_patch.second_rings, options.local_patch.second_max_quads);
+      }
       // Subregions still holding a poor quad are meshed again (a mapped one as a patch, a patch by the matching
       // construction); the rest of the part keeps its maps.
       std::set<int> bad;

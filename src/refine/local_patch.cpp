@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <map>
+#include <optional>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -208,6 +209,9 @@ LocalPatchStats remesh_poor_quads(QuadMesh& mesh, const std::vector<std::uint8_t
         quads.push_back(q);
       }
     if (quads.empty()) continue;  // already inside another cluster's region
+    // Rings are added until a patch builds whose worst corner reaches the target; the best one seen is kept.
+    std::optional<Done> best;
+    double best_worst = 0.0;
     for (int ring = 1; ring <= options.max_rings; ++ring) {
       cutter.grow(in, quads, used);
       if (quads.size() > options.max_quads) break;
@@ -215,15 +219,21 @@ LocalPatchStats remesh_poor_quads(QuadMesh& mesh, const std::vector<std::uint8_t
       if (!cutter.cut(quads, in, r)) continue;
       QuadMesh patch;
       if (!best_patch(cutter.patch_input(r), options.size, patch)) continue;
+      const double worst = worst_corner(patch);
+      if (best && worst <= best_worst) continue;
       // The subregion that held most of the region names the patch quads.
       std::map<std::int32_t, std::size_t> votes;
       for (std::int32_t q : r.quads) votes[mesh.quad_part.empty() ? 0 : mesh.quad_part[static_cast<std::size_t>(q)]]++;
       const auto part = std::max_element(votes.begin(), votes.end(), [](const auto& a, const auto& b) {
                           return a.second < b.second;
                         })->first;
-      for (std::int32_t q : r.quads) used[q] = 1;
-      done.push_back({std::move(r), std::move(patch), part});
-      break;
+      best = Done{std::move(r), std::move(patch), part};
+      best_worst = worst;
+      if (worst >= options.target_sj) break;
+    }
+    if (best) {
+      for (std::int32_t q : best->region.quads) used[q] = 1;
+      done.push_back(std::move(*best));
     }
   }
   if (done.empty()) return st;

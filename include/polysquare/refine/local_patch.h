@@ -18,6 +18,13 @@ struct LocalPatchOptions {
   double size = 1.0;            ///< target quad edge length h (patch interior vertices follow it)
   int max_rings = 3;            ///< rings of quads grown around a cluster, one at a time, until its patch builds
   std::size_t max_quads = 300;  ///< a region grown past this many quads is left to the caller's coarser repair
+  /// Growth goes on while the patch's worst corner (scaled Jacobian, before smoothing) is below this; the best
+  /// patch of all rings tried is kept.
+  double target_sj = 0.3;
+  /// A second pass for quads still poor after the first pass and smoothing, before their subregion is demoted
+  /// to a patch (a patch that builds may still hold a corner under the gate): larger regions, more rings.
+  int second_rings = 6;
+  std::size_t second_max_quads = 1200;
   /// The last resort for quads still folded when every coarser repair has run (instead of refusing the part):
   /// the same growth, further.
   int wide_rings = 12;
