@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <map>
 
 #include "polysquare/core/error.h"
 #include "polysquare/core/version.h"
@@ -104,6 +105,18 @@ int run_mesh(const MeshArgs& args) {
   for (const auto& d : result.report["dropped_parts"])
     std::cerr << "warning: part " << d["part"] << " left out: its area " << d["area"] << " is less than one element, at ("
               << d["at"][0] << ", " << d["at"][1] << ")\n";
+  if (const auto& curves = result.report["dropped_curves"]; !curves.empty()) {
+    std::map<std::string, std::size_t> kinds;
+    const nlohmann::json* widest = &curves.front();
+    for (const auto& d : curves) {
+      kinds[d["kind"].get<std::string>()]++;
+      if (d["width"].get<double>() > (*widest)["width"].get<double>()) widest = &d;
+    }
+    std::cerr << "warning: " << curves.size() << " curves around regions narrower than the size left out (";
+    for (const auto& [kind, n] : kinds) std::cerr << (kind == kinds.begin()->first ? "" : ", ") << n << " " << kind;
+    std::cerr << "; the widest " << (*widest)["width"] << " at (" << (*widest)["at"][0] << ", " << (*widest)["at"][1]
+              << "); the report's dropped_curves lists them; --min-island-width 0 keeps them)\n";
+  }
   for (const auto& u : result.report["unstructured"])
     if (u["meshed_by"] == "patch")
       std::cerr << "warning: part " << u["part"] << ": subregion " << u["subregion"] << " at (" << u["at"][0] << ", "
@@ -229,6 +242,10 @@ int main(int argc, char** argv) {
   cmd_mesh->add_option("--simplify", mesh.options.simplify,
                        "simplify curves finer than the size first: drop vertices whose triangle area < (F*size)^2, each within size of the result (0 = off: the mesh follows every input vertex)")
       ->capture_default_str();
+  cmd_mesh->add_option("--min-island-width", mesh.options.min_island_width,
+                       "with --simplify: leave out (and report) holes, closed feature curves and feature pieces around regions narrower than F*size (0 keeps them)")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
   cmd_mesh->add_option("--max-quads", mesh.options.max_quads, "refuse sizes that need more quads than this")
       ->capture_default_str();
   cmd_mesh->add_option("--min-sj", mesh.options.min_scaled_jacobian,

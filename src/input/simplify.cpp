@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <queue>
 #include <unordered_map>
 #include <unordered_set>
@@ -207,6 +208,249 @@ SimplifyStats simplify_region(Region& region, const SimplifyOptions& options) {
   for (const Ring& r : region.rings) stats.vertices_after += r.points.size();
   for (const FeatureCurve& f : region.features) stats.vertices_after += f.points.size();
   return stats;
+}
+
+}  // namespace polysquare
+
+namespace polysquare {
+namespace {
+
+double signed_area(const std::vector<Vec2>& pts) {
+  double a = 0.0;
+  for (std::size_t i = 0; i < pts.size(); ++i) a += cross(pts[i], pts[(i + 1) % pts.size()]);
+  return 0.5 * a;
+}
+
+// The arrangement of the region's curves as a planar graph: nodes where feature pieces end (on rings, on each
+// other or free), edges the open feature pieces and the ring arcs between such nodes. Faces are traced with
+// each face on the left of its half-edges.
+struct Arrangement {
+  struct Edge {
+    std::vector<Vec2> points;  // from node a to node b
+    int a = -1, b = -1;
+    int feature = -1;          // index into Region::features, or -1 for a ring arc
+    bool domain_left = false;  // ring arcs: the domain lies on the left going a -> b
+  };
+  std::vector<Edge> edges;
+  std::vector<std::vector<int>> out;  // per node: half-edges leaving it (2 e: a -> b, 2 e + 1: b -> a), by angle
+
+  explicit Arrangement(const Region& region) {
+    std::map<std::pair<double, double>, int> node_of;
+    auto node = [&](Vec2 p) { return node_of.try_emplace({p.x, p.y}, static_cast<int>(node_of.size())).first->second; };
+    for (std::size_t f = 0; f < region.features.size(); ++f) {
+      const FeatureCurve& c = region.features[f];
+      if (c.closed || c.points.size() < 2) continue;
+      edges.push_back({c.points, node(c.points.front()), node(c.points.back()), static_cast<int>(f), false});
+    }
+    for (const Ring& r : region.rings) {
+      const std::size_t n = r.points.size();
+      std::vector<std::size_t> at;
+      for (std::size_t i = 0; i < n; ++i)
+        if (node_of.count({r.points[i].x, r.points[i].y})) at.push_back(i);
+      for (std::size_t k = 0; k < at.size(); ++k) {
+        Edge e;
+        for (std::size_t i = at[k];; i = (i + 1) % n) {
+          e.points.push_back(r.points[i]);
+          if (e.points.size() > 1 && i == at[(k + 1) % at.size()]) break;
+        }
+        e.a = node(e.points.front());
+        e.b = node(e.points.back());
+        e.domain_left = true;  // outer rings counter-clockwise, holes clockwise: the domain is on the left
+        edges.push_back(std::move(e));
+      }
+    }
+    out.assign(node_of.size(), {});
+    for (std::size_t e = 0; e < edges.size(); ++e) {
+      out[static_cast<std::size_t>(edges[e].a)].push_back(static_cast<int>(2 * e));
+      out[static_cast<std::size_t>(edges[e].b)].push_back(static_cast<int>(2 * e + 1));
+    }
+    for (auto& o : out)
+      std::sort(o.begin(), o.end(), [&](int h, int g) { return angle(h) < angle(g); });
+  }
+  Vec2 first_step(int h) const {
+    const auto& p = edges[static_cast<std::size_t>(h / 2)].points;
+    return h % 2 == 0 ? p[1] - p[0] : p[p.size() - 2] - p.back();
+  }
+  double angle(int h) const {
+    const Vec2 d = first_step(h);
+    return std::atan2(d.y, d.x);
+  }
+  int head(int h) const { const Edge& e = edges[static_cast<std::size_t>(h / 2)]; return h % 2 == 0 ? e.b : e.a; }
+  // The half-edge after h on the face to its left: at h's head, the next one clockwise from h's reverse.
+  int next(int h) const {
+    const auto& o = out[static_cast<std::size_t>(head(h))];
+    const auto it = std::find(o.begin(), o.end(), h ^ 1);
+    const std::size_t i = static_cast<std::size_t>(it - o.begin());
+    return o[(i + o.size() - 1) % o.size()];
+  }
+  // The points of half-edge h in its direction, without its last point.
+  void append(int h, std::vector<Vec2>& poly) const {
+    const auto& p = edges[static_cast<std::size_t>(h / 2)].points;
+    if (h % 2 == 0) poly.insert(poly.end(), p.begin(), p.end() - 1);
+    else poly.insert(poly.end(), p.rbegin(), p.rend() - 1);
+  }
+};
+
+double polyline_distance(Vec2 q, const std::vector<Vec2>& line) {
+  double d = INFINITY;
+  for (std::size_t i = 0; i + 1 < line.size(); ++i) d = std::min(d, point_segment_distance(q, line[i], line[i + 1]));
+  return d;
+}
+
+}  // namespace
+
+std::vector<DroppedCurve> collapse_narrow_faces(Region& region, double min_width) {
+  std::vector<DroppedCurve> dropped;
+  if (!(min_width > 0.0)) return dropped;
+  // Each removal changes the faces around it: trace them again until no narrow face can be opened.
+  for (bool again = true; again;) {
+    again = false;
+    const Arrangement g(region);
+    std::vector<int> face_of(2 * g.edges.size(), -1);
+    std::vector<std::vector<int>> faces;
+    for (std::size_t h0 = 0; h0 < face_of.size(); ++h0) {
+      if (face_of[h0] >= 0) continue;
+      std::vector<int> cycle;
+      for (int h = static_cast<int>(h0); face_of[static_cast<std::size_t>(h)] < 0; h = g.next(h)) {
+        face_of[static_cast<std::size_t>(h)] = static_cast<int>(faces.size());
+        cycle.push_back(h);
+      }
+      faces.push_back(std::move(cycle));
+    }
+    struct Best { int feature = -1; double distance = INFINITY, width = 0, area = 0; };
+    Best best;
+    for (std::size_t f = 0; f < faces.size(); ++f) {
+      const std::vector<int>& cycle = faces[f];
+      bool inside = false, feature = false;
+      for (int h : cycle) {
+        const auto& e = g.edges[static_cast<std::size_t>(h / 2)];
+        if (e.feature < 0) inside = inside || e.domain_left == (h % 2 == 0);
+        feature = feature || e.feature >= 0;
+      }
+      std::vector<Vec2> poly;
+      for (int h : cycle) g.append(h, poly);
+      const double area = signed_area(poly);
+      // Bounded faces only (the face on the left of a counter-clockwise cycle); faces with a ring arc must have
+      // the domain on their side; faces of features alone lie inside the domain already.
+      if (!feature || !(area > 0.0) || (!inside && std::any_of(cycle.begin(), cycle.end(), [&](int h) {
+            return g.edges[static_cast<std::size_t>(h / 2)].feature < 0; })))
+        continue;
+      // Another curve or a feature point inside: the face is not a simple sliver.
+      bool holds = false;
+      for (Vec2 p : region.feature_points) holds = holds || point_in_ring(p, poly);
+      for (const FeatureCurve& c : region.features)
+        if (c.closed && !c.points.empty()) holds = holds || point_in_ring(c.points.front(), poly);
+      for (const Ring& r : region.rings)
+        if (r.hole) holds = holds || point_in_ring(r.points.front(), poly);
+      std::vector<std::uint8_t> on_face(g.edges.size(), 0);
+      for (int h : cycle) on_face[static_cast<std::size_t>(h / 2)] = 1;
+      for (std::size_t e = 0; e < g.edges.size() && !holds; ++e)
+        if (!on_face[e]) holds = point_in_ring(0.5 * (g.edges[e].points[0] + g.edges[e].points[1]), poly);
+      if (holds) continue;
+      const double width = inscribed_width(poly, 0.01 * min_width, min_width);
+      if (width >= min_width) continue;
+      for (int h : cycle) {
+        const auto& e = g.edges[static_cast<std::size_t>(h / 2)];
+        if (e.feature < 0 || face_of[static_cast<std::size_t>(h ^ 1)] == static_cast<int>(f)) continue;
+        // How far the piece lies from the rest of the face's boundary.
+        std::vector<Vec2> rest;
+        const auto i = static_cast<std::size_t>(std::find(cycle.begin(), cycle.end(), h) - cycle.begin());
+        for (std::size_t k = 1; k < cycle.size(); ++k) g.append(cycle[(i + k) % cycle.size()], rest);
+        rest.push_back(e.points[h % 2 == 0 ? 0 : e.points.size() - 1]);
+        double d = 0.0;
+        for (Vec2 q : e.points) d = std::max(d, polyline_distance(q, rest));
+        if (d <= min_width && d < best.distance) best = {e.feature, d, width, area};
+      }
+    }
+    if (best.feature < 0) break;
+    const FeatureCurve& c = region.features[static_cast<std::size_t>(best.feature)];
+    dropped.push_back({DroppedCurve::Kind::feature_piece, c.source_feature, best.width, best.area, best.distance, c.points.front()});
+    region.features.erase(region.features.begin() + best.feature);
+    again = true;
+  }
+  return dropped;
+}
+
+double inscribed_width(const std::vector<Vec2>& ring, double tolerance, double enough) {
+  // Best-first search over square cells (the largest-inscribed-circle search): a cell's centre is at distance d
+  // from the ring (negative outside), and no point of the cell is farther than d + half its diagonal, so cells
+  // that cannot beat the best centre by more than the tolerance are dropped.
+  Box2 box;
+  for (Vec2 p : ring) box.add(p);
+  const double w = box.hi.x - box.lo.x, h = box.hi.y - box.lo.y, cell = std::min(w, h);
+  if (ring.size() < 3 || !(cell > 0.0)) return 0.0;
+  auto signed_distance = [&](Vec2 p) {
+    double d = INFINITY;
+    for (std::size_t i = 0, j = ring.size() - 1; i < ring.size(); j = i++) d = std::min(d, point_segment_distance(p, ring[j], ring[i]));
+    return point_in_ring(p, ring) ? d : -d;
+  };
+  struct Cell {
+    Vec2 c;
+    double half, d, potential;
+    bool operator<(const Cell& o) const { return potential < o.potential; }
+  };
+  auto make = [&](Vec2 c, double half) {
+    const double d = signed_distance(c);
+    return Cell{c, half, d, d + half * std::sqrt(2.0)};
+  };
+  std::priority_queue<Cell> queue;
+  for (double x = box.lo.x; x < box.hi.x; x += cell)
+    for (double y = box.lo.y; y < box.hi.y; y += cell) queue.push(make({x + 0.5 * cell, y + 0.5 * cell}, 0.5 * cell));
+  double best = std::max(0.0, make(0.5 * (box.lo + box.hi), 0.0).d);
+  while (!queue.empty()) {
+    const Cell c = queue.top();
+    queue.pop();
+    best = std::max(best, c.d);
+    if (enough > 0.0 && 2.0 * best >= enough) break;
+    if (c.potential - best <= 0.5 * tolerance) continue;
+    const double q = 0.5 * c.half;
+    for (Vec2 off : {Vec2{-q, -q}, Vec2{q, -q}, Vec2{-q, q}, Vec2{q, q}}) queue.push(make(c.c + off, q));
+  }
+  return 2.0 * best;
+}
+
+std::vector<DroppedCurve> drop_narrow_islands(Region& region, double min_width) {
+  std::vector<DroppedCurve> dropped;
+  if (!(min_width > 0.0)) return dropped;
+  // Points used by more than one polyline (a feature ending on a hole, two loops touching) and feature points
+  // keep their rings and loops: removing one would cut a curve loose.
+  std::unordered_map<long long, int> uses;  // hashed point -> polylines through it
+  auto key = [](Vec2 p) {
+    const auto h1 = std::hash<double>{}(p.x), h2 = std::hash<double>{}(p.y);
+    return static_cast<long long>(h1 ^ (h2 * 0x9e3779b97f4a7c15ULL));
+  };
+  auto count_line = [&](const std::vector<Vec2>& pts) {
+    std::unordered_set<long long> mine;
+    for (Vec2 p : pts) mine.insert(key(p));
+    for (long long k : mine) uses[k]++;
+  };
+  for (const Ring& r : region.rings) count_line(r.points);
+  for (const FeatureCurve& f : region.features) count_line(f.points);
+  for (Vec2 p : region.feature_points) uses[key(p)] += 2;
+  auto isolated = [&](const std::vector<Vec2>& pts) {
+    for (Vec2 p : pts)
+      if (uses[key(p)] > 1) return false;
+    for (Vec2 p : region.feature_points)
+      if (point_in_ring(p, pts)) return false;
+    return true;
+  };
+  auto narrow = [&](const std::vector<Vec2>& pts, bool feature, int source) {
+    if (!isolated(pts)) return false;
+    const double width = inscribed_width(pts, 0.01 * min_width, min_width);
+    if (width >= min_width) return false;
+    dropped.push_back({feature ? DroppedCurve::Kind::feature_loop : DroppedCurve::Kind::hole, source, width,
+                       std::abs(signed_area(pts)), 0.0, pts.front()});
+    return true;
+  };
+  std::vector<Ring> rings;
+  for (Ring& r : region.rings)
+    if (!(r.hole && narrow(r.points, false, r.source_feature))) rings.push_back(std::move(r));
+  region.rings = std::move(rings);
+  std::vector<FeatureCurve> features;
+  for (FeatureCurve& f : region.features)
+    if (!(f.closed && narrow(f.points, true, f.source_feature))) features.push_back(std::move(f));
+  region.features = std::move(features);
+  return dropped;
 }
 
 }  // namespace polysquare

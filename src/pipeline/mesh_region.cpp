@@ -69,6 +69,17 @@ nlohmann::json part_json(const PartMapStats& s) {
                        {"extract", s.seconds_extract}}}};
 }
 
+nlohmann::json dropped_json(const std::vector<DroppedCurve>& curves) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const DroppedCurve& d : curves) {
+    const char* kind = d.kind == DroppedCurve::Kind::hole ? "hole"
+                       : d.kind == DroppedCurve::Kind::feature_loop ? "feature_loop" : "feature_piece";
+    out.push_back({{"kind", kind}, {"input_feature", d.source_feature}, {"width", d.width}, {"area", d.area},
+                   {"distance", d.distance}, {"at", {d.at.x, d.at.y}}});
+  }
+  return out;
+}
+
 // One way to map a part: the number of subregions and whether PPM interfaces may bend.
 struct CandidateSpec {
   int subregions = 1;
@@ -492,8 +503,13 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
   const Region* work = &region;
   SimplifyStats simplify_stats;
   SnapStats end_snaps;
+  std::vector<DroppedCurve> dropped_curves;
   if (options.simplify > 0.0) {
     simplified = region;
+    // Islands and faces between curves narrower than the size hold no quad of that size: their curves go first.
+    dropped_curves = drop_narrow_islands(simplified, options.min_island_width * options.size);
+    for (DroppedCurve& d : collapse_narrow_faces(simplified, options.min_island_width * options.size))
+      dropped_curves.push_back(d);
     // Feature curves that end a small fraction of the size short of the boundary or of another curve (crossing
     // points computed in another projection) are joined to it first: a gap far below h cannot be meshed, and a
     // curve that reaches the boundary splits the part into feature faces for the partition.
@@ -706,6 +722,7 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
       {"partition", partition_json},
       {"candidates", tried},
       {"dropped_parts", dropped},
+      {"dropped_curves", dropped_json(dropped_curves)},
       {"simplify", {{"fraction_of_size", options.simplify}, {"vertices_before", simplify_stats.vertices_before},
                     {"vertices_after", simplify_stats.vertices_after}, {"refused", simplify_stats.refused},
                     {"max_distance", simplify_stats.max_distance},

@@ -1,6 +1,8 @@
 // Topology-preserving simplification of curves finer than the target size.
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "polysquare/core/error.h"
 #include "polysquare/input/read_region.h"
 #include "polysquare/input/simplify.h"
@@ -68,4 +70,94 @@ TEST(Simplify, KeepsEveryInputVertexWithinTheDistanceBound) {
   EXPECT_NE(std::find(r.rings[0].points.begin(), r.rings[0].points.end(), Vec2{4, 0.3}), r.rings[0].points.end());
   EXPECT_LE(st.max_distance, 0.2);
   EXPECT_EQ(r.rings[0].points.size(), 5u);
+}
+
+TEST(NarrowIslands, InscribedWidthOfKnownShapes) {
+  // A 4 x 1 rectangle holds a disk of diameter 1; an L of two 1-wide arms one touching both outer walls and the
+  // inner corner (centre (c, c), c = sqrt 2 (1 - c)); a 3-4-5 right triangle its incircle, diameter 3 + 4 - 5.
+  EXPECT_NEAR(inscribed_width({{0, 0}, {4, 0}, {4, 1}, {0, 1}}, 1e-4), 1.0, 1e-3);
+  EXPECT_NEAR(inscribed_width({{0, 0}, {5, 0}, {5, 1}, {1, 1}, {1, 5}, {0, 5}}, 1e-4),
+              2.0 * std::sqrt(2.0) / (1.0 + std::sqrt(2.0)), 1e-3);
+  EXPECT_NEAR(inscribed_width({{0, 0}, {4, 0}, {0, 3}}, 1e-4), 2.0, 1e-3);
+  // Clockwise rings give the same answer; the early stop returns as soon as `enough` is reached.
+  EXPECT_NEAR(inscribed_width({{0, 1}, {4, 1}, {4, 0}, {0, 0}}, 1e-4), 1.0, 1e-3);
+  EXPECT_GE(inscribed_width({{0, 0}, {40, 0}, {40, 40}, {0, 40}}, 1e-4, 2.0), 2.0);
+}
+
+TEST(NarrowIslands, NarrowHolesAndLoopsGoWideOnesAndTouchedOnesStay) {
+  Region r;
+  r.source = "test";
+  r.num_parts = 1;
+  r.rings.push_back({{{0, 0}, {100, 0}, {100, 100}, {0, 100}}, 0, false, 0});
+  r.rings.push_back({{{10, 10}, {10, 10.8}, {30, 10.8}, {30, 10}}, 0, true, 1});  // 0.8 wide: goes
+  r.rings.push_back({{{50, 50}, {50, 55}, {55, 55}, {55, 50}}, 0, true, 2});      // 5 wide: stays
+  r.rings.push_back({{{70, 10}, {70, 10.5}, {90, 10.5}, {90, 10}}, 0, true, 3});  // narrow, but a feature ends on it
+  r.features.push_back({{{70, 10.5}, {70, 40}}, false, 4});
+  r.features.push_back({{{10, 80}, {30, 80}, {30, 80.9}, {10, 80.9}}, true, 5});  // narrow loop: goes
+  r.features.push_back({{{60, 80}, {80, 80}, {80, 90}, {60, 90}}, true, 6});      // wide loop: stays
+  r.features.push_back({{{10, 60}, {30, 60}, {30, 60.5}, {10, 60.5}}, true, 7});  // narrow, holds a feature point
+  r.feature_points.push_back({20, 60.25});
+  const std::vector<DroppedCurve> d = drop_narrow_islands(r, 1.0);
+  ASSERT_EQ(d.size(), 2u);
+  EXPECT_EQ(d[0].kind, DroppedCurve::Kind::hole);
+  EXPECT_EQ(d[0].source_feature, 1);
+  EXPECT_NEAR(d[0].width, 0.8, 0.02);
+  EXPECT_NEAR(d[0].area, 16.0, 1e-9);
+  EXPECT_EQ(d[1].kind, DroppedCurve::Kind::feature_loop);
+  EXPECT_EQ(d[1].source_feature, 5);
+  ASSERT_EQ(r.rings.size(), 3u);
+  EXPECT_EQ(r.rings[1].source_feature, 2);
+  EXPECT_EQ(r.rings[2].source_feature, 3);
+  ASSERT_EQ(r.features.size(), 3u);
+  EXPECT_EQ(r.features[1].source_feature, 6);
+  EXPECT_NO_THROW(validate_region(r));
+  // A zero width removes nothing.
+  Region same = r;
+  EXPECT_TRUE(drop_narrow_islands(same, 0.0).empty());
+  EXPECT_EQ(same.rings.size(), 3u);
+}
+
+TEST(NarrowFaces, ARiverCrossingAShorelineTwiceCloseByLosesOnePieceOfTheSliver) {
+  // Pieces as validation leaves them: a shoreline along y = 50 and a river crossing it at x = 50 and x = 52,
+  // between the crossings 0.3 above it: the sliver between them is far narrower than 1.
+  Region r;
+  r.source = "test";
+  r.num_parts = 1;
+  r.rings.push_back({{{0, 0}, {100, 0}, {100, 100}, {0, 100}}, 0, false, 0});
+  r.rings[0].points = {{0, 0}, {50, 0}, {100, 0}, {100, 50}, {100, 100}, {52, 100}, {0, 100}, {0, 50}};
+  r.features.push_back({{{0, 50}, {50, 50}}, false, 1});
+  r.features.push_back({{{50, 50}, {52, 50}}, false, 1});
+  r.features.push_back({{{52, 50}, {100, 50}}, false, 1});
+  r.features.push_back({{{50, 0}, {50, 50}}, false, 2});
+  r.features.push_back({{{50, 50}, {51, 50.3}, {52, 50}}, false, 2});
+  r.features.push_back({{{52, 50}, {52, 100}}, false, 2});
+  ASSERT_NO_THROW(validate_region(r));
+  const std::size_t before = r.features.size();
+  Region wide = r;
+  EXPECT_TRUE(collapse_narrow_faces(wide, 0.2).empty());  // the sliver is 0.3 high at most: wider than 0.2
+  const std::vector<DroppedCurve> d = collapse_narrow_faces(r, 1.0);
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_EQ(d[0].kind, DroppedCurve::Kind::feature_piece);
+  EXPECT_LT(d[0].width, 0.3);
+  EXPECT_NEAR(d[0].area, 0.3, 1e-9);  // the triangle (50, 50), (51, 50.3), (52, 50)
+  EXPECT_LE(d[0].distance, 0.3);
+  ASSERT_EQ(r.features.size(), before - 1);
+  // The piece that went is one side of the sliver; the large faces around it kept all their pieces.
+  for (const FeatureCurve& c : r.features) EXPECT_GE(c.points.size(), 2u);
+  EXPECT_NO_THROW(validate_region(r));
+  EXPECT_TRUE(collapse_narrow_faces(r, 1.0).empty());
+}
+
+TEST(NarrowFaces, DeltaBoxSliversGoAndNothingNarrowIsLeft) {
+  Region r = read_region(std::string(POLYSQUARE_DATA_DIR) + "/cases/delta_box.geojson");
+  const std::size_t before = r.features.size();
+  const std::vector<DroppedCurve> d = collapse_narrow_faces(r, 200.0);
+  EXPECT_GE(d.size(), 3u);  // the shoreline/river crossings within a fraction of 200 m of each other
+  EXPECT_EQ(r.features.size(), before - d.size());
+  for (const DroppedCurve& c : d) {
+    EXPECT_LT(c.width, 200.0);
+    EXPECT_LE(c.distance, 200.0);
+  }
+  EXPECT_NO_THROW(validate_region(r));
+  EXPECT_TRUE(collapse_narrow_faces(r, 200.0).empty());
 }

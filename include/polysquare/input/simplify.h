@@ -3,6 +3,8 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
+#include <vector>
 
 #include "polysquare/core/region.h"
 
@@ -25,6 +27,39 @@ struct SimplifyStats {
   std::size_t refused = 0;  ///< removals refused because the shortcut would cross or cover other geometry
   double max_distance = 0.0;  ///< largest distance of a removed vertex from the simplified curve (region units)
 };
+
+/// A curve left out because the region it bounds is narrower than the size: no quad of that size fits there.
+struct DroppedCurve {
+  enum class Kind : std::uint8_t {
+    hole,           ///< a hole ring (an island of a water domain)
+    feature_loop,   ///< a closed feature curve (an island drawn as a feature)
+    feature_piece,  ///< a piece of a feature curve between two crossings that closed a narrow face with other
+                    ///< curves (two shorelines crossing twice within the size); the face joins its neighbour
+  };
+  Kind kind = Kind::hole;
+  int source_feature = -1;  ///< input feature it came from (for messages)
+  double width = 0.0;    ///< diameter of the largest disk inside the face it bounded (region units)
+  double area = 0.0;     ///< that face's area (region units squared)
+  double distance = 0.0; ///< feature pieces: largest distance of the piece from the curves that remain
+  Vec2 at{};             ///< its first vertex
+};
+
+/// Removes holes and closed feature loops whose largest inscribed disk is narrower than `min_width` (a
+/// shoreline at size h keeps every island wider than h). A ring or loop that shares a point with another curve,
+/// or holds a feature point, stays. Ring and curve indices after the removed ones shift down; parts keep their
+/// numbers (an outer ring is never removed). Returns what was removed, in input order.
+std::vector<DroppedCurve> drop_narrow_islands(Region& region, double min_width);
+
+/// Removes feature pieces (curves between crossings, as validation leaves them) that close a face of the curve
+/// arrangement narrower than `min_width` with other curves, one at a time, so that the face joins the one across
+/// the piece: of the face's pieces that separate it from another face, the one lying closest to the rest of its
+/// boundary goes, and only if all of it lies within `min_width` of it. Faces holding other curves or feature
+/// points, and faces outside the domain, are left alone. Returns what was removed.
+std::vector<DroppedCurve> collapse_narrow_faces(Region& region, double min_width);
+
+/// Diameter of the largest disk inside the simple polygon `ring` (either orientation), found to within
+/// `tolerance`; the search stops as soon as a disk of diameter `enough` is found (0: no early stop).
+double inscribed_width(const std::vector<Vec2>& ring, double tolerance, double enough = 0.0);
 
 /// Simplifies every ring and feature curve in place. Ring vertices where a feature ends, feature end points,
 /// and enough vertices to keep each ring a triangle are never removed. A removal is refused when the new

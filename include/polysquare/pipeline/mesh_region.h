@@ -24,6 +24,11 @@ struct MeshOptions {
                                  ///< is below (simplify * size)^2, keeping topology and every vertex within size of
                                  ///< the simplified curve; the mesh follows the simplified curves (MeshResult::region)
                                  ///< and the report gives the largest distance moved and the area change; 0 = off
+  double min_island_width = 1.0; ///< with simplify on: holes, closed feature loops and faces between feature
+                                 ///< pieces whose largest inscribed disk is narrower than this times size hold no
+                                 ///< quad of that size: the hole or loop is left out, the face opened by removing
+                                 ///< one of its pieces (input/simplify.h); each is reported (report
+                                 ///< `dropped_curves`, a CLI warning); 0 keeps them all
   std::size_t max_quads = 50'000'000;  ///< refuse sizes whose estimated quad count exceeds this
   int parts = 0;                 ///< subregions per polygon part. 0 = automatic: a part above search_quads quads
                                  ///< is meshed one way, with max(its quads / target_quads_per_part, its boundary
