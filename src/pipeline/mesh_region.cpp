@@ -80,6 +80,11 @@ nlohmann::json dropped_json(const std::vector<DroppedCurve>& curves) {
   return out;
 }
 
+// "FILE: part P", how messages name a part.
+std::string name_of(const Region& region, const RegionPart& part) {
+  return (region.source.empty() ? std::string("region") : region.source) + ": part " + std::to_string(part.part);
+}
+
 // One way to map a part: the number of subregions and whether PPM interfaces may bend.
 struct CandidateSpec {
   int subregions = 1;
@@ -226,8 +231,7 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
   c.summary = std::move(summary);
   // Wall time of the candidate, map to gates, so the report shows where a part's search spent its time.
   const auto t_start = std::chrono::steady_clock::now();
-  const std::string name = (region.source.empty() ? std::string("region") : region.source) + ": part " +
-                           std::to_string(part.part);
+  const std::string name = name_of(region, part);
   try {
     // A mapped subregion whose quads stay folded after smoothing (its map folds near a convoluted boundary) is
     // meshed again as a patch, with the subregions patched before; the rest of the part keeps its maps.
@@ -457,6 +461,13 @@ Candidate try_candidate(const Region& region, const RegionPart& part, const Poly
       joint_splits = r.stats.joint_splits;
       faces = r.partition->faces;
     }
+    // Subregions the repair rounds turned into patches say why, not merely that a patch was asked for.
+    for (int s : repairs.patches)
+      if (static_cast<std::size_t>(s) < r.stats.subregions.size() && !r.stats.subregions[static_cast<std::size_t>(s)].mapped &&
+          std::find(map.patch_subregions.begin(), map.patch_subregions.end(), s) == map.patch_subregions.end())
+        r.stats.subregions[static_cast<std::size_t>(s)].reason =
+            name_of(region, part) + ": subregion " + std::to_string(s) +
+            ": its map left quads folded or below --min-sj after smoothing and local patches (meshed again as a patch)";
     r.stats.split = split;
     r.stats.joint_splits = joint_splits;
     if (r.partition) r.partition->faces = faces;  // a reused partition keeps the first round's count

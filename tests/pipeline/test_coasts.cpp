@@ -1,0 +1,45 @@
+// Real coastlines at default options (issue "Real coastlines, semi-structured"): the mesh is semi-structured,
+// not a whole-part fallback, and what was left out as narrower than the size is reported.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+#include "polysquare/input/read_region.h"
+#include "polysquare/pipeline/invariants.h"
+#include "polysquare/pipeline/mesh_region.h"
+#include "polysquare/quality/quality.h"
+
+using namespace polysquare;
+
+TEST(Coasts, DeltaWaterAt200MetresIsSemiStructured) {
+  const Region region = read_region(std::string(POLYSQUARE_DATA_DIR) + "/cases/delta_water.geojson");
+  MeshOptions o;
+  o.size = 200.0;
+  const MeshResult r = mesh_region(region, o);
+  ASSERT_TRUE(check_invariants(r.mesh).ok()) << check_invariants(r.mesh).first_problem;
+  const QualityReport q = compute_quality(r.mesh);
+  EXPECT_EQ(q.inverted, 0u);
+  const auto& summary = r.report["summary"];
+  // Most quads come from poly-square maps, and singular nodes stay far below Gmsh's 212 per 1000 quads.
+  EXPECT_GE(summary["structured_fraction"].get<double>(), 0.9);
+  EXPECT_LE(1000.0 * static_cast<double>(q.interior_singularities) / static_cast<double>(r.mesh.quads.size()), 30.0);
+  std::size_t below = 0;
+  const QuadMetrics m = quad_metrics(r.mesh);
+  for (double sj : m.sj) below += sj < 0.3;
+  EXPECT_LE(static_cast<double>(below), 0.005 * static_cast<double>(r.mesh.quads.size()));
+  // No whole part fell back to split triangles.
+  for (const auto& u : r.report["unstructured"]) EXPECT_NE(u["meshed_by"], "split_triangles") << u.dump();
+  // Islands narrower than the size are left out, each reported narrower than h; the mesh boundary stays within h
+  // of the input and lies on the region it was meshed against.
+  EXPECT_GT(r.report["dropped_curves"].size(), 0u);
+  for (const auto& d : r.report["dropped_curves"]) {
+    EXPECT_EQ(d["kind"], "hole");
+    EXPECT_LT(d["width"].get<double>(), o.size);
+  }
+  DomainDistanceOptions measure;
+  for (const auto& d : r.report["dropped_parts"]) measure.skip_parts.push_back(d["part"].get<int>());
+  EXPECT_LT(domain_distance(r.mesh, r.region, measure).boundary_max_relative, 1e-9);
+  EXPECT_LE(domain_distance(r.mesh, region, measure).boundary_max_distance, o.size);
+  EXPECT_LT(std::abs(domain_distance(r.mesh, region, measure).area_relative_change), 0.03);
+}
