@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <sstream>
 
 #include "polysquare/core/error.h"
 #include "polysquare/core/version.h"
@@ -18,7 +19,9 @@
 #include "polysquare/io/svg.h"
 #include "polysquare/partition/partition.h"
 #include "polysquare/pipeline/mesh_region.h"
+#include "polysquare/pipeline/report.h"
 #include "polysquare/quality/quality.h"
+#include "terminal_progress.h"
 
 namespace {
 
@@ -34,6 +37,7 @@ void on_signal(int sig) {
 struct MeshArgs {
   std::string input, output, report, picture, partition_picture, map = "ppm";
   bool binary = false, bend_interfaces = false;
+  bool quiet = false, verbose = false;  ///< --quiet: errors and warnings only; --verbose: stage timings
   double depth = 0.0;  ///< constant water depth (positive down) for solver files, when depth_given
   bool depth_given = false;
   std::string bathymetry, bathymetry_positive = "up";  ///< raster of elevations (up) or depths (down)
@@ -50,32 +54,39 @@ int run_mesh(const MeshArgs& args) {
   if (args.depth_given && !args.bathymetry.empty()) throw InputError("--depth and --bathymetry exclude each other");
   if (!args.bathymetry.empty() && !fs::is_regular_file(args.bathymetry))
     throw InputError(args.bathymetry + ": the bathymetry raster does not exist");
+  // Progress on a terminal (never in a pipe or under CI), stage timings with --verbose; quiet: warnings only.
+  cli::TerminalProgress shown(args.quiet ? cli::Verbosity::quiet : args.verbose ? cli::Verbosity::verbose : cli::Verbosity::normal);
+  ProgressReporter progress(shown.callback());
+  std::ostringstream discarded;
+  std::ostream& info = args.quiet ? discarded : std::cerr;
   InputNotes notes;
+  progress.start("read input");
   const Region region = read_input(args.input, args.input_options, notes);
+  progress.finish("read input");
   for (const std::string& r : notes.repairs) std::cerr << "warning: repaired: " << r << "\n";
   for (const std::string& w : notes.warnings) std::cerr << "warning: " << w << "\n";
   for (std::size_t i = 0; i < notes.snaps.size() && i < 5; ++i) std::cerr << "warning: " << notes.snaps[i] << "\n";
   if (notes.snaps.size() > 5) std::cerr << "warning: ... and " << notes.snaps.size() - 5 << " more snapped points (see the report)\n";
-  if (notes.reprojected) std::cerr << "input in " << notes.input_crs << ", meshed in " << region.crs << " (--size in metres)\n";
+  if (notes.reprojected) info << "input in " << notes.input_crs << ", meshed in " << region.crs << " (--size in metres)\n";
   MeshOptions options = args.options;
   options.keep_partition = !args.partition_picture.empty();
   options.map.composition = args.map == "gpm" ? MapComposition::gpm : MapComposition::ppm;
   options.map.layout.straight_interfaces = !args.bend_interfaces;
+  options.progress = shown.callback();
   MeshResult result = mesh_region(region, options);
+  progress.start("quality");
   const QualityReport quality = compute_quality(result.mesh);
   DomainDistanceOptions measure{args.options.corner_threshold_deg, {}};
   for (const auto& d : result.report["dropped_parts"]) measure.skip_parts.push_back(d["part"].get<int>());
   const DomainDistance domain = domain_distance(result.mesh, region, measure);
   const FiniteVolumeQuality fv = finite_volume_quality(result.mesh);
-  result.report["quality"] = to_json(quality);
-  result.report["quality"]["finite_volume"] = to_json(fv);
-  result.report["summary"]["sj_min"] = quality.sj.min;
-  result.report["summary"]["interior_singularities"] = quality.interior_singularities;
+  add_quality_to_report(result.report, quality, fv, domain, args.options.size);
   result.report["input"]["repairs"] = notes.repairs;
   result.report["input"]["snapped"] = notes.snaps;
   result.report["input"]["warnings"] = notes.warnings;
   result.report["input"]["input_crs"] = notes.input_crs;
-  result.report["domain"] = to_json(domain);
+  progress.finish("quality");
+  progress.start("write");
   // Outputs are written only after the whole mesh passed its checks, each atomically.
   const MeshWriteOptions write{args.binary,
                                args.msh_features == "lines" ? MshFeatures::lines
@@ -88,19 +99,20 @@ int run_mesh(const MeshArgs& args) {
                                                   : std::vector<double>{},
                                notes.input_crs};
   write_mesh(args.output, result.mesh, write);
-  if (out_ext == ".nc" && fv.orthogonality_above > 0)
-    std::cerr << "warning: " << fv.orthogonality_above << " of " << fv.interior_edges
-              << " interior edges have a D-Flow FM orthogonality above " << fv.orthogonality_limit
-              << ", which D-Flow FM refuses; the worst, " << fv.orthogonality.max << ", at "
-              << at_text(fv.orthogonality_worst_at) << "\n";
   if (!args.report.empty())
-    write_file_atomically(args.report, [&](std::ostream& os) { os << result.report.dump(2) << "\n"; }, false);
+    write_file_atomically(args.report, [&](std::ostream& os) { os << report_text(result.report); }, false);
   if (!args.picture.empty()) write_svg(args.picture, result.mesh, &region);
   if (!args.partition_picture.empty()) {
     PartitionResult partition;
     partition.triangle_part = result.background_part;
     write_partition_svg(args.partition_picture, result.background, partition);
   }
+  progress.finish("write");
+  if (out_ext == ".nc" && fv.orthogonality_above > 0)
+    std::cerr << "warning: " << fv.orthogonality_above << " of " << fv.interior_edges
+              << " interior edges have a D-Flow FM orthogonality above " << fv.orthogonality_limit
+              << ", which D-Flow FM refuses; the worst, " << fv.orthogonality.max << ", at "
+              << at_text(fv.orthogonality_worst_at) << "\n";
   for (const auto& d : result.report["dropped_parts"])
     std::cerr << "warning: part " << d["part"] << " left out: its area " << d["area"] << " is less than one element, at ("
               << d["at"][0] << ", " << d["at"][1] << ")\n";
@@ -110,10 +122,10 @@ int run_mesh(const MeshArgs& args) {
                 << u["at"][1] << ") is an unstructured patch of " << u["quads"] << " quads: "
                 << u["reason"].get<std::string>() << "\n";
   if (const auto& simp = result.report["simplify"]; simp["vertices_after"] != simp["vertices_before"])
-    std::cerr << "simplified curves finer than the size: " << simp["vertices_before"] << " -> " << simp["vertices_after"]
+    info << "simplified curves finer than the size: " << simp["vertices_before"] << " -> " << simp["vertices_after"]
               << " vertices, largest distance moved " << simp["max_distance"] << " (" << simp["max_distance_over_size"]
               << " of the size), area change " << simp["area_change"] << " (--simplify 0 keeps them)\n";
-  std::cerr << "structured fraction " << result.report["summary"]["structured_fraction"] << " ("
+  info << "structured fraction " << result.report["summary"]["structured_fraction"] << " ("
             << result.report["summary"]["unstructured_subregions"] << " of " << result.report["summary"]["subregions"]
             << " subregions unstructured)\n";
   // Which candidate each part kept, and why the explicitly requested one was not kept.
@@ -133,14 +145,15 @@ int run_mesh(const MeshArgs& args) {
                   << c["min_scaled_jacobian"] << "); the report's candidates say why each failed\n";
       } else if (c.contains("chosen")) {
         if (part.size() > 1 && !explicit_parts)
-          std::cerr << "part " << c["part"] << ": " << c["subregions"] << " subregion(s) kept of " << part.size()
+          info << "part " << c["part"] << ": " << c["subregions"] << " subregion(s) kept of " << part.size()
                     << " candidates (scaled Jacobian min " << c["min_scaled_jacobian"] << ")\n";
       } else if (explicit_parts && c.contains("error") && c["subregions"].get<int>() == args.options.parts) {
         std::cerr << "warning: part " << c["part"] << " meshed as one poly-square: " << c["error"].get<std::string>() << "\n";
       }
     }
   }
-  std::cout << "polysquare: " << result.mesh.quads.size() << " quads, " << result.mesh.nodes.size() << " nodes -> "
+  if (!args.quiet)
+    std::cout << "polysquare: " << result.mesh.quads.size() << " quads, " << result.mesh.nodes.size() << " nodes -> "
             << args.output << "\n"
             << format_quality_text(quality, &domain) << format_finite_volume_text(fv);
   return 0;
@@ -256,6 +269,8 @@ int main(int argc, char** argv) {
                        "feature curves in MSH: nodes (a physical point group per curve; every reader takes the file), "
                        "lines (physical curves of line elements; deal.II refuses them) or none")
       ->check(CLI::IsMember({"nodes", "lines", "none"}))->capture_default_str();
+  cmd_mesh->add_flag("-q,--quiet", mesh.quiet, "print errors and warnings only (no progress, no summary)");
+  cmd_mesh->add_flag("-v,--verbose", mesh.verbose, "print each stage's wall time as it finishes (on stderr)");
   cmd_mesh->add_flag("--repair", mesh.input_options.repair,
                      "drop repeated points and clip features crossing holes instead of refusing the input (reported)");
 
