@@ -20,9 +20,10 @@ polysquare_find(nlohmann_json 3.11)
 polysquare_find(spdlog)
 polysquare_find(GDAL)
 
-# METIS, LEMON, GLPK and netCDF: Debian ships no CMake package for the first three (netCDF's pulls in HDF5
-# targets), so each becomes an imported target polysquare::dep_<name> made here, in both places.
-foreach(dep IN ITEMS "METIS;metis.h;metis" "LEMON;lemon/matching.h;lemon" "GLPK;glpk.h;glpk" "NETCDF;netcdf.h;netcdf")
+# METIS, LEMON, GLPK, netCDF and Cairo (pictures): Debian ships no CMake package for four of them (netCDF's pulls
+# in HDF5 targets), so each becomes an imported target polysquare::dep_<name> made here, in both places.
+foreach(dep IN ITEMS "METIS;metis.h;metis" "LEMON;lemon/matching.h;lemon" "GLPK;glpk.h;glpk" "NETCDF;netcdf.h;netcdf"
+                    "CAIRO;cairo/cairo.h;cairo")
   list(GET dep 0 name)
   list(GET dep 1 header)
   list(GET dep 2 lib)

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <optional>
 #include <sstream>
 
 #include "polysquare/core/error.h"
@@ -15,6 +16,7 @@
 #include "polysquare/io/atomic_file.h"
 #include "polysquare/io/bathymetry.h"
 #include "polysquare/io/mesh_io.h"
+#include "polysquare/io/render.h"
 #include "polysquare/io/solver_files.h"
 #include "polysquare/io/svg.h"
 #include "polysquare/partition/partition.h"
@@ -46,8 +48,22 @@ struct MeshArgs {
   MeshOptions options;
 };
 
+// --picture: PNG, or SVG when the mesh is small enough for one (else a PNG beside it, with a warning).
+void write_picture(const fs::path& picture, const QuadMesh& mesh, const Region& region) {
+  RenderOptions ro;
+  fs::path to = picture;
+  if (lower_extension(picture) == ".svg" && mesh.quads.size() > ro.svg_max_quads) {
+    to.replace_extension(".png");
+    std::cerr << "warning: " << mesh.quads.size() << " quads are too many for an SVG picture (limit "
+              << ro.svg_max_quads << "); wrote " << to.string() << " instead\n";
+  }
+  render_mesh(to, mesh, &region, ro);
+}
+
 int run_mesh(const MeshArgs& args) {
   check_output_path(args.output);  // before minutes of meshing
+  if (const std::string p = lower_extension(args.picture); !args.picture.empty() && p != ".png" && p != ".svg")
+    throw InputError(args.picture + ": pictures are .png or .svg");
   const std::string out_ext = lower_extension(args.output);
   if ((args.depth_given || !args.bathymetry.empty()) && (out_ext == ".msh" || out_ext == ".vtu"))
     std::cerr << "warning: depths are written to .gr3, .nc and .2dm files only, not to " << args.output << "\n";
@@ -101,7 +117,7 @@ int run_mesh(const MeshArgs& args) {
   write_mesh(args.output, result.mesh, write);
   if (!args.report.empty())
     write_file_atomically(args.report, [&](std::ostream& os) { os << report_text(result.report); }, false);
-  if (!args.picture.empty()) write_svg(args.picture, result.mesh, &region);
+  if (!args.picture.empty()) write_picture(args.picture, result.mesh, region);
   if (!args.partition_picture.empty()) {
     PartitionResult partition;
     partition.triangle_part = result.background_part;
@@ -156,6 +172,28 @@ int run_mesh(const MeshArgs& args) {
     std::cout << "polysquare: " << result.mesh.quads.size() << " quads, " << result.mesh.nodes.size() << " nodes -> "
             << args.output << "\n"
             << format_quality_text(quality, &domain) << format_finite_volume_text(fv);
+  return 0;
+}
+
+struct RenderArgs {
+  std::string mesh, output, color = "sj", window, domain;
+  int width = 1600;
+};
+
+int run_render(const RenderArgs& args) {
+  RenderOptions ro;
+  ro.color = parse_render_color(args.color);
+  if (!args.window.empty()) ro.window = parse_window(args.window);
+  ro.width_px = args.width;
+  const std::string ext = lower_extension(args.output);
+  if (ext != ".png" && ext != ".svg") throw InputError(args.output + ": pictures are .png or .svg");
+  const QuadMesh mesh = read_mesh(args.mesh);
+  std::optional<Region> region;
+  if (!args.domain.empty()) region = read_region(args.domain);
+  const RenderStats st = render_mesh(args.output, mesh, region ? &*region : nullptr, ro);
+  std::cerr << "polysquare: " << st.quads_drawn << " quads drawn, " << st.singular_nodes_marked
+            << " singular nodes marked" << (st.edges_drawn ? "" : ", quad edges hidden (too small to see)") << " -> "
+            << args.output << " (" << st.width_px << " x " << st.height_px << ")\n";
   return 0;
 }
 
@@ -217,7 +255,8 @@ int main(int argc, char** argv) {
                        "up: the raster holds elevations (depth = -value, as GEBCO and DEMs); down: it holds depths")
       ->check(CLI::IsMember({"up", "down"}))->capture_default_str();
   cmd_mesh->add_option("--report", mesh.report, "write a JSON report (options, timings, counts, quality)");
-  cmd_mesh->add_option("--picture", mesh.picture, "write an SVG picture of the mesh coloured by scaled Jacobian");
+  cmd_mesh->add_option("--picture", mesh.picture,
+                       "write a picture of the mesh coloured by scaled Jacobian: .png, or .svg for small meshes");
   cmd_mesh->add_option("--parts", mesh.options.parts,
                        "subregions per polygon part (1 = one poly-square per part, 0 = try several counts and keep the best mesh)")
       ->capture_default_str()->check(CLI::NonNegativeNumber);
@@ -282,6 +321,19 @@ int main(int argc, char** argv) {
   cmd_quality->add_flag("--json", quality_json, "print JSON");
   cmd_quality->add_flag("--require-quads", quality_require_quads, "exit 2 if the mesh has triangles");
 
+  RenderArgs render;
+  auto* cmd_render = app.add_subcommand("render", "draw a mesh (MSH, VTU) as a PNG or SVG picture");
+  cmd_render->add_option("mesh", render.mesh, "mesh file")->required();
+  cmd_render->add_option("-o,--output", render.output, "picture: .png (any size) or .svg (small meshes)")->required();
+  cmd_render->add_option("--color", render.color,
+                         "quad colours: sj (scaled Jacobian), skew, part (subregion) or singularities (plain, valence "
+                         "marks only)")
+      ->check(CLI::IsMember({"sj", "skew", "part", "singularities"}))->capture_default_str();
+  cmd_render->add_option("--window", render.window, "x0,y0,x1,y1: the part of the plane to draw (mesh units)");
+  cmd_render->add_option("--width", render.width, "picture width in pixels, colour bar included")
+      ->check(CLI::Range(300, 16000))->capture_default_str();
+  cmd_render->add_option("--domain", render.domain, "input region to draw under the mesh (thin dashed lines)");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -292,6 +344,7 @@ int main(int argc, char** argv) {
   mesh.depth_given = cmd_mesh->count("--depth") > 0;
   try {
     if (*cmd_mesh) return run_mesh(mesh);
+    if (*cmd_render) return run_render(render);
     if (*cmd_quality) return run_quality(quality_mesh, quality_domain, quality_json, quality_require_quads);
   } catch (const InputError& e) {
     std::cerr << "error: " << e.what() << "\n";
