@@ -312,6 +312,7 @@ RenderStats render_mesh(const std::filesystem::path& path, const QuadMesh& mesh,
   double radius = std::clamp(0.3 * median_px, 2.0, 6.0);
   if (!singular.empty())
     radius = std::max(1.0, std::min(radius, std::sqrt(0.1 * plot_w * plot_h / (M_PI * static_cast<double>(singular.size())))));
+  st.mark_radius_px = radius;
   std::map<int, std::size_t> marked_by_extra;
   for (std::size_t v : singular) {
     const bool b = on_boundary[v] != 0;
@@ -343,6 +344,10 @@ RenderStats render_mesh(const std::filesystem::path& path, const QuadMesh& mesh,
   if (options.color == RenderColor::sj || options.color == RenderColor::skew) {
     text(cr, lx, ly, options.color == RenderColor::sj ? "scaled Jacobian" : "skew");
     const double top = ly + 10, height = 200, bar_w = 20;
+    st.bar_x0 = lx;
+    st.bar_y0 = top;
+    st.bar_w = bar_w;
+    st.bar_h = height;
     constexpr int slices = 100;
     for (int s = 0; s < slices; ++s) {  // value 0 at the bottom, 1 at the top
       const double v = (s + 0.5) / slices;

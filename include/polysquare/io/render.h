@@ -41,7 +41,10 @@ struct RenderStats {
   std::size_t quads_drawn = 0;       ///< quads meeting the window
   bool edges_drawn = false;          ///< quad edges drawn (level of detail)
   std::size_t singular_nodes_marked = 0;
+  double mark_radius_px = 0;         ///< radius of the valence marks (discs, and rings along their stroke)
   double value_min = 0, value_max = 0;  ///< range of the measure over the quads drawn (sj, skew)
+  double bar_x0 = 0, bar_y0 = 0, bar_w = 0, bar_h = 0;  ///< the colour bar's rectangle, pixels (0 without one):
+                                                        ///< measure 0 at its bottom edge, 1 at its top edge
 };
 
 /// Colour (RGB in [0, 1]) marking a singular node: one edge fewer than regular (interior valence 3, boundary 2)
