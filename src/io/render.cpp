@@ -203,7 +203,7 @@ RenderStats render_mesh(const std::filesystem::path& path, const QuadMesh& mesh,
     if (options.color == RenderColor::sj || options.color == RenderColor::skew)
       key = static_cast<int>(std::lround(std::clamp(values[i], 0.0, 1.0) * 255.0));
     else if (options.color == RenderColor::part)
-      key = mesh.quad_part.size() == mesh.quads.size() ? static_cast<int>(mesh.quad_part[i] % 12) : 0;
+      key = mesh.quad_part.size() == mesh.quads.size() ? static_cast<int>((mesh.quad_part[i] % 12 + 12) % 12) : 0;
     buckets[key].push_back(i);
   }
   // Without edges drawn, antialiased fills would leave faint seams between neighbouring quads.
