@@ -1,1 +1,3 @@
 list(APPEND TEST_SOURCES cli/test_cli.cpp)
+list(APPEND TEST_SOURCES cli/test_report.cpp)
+list(APPEND TEST_SOURCES cli/test_progress.cpp)

@@ -18,3 +18,4 @@ if(POLYSQUARE_DEALII_TEST AND NOT POLYSQUARE_SANITIZE AND NOT POLYSQUARE_FUZZ
     message(STATUS "deal.II not found: the deal.II MSH reader test will be skipped")
   endif()
 endif()
+list(APPEND TEST_SOURCES io/test_render.cpp)

@@ -8,6 +8,8 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <optional>
+#include <sstream>
 
 #include "polysquare/core/error.h"
 #include "polysquare/core/version.h"
@@ -15,11 +17,14 @@
 #include "polysquare/io/atomic_file.h"
 #include "polysquare/io/bathymetry.h"
 #include "polysquare/io/mesh_io.h"
+#include "polysquare/io/render.h"
 #include "polysquare/io/solver_files.h"
 #include "polysquare/io/svg.h"
 #include "polysquare/partition/partition.h"
 #include "polysquare/pipeline/mesh_region.h"
+#include "polysquare/pipeline/report.h"
 #include "polysquare/quality/quality.h"
+#include "terminal_progress.h"
 
 namespace {
 
@@ -35,6 +40,7 @@ void on_signal(int sig) {
 struct MeshArgs {
   std::string input, output, report, picture, partition_picture, map = "ppm";
   bool binary = false, bend_interfaces = false;
+  bool quiet = false, verbose = false;  ///< --quiet: errors and warnings only; --verbose: stage timings
   double depth = 0.0;  ///< constant water depth (positive down) for solver files, when depth_given
   bool depth_given = false;
   std::string bathymetry, bathymetry_positive = "up";  ///< raster of elevations (up) or depths (down)
@@ -43,40 +49,61 @@ struct MeshArgs {
   MeshOptions options;
 };
 
+// --picture: PNG, or SVG when the mesh is small enough for one (else a PNG beside it, with a warning).
+void write_picture(const fs::path& picture, const QuadMesh& mesh, const Region& region) {
+  RenderOptions ro;
+  fs::path to = picture;
+  if (lower_extension(picture) == ".svg" && mesh.quads.size() > ro.svg_max_quads) {
+    to.replace_extension(".png");
+    std::cerr << "warning: " << mesh.quads.size() << " quads are too many for an SVG picture (limit "
+              << ro.svg_max_quads << "); wrote " << to.string() << " instead\n";
+  }
+  render_mesh(to, mesh, &region, ro);
+}
+
 int run_mesh(const MeshArgs& args) {
   check_output_path(args.output);  // before minutes of meshing
+  if (const std::string p = lower_extension(args.picture); !args.picture.empty() && p != ".png" && p != ".svg")
+    throw InputError(args.picture + ": pictures are .png or .svg");
   const std::string out_ext = lower_extension(args.output);
   if ((args.depth_given || !args.bathymetry.empty()) && (out_ext == ".msh" || out_ext == ".vtu"))
     std::cerr << "warning: depths are written to .gr3, .nc and .2dm files only, not to " << args.output << "\n";
   if (args.depth_given && !args.bathymetry.empty()) throw InputError("--depth and --bathymetry exclude each other");
   if (!args.bathymetry.empty() && !fs::is_regular_file(args.bathymetry))
     throw InputError(args.bathymetry + ": the bathymetry raster does not exist");
+  // Progress on a terminal (never in a pipe or under CI), stage timings with --verbose; quiet: warnings only.
+  cli::TerminalProgress shown(args.quiet ? cli::Verbosity::quiet : args.verbose ? cli::Verbosity::verbose : cli::Verbosity::normal);
+  ProgressReporter progress(shown.callback());
+  std::ostringstream discarded;
+  std::ostream& info = args.quiet ? discarded : std::cerr;
   InputNotes notes;
+  progress.start("read input");
   const Region region = read_input(args.input, args.input_options, notes);
+  progress.finish("read input");
   for (const std::string& r : notes.repairs) std::cerr << "warning: repaired: " << r << "\n";
   for (const std::string& w : notes.warnings) std::cerr << "warning: " << w << "\n";
   for (std::size_t i = 0; i < notes.snaps.size() && i < 5; ++i) std::cerr << "warning: " << notes.snaps[i] << "\n";
   if (notes.snaps.size() > 5) std::cerr << "warning: ... and " << notes.snaps.size() - 5 << " more snapped points (see the report)\n";
-  if (notes.reprojected) std::cerr << "input in " << notes.input_crs << ", meshed in " << region.crs << " (--size in metres)\n";
+  if (notes.reprojected) info << "input in " << notes.input_crs << ", meshed in " << region.crs << " (--size in metres)\n";
   MeshOptions options = args.options;
   options.keep_partition = !args.partition_picture.empty();
   options.map.composition = args.map == "gpm" ? MapComposition::gpm : MapComposition::ppm;
   options.map.layout.straight_interfaces = !args.bend_interfaces;
+  options.progress = shown.callback();
   MeshResult result = mesh_region(region, options);
+  progress.start("quality");
   const QualityReport quality = compute_quality(result.mesh);
   DomainDistanceOptions measure{args.options.corner_threshold_deg, {}};
   for (const auto& d : result.report["dropped_parts"]) measure.skip_parts.push_back(d["part"].get<int>());
   const DomainDistance domain = domain_distance(result.mesh, region, measure);
   const FiniteVolumeQuality fv = finite_volume_quality(result.mesh);
-  result.report["quality"] = to_json(quality);
-  result.report["quality"]["finite_volume"] = to_json(fv);
-  result.report["summary"]["sj_min"] = quality.sj.min;
-  result.report["summary"]["interior_singularities"] = quality.interior_singularities;
+  add_quality_to_report(result.report, quality, fv, domain, args.options.size);
   result.report["input"]["repairs"] = notes.repairs;
   result.report["input"]["snapped"] = notes.snaps;
   result.report["input"]["warnings"] = notes.warnings;
   result.report["input"]["input_crs"] = notes.input_crs;
-  result.report["domain"] = to_json(domain);
+  progress.finish("quality");
+  progress.start("write");
   // Outputs are written only after the whole mesh passed its checks, each atomically.
   const MeshWriteOptions write{args.binary,
                                args.msh_features == "lines" ? MshFeatures::lines
@@ -89,19 +116,20 @@ int run_mesh(const MeshArgs& args) {
                                                   : std::vector<double>{},
                                notes.input_crs};
   write_mesh(args.output, result.mesh, write);
-  if (out_ext == ".nc" && fv.orthogonality_above > 0)
-    std::cerr << "warning: " << fv.orthogonality_above << " of " << fv.interior_edges
-              << " interior edges have a D-Flow FM orthogonality above " << fv.orthogonality_limit
-              << ", which D-Flow FM refuses; the worst, " << fv.orthogonality.max << ", at "
-              << at_text(fv.orthogonality_worst_at) << "\n";
   if (!args.report.empty())
-    write_file_atomically(args.report, [&](std::ostream& os) { os << result.report.dump(2) << "\n"; }, false);
-  if (!args.picture.empty()) write_svg(args.picture, result.mesh, &region);
+    write_file_atomically(args.report, [&](std::ostream& os) { os << report_text(result.report); }, false);
+  if (!args.picture.empty()) write_picture(args.picture, result.mesh, region);
   if (!args.partition_picture.empty()) {
     PartitionResult partition;
     partition.triangle_part = result.background_part;
     write_partition_svg(args.partition_picture, result.background, partition);
   }
+  progress.finish("write");
+  if (out_ext == ".nc" && fv.orthogonality_above > 0)
+    std::cerr << "warning: " << fv.orthogonality_above << " of " << fv.interior_edges
+              << " interior edges have a D-Flow FM orthogonality above " << fv.orthogonality_limit
+              << ", which D-Flow FM refuses; the worst, " << fv.orthogonality.max << ", at "
+              << at_text(fv.orthogonality_worst_at) << "\n";
   for (const auto& d : result.report["dropped_parts"])
     std::cerr << "warning: part " << d["part"] << " left out: its area " << d["area"] << " is less than one element, at ("
               << d["at"][0] << ", " << d["at"][1] << ")\n";
@@ -123,10 +151,10 @@ int run_mesh(const MeshArgs& args) {
                 << u["at"][1] << ") is an unstructured patch of " << u["quads"] << " quads: "
                 << u["reason"].get<std::string>() << "\n";
   if (const auto& simp = result.report["simplify"]; simp["vertices_after"] != simp["vertices_before"])
-    std::cerr << "simplified curves finer than the size: " << simp["vertices_before"] << " -> " << simp["vertices_after"]
+    info << "simplified curves finer than the size: " << simp["vertices_before"] << " -> " << simp["vertices_after"]
               << " vertices, largest distance moved " << simp["max_distance"] << " (" << simp["max_distance_over_size"]
               << " of the size), area change " << simp["area_change"] << " (--simplify 0 keeps them)\n";
-  std::cerr << "structured fraction " << result.report["summary"]["structured_fraction"] << " ("
+  info << "structured fraction " << result.report["summary"]["structured_fraction"] << " ("
             << result.report["summary"]["unstructured_subregions"] << " of " << result.report["summary"]["subregions"]
             << " subregions unstructured)\n";
   // Which candidate each part kept, and why the explicitly requested one was not kept.
@@ -146,16 +174,39 @@ int run_mesh(const MeshArgs& args) {
                   << c["min_scaled_jacobian"] << "); the report's candidates say why each failed\n";
       } else if (c.contains("chosen")) {
         if (part.size() > 1 && !explicit_parts)
-          std::cerr << "part " << c["part"] << ": " << c["subregions"] << " subregion(s) kept of " << part.size()
+          info << "part " << c["part"] << ": " << c["subregions"] << " subregion(s) kept of " << part.size()
                     << " candidates (scaled Jacobian min " << c["min_scaled_jacobian"] << ")\n";
       } else if (explicit_parts && c.contains("error") && c["subregions"].get<int>() == args.options.parts) {
         std::cerr << "warning: part " << c["part"] << " meshed as one poly-square: " << c["error"].get<std::string>() << "\n";
       }
     }
   }
-  std::cout << "polysquare: " << result.mesh.quads.size() << " quads, " << result.mesh.nodes.size() << " nodes -> "
+  if (!args.quiet)
+    std::cout << "polysquare: " << result.mesh.quads.size() << " quads, " << result.mesh.nodes.size() << " nodes -> "
             << args.output << "\n"
             << format_quality_text(quality, &domain) << format_finite_volume_text(fv);
+  return 0;
+}
+
+struct RenderArgs {
+  std::string mesh, output, color = "sj", window, domain;
+  int width = 1600;
+};
+
+int run_render(const RenderArgs& args) {
+  RenderOptions ro;
+  ro.color = parse_render_color(args.color);
+  if (!args.window.empty()) ro.window = parse_window(args.window);
+  ro.width_px = args.width;
+  const std::string ext = lower_extension(args.output);
+  if (ext != ".png" && ext != ".svg") throw InputError(args.output + ": pictures are .png or .svg");
+  const QuadMesh mesh = read_mesh(args.mesh);
+  std::optional<Region> region;
+  if (!args.domain.empty()) region = read_region(args.domain);
+  const RenderStats st = render_mesh(args.output, mesh, region ? &*region : nullptr, ro);
+  std::cerr << "polysquare: " << st.quads_drawn << " quads drawn, " << st.singular_nodes_marked
+            << " singular nodes marked" << (st.edges_drawn ? "" : ", quad edges hidden (too small to see)") << " -> "
+            << args.output << " (" << st.width_px << " x " << st.height_px << ")\n";
   return 0;
 }
 
@@ -217,7 +268,8 @@ int main(int argc, char** argv) {
                        "up: the raster holds elevations (depth = -value, as GEBCO and DEMs); down: it holds depths")
       ->check(CLI::IsMember({"up", "down"}))->capture_default_str();
   cmd_mesh->add_option("--report", mesh.report, "write a JSON report (options, timings, counts, quality)");
-  cmd_mesh->add_option("--picture", mesh.picture, "write an SVG picture of the mesh coloured by scaled Jacobian");
+  cmd_mesh->add_option("--picture", mesh.picture,
+                       "write a picture of the mesh coloured by scaled Jacobian: .png, or .svg for small meshes");
   cmd_mesh->add_option("--parts", mesh.options.parts,
                        "subregions per polygon part (1 = one poly-square per part, 0 = try several counts and keep the best mesh)")
       ->capture_default_str()->check(CLI::NonNegativeNumber);
@@ -273,6 +325,8 @@ int main(int argc, char** argv) {
                        "feature curves in MSH: nodes (a physical point group per curve; every reader takes the file), "
                        "lines (physical curves of line elements; deal.II refuses them) or none")
       ->check(CLI::IsMember({"nodes", "lines", "none"}))->capture_default_str();
+  cmd_mesh->add_flag("-q,--quiet", mesh.quiet, "print errors and warnings only (no progress, no summary)");
+  cmd_mesh->add_flag("-v,--verbose", mesh.verbose, "print each stage's wall time as it finishes (on stderr)");
   cmd_mesh->add_flag("--repair", mesh.input_options.repair,
                      "drop repeated points and clip features crossing holes instead of refusing the input (reported)");
 
@@ -284,6 +338,19 @@ int main(int argc, char** argv) {
   cmd_quality->add_flag("--json", quality_json, "print JSON");
   cmd_quality->add_flag("--require-quads", quality_require_quads, "exit 2 if the mesh has triangles");
 
+  RenderArgs render;
+  auto* cmd_render = app.add_subcommand("render", "draw a mesh (MSH, VTU) as a PNG or SVG picture");
+  cmd_render->add_option("mesh", render.mesh, "mesh file")->required();
+  cmd_render->add_option("-o,--output", render.output, "picture: .png (any size) or .svg (small meshes)")->required();
+  cmd_render->add_option("--color", render.color,
+                         "quad colours: sj (scaled Jacobian), skew, part (subregion) or singularities (plain, valence "
+                         "marks only)")
+      ->check(CLI::IsMember({"sj", "skew", "part", "singularities"}))->capture_default_str();
+  cmd_render->add_option("--window", render.window, "x0,y0,x1,y1: the part of the plane to draw (mesh units)");
+  cmd_render->add_option("--width", render.width, "picture width in pixels, colour bar included")
+      ->check(CLI::Range(300, 16000))->capture_default_str();
+  cmd_render->add_option("--domain", render.domain, "input region to draw under the mesh (thin dashed lines)");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -294,6 +361,7 @@ int main(int argc, char** argv) {
   mesh.depth_given = cmd_mesh->count("--depth") > 0;
   try {
     if (*cmd_mesh) return run_mesh(mesh);
+    if (*cmd_render) return run_render(render);
     if (*cmd_quality) return run_quality(quality_mesh, quality_domain, quality_json, quality_require_quads);
   } catch (const InputError& e) {
     std::cerr << "error: " << e.what() << "\n";

@@ -508,6 +508,8 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
                      std::to_string(options.max_quads) + " (raise --max-quads)");
 
   const auto t_start = std::chrono::steady_clock::now();
+  ProgressReporter progress(options.progress);
+  progress.start("simplify");
   // Curves far finer than h (coastlines) are simplified first; the mesh then follows the simplified curves and
   // the quality report measures the distance to the original ones.
   Region simplified;
@@ -532,6 +534,7 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
     simplify_stats = simplify_region(simplified, so);
     work = &simplified;
   }
+  progress.finish("simplify");
   PolysquareMapOptions map = options.map;
   map.size = options.size;
   map.layout.corner_threshold_deg = options.corner_threshold_deg;
@@ -564,7 +567,9 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
   // One thread limit for every parallel stage (parts, candidates, subregions, colours in smoothing).
   const int threads = options.threads > 0 ? options.threads : static_cast<int>(oneapi::tbb::info::default_concurrency());
   oneapi::tbb::global_control limit(oneapi::tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
+  progress.start("mesh parts");
   oneapi::tbb::parallel_for(std::size_t{0}, parts.size(), [&](std::size_t k) {
+    const ProgressReporter::Item part_done(progress, "mesh parts", parts.size());
     std::vector<CandidateSpec> ks;
     std::vector<Candidate> cands;
     int best = -1;
@@ -621,6 +626,8 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
   if (nfailed > 0)
     throw MeshingError(std::to_string(nfailed) + " of " + std::to_string(parts.size()) + " parts failed: " + failed.str());
   const double seconds_parts = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+  progress.finish("mesh parts");
+  progress.start("assemble");
 
   MeshResult out;
   QuadMesh& mesh = out.mesh;
@@ -745,6 +752,7 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
       {"seconds", {{"parts", seconds_parts}}},
   };
   out.region = work == &region ? region : std::move(simplified);
+  progress.finish("assemble");
   return out;
 }
 

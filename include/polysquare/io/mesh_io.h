@@ -44,6 +44,7 @@ struct MeshWriteOptions {
 /// -z, as Gmsh makes from a clockwise outline) is reversed, so quads are counter-clockwise as QuadMesh requires.
 /// Throws InputError on malformed or truncated files.
 QuadMesh read_mesh(const std::filesystem::path& path);
+/// read_mesh for one format, whatever the extension.
 QuadMesh read_msh(const std::filesystem::path& path);
 QuadMesh read_vtu(const std::filesystem::path& path);
 /// The same readers on file contents already in memory; `name` is used in messages (fuzzing, pipes).
@@ -59,6 +60,7 @@ void write_mesh(const std::filesystem::path& path, const QuadMesh& mesh, const M
 /// The extension of `path` in lower case, with its dot (".msh"; empty when there is none).
 std::string lower_extension(const std::filesystem::path& path);
 
+/// write_mesh for one format, whatever the extension.
 void write_msh(const std::filesystem::path& path, const QuadMesh& mesh, const MeshWriteOptions& options = {});
 void write_vtu(const std::filesystem::path& path, const QuadMesh& mesh);
 

@@ -9,6 +9,7 @@
 #include "polysquare/core/quad_mesh.h"
 #include "polysquare/core/region.h"
 #include "polysquare/map/polysquare_map.h"
+#include "polysquare/pipeline/progress.h"
 #include "polysquare/refine/local_patch.h"
 #include "polysquare/refine/refine.h"
 #include "polysquare/smooth/smooth.h"
@@ -63,6 +64,8 @@ struct MeshOptions {
                                  ///< around them, before a repair round turns their whole subregion into a patch
                                  ///< (local_patch.size is set from size)
   SmoothOptions smooth;          ///< stage 7 smoothing
+  ProgressCallback progress;     ///< told when each stage starts and finishes and as polygon parts are meshed
+                                 ///< (ProgressEvent); empty = silent. It never changes the mesh.
 };
 
 struct MeshResult {

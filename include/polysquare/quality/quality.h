@@ -25,6 +25,7 @@ struct QuadMetrics {
   std::vector<double> skew;        ///< paper eq. 16 = Verdict quad_equiangle_skew
   std::vector<double> edge_ratio;  ///< longest / shortest edge
 };
+/// The metrics of every quad of `mesh` (triangles are left out).
 QuadMetrics quad_metrics(const QuadMesh& mesh);
 
 struct QualityReport {
@@ -65,6 +66,8 @@ struct DomainDistance {
   double area_relative_change = 0;   ///< (mesh area - region area) / region area
   std::size_t sharp_vertices_total = 0, sharp_vertices_missing = 0;
 };
+/// How closely `mesh` follows `region` (the input before simplification, for the report): boundary and feature
+/// distances, area change, sharp input vertices that are not mesh nodes.
 DomainDistance domain_distance(const QuadMesh& mesh, const Region& region, const DomainDistanceOptions& options = {});
 
 /// Faces are the quads (indices 0 .. #quads-1) then the triangles (#quads ..). Edges in order of first appearance
@@ -98,13 +101,17 @@ struct FiniteVolumeQuality {
   Stats smoothness;                     ///< over interior edges
   Vec2 smoothness_worst_at{};           ///< midpoint of the edge with the largest smoothness
 };
+/// Orthogonality and smoothness over the interior edges of `mesh` (quads and triangles), worst places included.
 FiniteVolumeQuality finite_volume_quality(const QuadMesh& mesh, double orthogonality_limit = 0.5);
 /// #edges orthogonality of each edge of `edges` (-1 on boundary edges), from `centres` (face_circumcentres).
 std::vector<double> edge_orthogonality(const QuadMesh& mesh, const EdgeTable& edges, const std::vector<Vec2>& centres);
 
+/// The report's `quality.finite_volume` block (keys in schema/report.schema.json) and its one-line text.
 nlohmann::json to_json(const FiniteVolumeQuality& q);
 std::string format_finite_volume_text(const FiniteVolumeQuality& q);
 
+/// The report's `quality` and `domain` blocks (see schema/report.schema.json; add_quality_to_report adds the
+/// figures relative to the size).
 nlohmann::json to_json(const QualityReport& q);
 nlohmann::json to_json(const DomainDistance& d);
 /// Human-readable table, one figure per line.

@@ -1,0 +1,424 @@
+// Mesh pictures with Cairo (libcairo2): one drawing for both PNG (image surface) and SVG (SVG surface).
+#include "polysquare/io/render.h"
+
+#include <cairo/cairo-svg.h>
+#include <cairo/cairo.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <map>
+#include <sstream>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "polysquare/core/error.h"
+#include "polysquare/io/atomic_file.h"
+#include "polysquare/io/mesh_io.h"
+#include "polysquare/quality/quality.h"
+
+namespace polysquare {
+
+namespace {
+
+using Rgb = std::array<double, 3>;
+
+// Twelve colours for subregions, neighbours in index order far apart in hue.
+constexpr std::array<Rgb, 12> kPalette{{{0.12, 0.47, 0.71}, {1.00, 0.50, 0.05}, {0.17, 0.63, 0.17},
+                                        {0.84, 0.15, 0.16}, {0.58, 0.40, 0.74}, {0.55, 0.34, 0.29},
+                                        {0.89, 0.47, 0.76}, {0.50, 0.50, 0.50}, {0.74, 0.74, 0.13},
+                                        {0.09, 0.75, 0.81}, {0.68, 0.78, 0.91}, {1.00, 0.73, 0.47}}};
+
+// Goodness t in [0, 1] (0 = worst): dark red, red, yellow, light green, green.
+Rgb ramp(double t) {
+  static constexpr std::array<std::pair<double, Rgb>, 5> stops{{{0.0, {0.50, 0.00, 0.05}},
+                                                                {0.3, {0.89, 0.20, 0.11}},
+                                                                {0.6, {0.99, 0.80, 0.25}},
+                                                                {0.8, {0.60, 0.80, 0.35}},
+                                                                {1.0, {0.10, 0.55, 0.25}}}};
+  t = std::clamp(std::isfinite(t) ? t : 0.0, 0.0, 1.0);
+  for (std::size_t i = 1; i < stops.size(); ++i) {
+    if (t <= stops[i].first) {
+      const double u = (t - stops[i - 1].first) / (stops[i].first - stops[i - 1].first);
+      Rgb c;
+      for (int k = 0; k < 3; ++k) c[k] = stops[i - 1].second[k] + u * (stops[i].second[k] - stops[i - 1].second[k]);
+      return c;
+    }
+  }
+  return stops.back().second;
+}
+
+cairo_status_t append_to_string(void* closure, const unsigned char* data, unsigned int length) {
+  static_cast<std::string*>(closure)->append(reinterpret_cast<const char*>(data), length);
+  return CAIRO_STATUS_SUCCESS;
+}
+
+void set(cairo_t* cr, const Rgb& c, double alpha = 1.0) { cairo_set_source_rgba(cr, c[0], c[1], c[2], alpha); }
+
+void text(cairo_t* cr, double x, double y, const std::string& s) {
+  cairo_move_to(cr, x, y);
+  cairo_show_text(cr, s.c_str());
+}
+
+std::string fixed(double v, int digits) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", digits, v);
+  return buf;
+}
+
+}  // namespace
+
+std::array<double, 3> valence_color(int valence, bool boundary) {
+  const int extra = valence - (boundary ? 3 : 4);
+  if (extra < 0) return {0.10, 0.30, 0.90};
+  if (extra == 1) return {1.00, 0.55, 0.00};
+  return {0.80, 0.00, 0.60};
+}
+
+std::array<double, 3> measure_color(RenderColor color, double value) {
+  return color == RenderColor::skew ? ramp(1.0 - value) : ramp(value);
+}
+
+RenderColor parse_render_color(std::string_view text) {
+  if (text == "sj") return RenderColor::sj;
+  if (text == "skew") return RenderColor::skew;
+  if (text == "part") return RenderColor::part;
+  if (text == "singularities") return RenderColor::singularities;
+  throw InputError("--color must be sj, skew, part or singularities, got '" + std::string(text) + "'");
+}
+
+Box2 parse_window(std::string_view text) {
+  std::istringstream is{std::string(text)};
+  double v[4];
+  char comma = 0;
+  bool ok = static_cast<bool>(is >> v[0]);
+  for (int i = 1; i < 4 && ok; ++i) ok = (is >> comma) && comma == ',' && (is >> v[i]);
+  is >> std::ws;
+  ok = ok && is.eof() && std::all_of(v, v + 4, [](double x) { return std::isfinite(x); });
+  Box2 b;
+  if (ok) {
+    b.add({v[0], v[1]});
+    b.add({v[2], v[3]});
+  }
+  if (!ok || !(b.hi.x > b.lo.x) || !(b.hi.y > b.lo.y))
+    throw InputError("--window must be x0,y0,x1,y1 with x0 != x1 and y0 != y1, got '" + std::string(text) + "'");
+  return b;
+}
+
+RenderStats render_mesh(const std::filesystem::path& path, const QuadMesh& mesh, const Region* region,
+                        const RenderOptions& options) {
+  const std::string ext = lower_extension(path);
+  const bool svg = ext == ".svg";
+  if (!svg && ext != ".png") throw InputError(path.string() + ": pictures are .png or .svg");
+  if (mesh.quads.empty()) throw InputError(path.string() + ": the mesh has no quads to draw");
+  if (options.width_px < 300 || options.width_px > 16000)
+    throw InputError("picture width must be between 300 and 16000 pixels, got " + std::to_string(options.width_px));
+
+  RenderStats st;
+  // The window: requested, or every quad node with a 2 % margin.
+  if (options.window) {
+    st.window = *options.window;
+  } else {
+    for (const auto& q : mesh.quads)
+      for (std::int32_t v : q) st.window.add(mesh.nodes[static_cast<std::size_t>(v)]);
+    const double m = 0.02 * std::max(st.window.hi.x - st.window.lo.x, st.window.hi.y - st.window.lo.y);
+    st.window.lo = {st.window.lo.x - m, st.window.lo.y - m};
+    st.window.hi = {st.window.hi.x + m, st.window.hi.y + m};
+  }
+  const double wx = st.window.hi.x - st.window.lo.x, wy = st.window.hi.y - st.window.lo.y;
+  if (!(wx > 0) || !(wy > 0)) throw InputError(path.string() + ": the picture window is empty");
+
+  // Layout: the plot on the left, the colour bar and legend in a 190 px column on the right.
+  constexpr double pad = 10.0, column = 190.0, max_height = 16000.0, min_height = 400.0;
+  double plot_w = options.width_px - column - 2 * pad;
+  st.scale = plot_w / wx;
+  double plot_h = wy * st.scale;
+  if (plot_h + 2 * pad > max_height) {
+    st.scale = (max_height - 2 * pad) / wy;
+    plot_h = wy * st.scale;
+    plot_w = wx * st.scale;
+  }
+  st.width_px = options.width_px;
+  st.height_px = static_cast<int>(std::ceil(std::max(min_height, plot_h + 2 * pad)));
+  st.plot_x0 = pad;
+  st.plot_y0 = (st.height_px - plot_h) / 2.0;
+  auto px = [&](Vec2 p) {
+    return std::pair<double, double>{st.plot_x0 + st.scale * (p.x - st.window.lo.x),
+                                     st.plot_y0 + st.scale * (st.window.hi.y - p.y)};
+  };
+  auto node = [&](std::int32_t v) { return mesh.nodes[static_cast<std::size_t>(v)]; };
+
+  // Quads meeting the window.
+  std::vector<std::size_t> visible;
+  for (std::size_t i = 0; i < mesh.quads.size(); ++i) {
+    Box2 b;
+    for (std::int32_t v : mesh.quads[i]) b.add(node(v));
+    if (b.hi.x >= st.window.lo.x && b.lo.x <= st.window.hi.x && b.hi.y >= st.window.lo.y && b.lo.y <= st.window.hi.y)
+      visible.push_back(i);
+  }
+  st.quads_drawn = visible.size();
+  if (svg && visible.size() > options.svg_max_quads)
+    throw InputError(path.string() + ": " + std::to_string(visible.size()) + " quads are too many for an SVG (limit " +
+                     std::to_string(options.svg_max_quads) + "); write a .png, or narrow the window");
+
+  // Level of detail from the median edge length on the picture.
+  std::vector<double> edge_px;
+  edge_px.reserve(visible.size());
+  for (std::size_t i : visible) edge_px.push_back(distance(node(mesh.quads[i][0]), node(mesh.quads[i][1])) * st.scale);
+  double median_px = 0.0;
+  if (!edge_px.empty()) {
+    std::nth_element(edge_px.begin(), edge_px.begin() + static_cast<std::ptrdiff_t>(edge_px.size() / 2), edge_px.end());
+    median_px = edge_px[edge_px.size() / 2];
+  }
+  st.edges_drawn = median_px >= options.min_edge_px;
+
+  const QuadMetrics metrics = quad_metrics(mesh);
+  const std::vector<double>& values = options.color == RenderColor::skew ? metrics.skew : metrics.sj;
+  st.value_min = INFINITY;
+  st.value_max = -INFINITY;
+  for (std::size_t i : visible) {
+    st.value_min = std::min(st.value_min, values[i]);
+    st.value_max = std::max(st.value_max, values[i]);
+  }
+  if (visible.empty()) st.value_min = st.value_max = 0.0;
+
+  std::string bytes;
+  cairo_surface_t* surface =
+      svg ? cairo_svg_surface_create_for_stream(append_to_string, &bytes, st.width_px, st.height_px)
+          : cairo_image_surface_create(CAIRO_FORMAT_RGB24, st.width_px, st.height_px);
+  cairo_t* cr = cairo_create(surface);
+  cairo_set_source_rgb(cr, 1, 1, 1);
+  cairo_paint(cr);
+  cairo_save(cr);
+  cairo_rectangle(cr, st.plot_x0, st.plot_y0, plot_w, plot_h);
+  cairo_clip(cr);
+
+  // Quads, one path per colour (256 levels of the measure, or the subregion colour): a million quads fill fast,
+  // and the SVG holds a few paths instead of one element per quad.
+  std::map<int, std::vector<std::size_t>> buckets;
+  for (std::size_t i : visible) {
+    int key = 0;
+    if (options.color == RenderColor::sj || options.color == RenderColor::skew)
+      key = static_cast<int>(std::lround(std::clamp(values[i], 0.0, 1.0) * 255.0));
+    else if (options.color == RenderColor::part)
+      key = mesh.quad_part.size() == mesh.quads.size() ? static_cast<int>((mesh.quad_part[i] % 12 + 12) % 12) : 0;
+    buckets[key].push_back(i);
+  }
+  // Without edges drawn, antialiased fills would leave faint seams between neighbouring quads.
+  if (!st.edges_drawn) cairo_set_antialias(cr, CAIRO_ANTIALIAS_NONE);
+  for (const auto& [key, quads] : buckets) {
+    for (std::size_t i : quads) {
+      const auto& q = mesh.quads[i];
+      for (int k = 0; k < 4; ++k) {
+        const auto [x, y] = px(node(q[static_cast<std::size_t>(k)]));
+        k == 0 ? cairo_move_to(cr, x, y) : cairo_line_to(cr, x, y);
+      }
+      cairo_close_path(cr);
+    }
+    if (options.color == RenderColor::sj || options.color == RenderColor::skew)
+      set(cr, measure_color(options.color, key / 255.0));
+    else if (options.color == RenderColor::part)
+      set(cr, kPalette[static_cast<std::size_t>(key)]);
+    else
+      set(cr, {0.88, 0.88, 0.88});
+    cairo_fill(cr);
+  }
+  cairo_set_antialias(cr, CAIRO_ANTIALIAS_DEFAULT);
+  if (st.edges_drawn) {
+    for (std::size_t i : visible) {
+      const auto& q = mesh.quads[i];
+      for (int k = 0; k < 4; ++k) {
+        const auto [x, y] = px(node(q[static_cast<std::size_t>(k)]));
+        k == 0 ? cairo_move_to(cr, x, y) : cairo_line_to(cr, x, y);
+      }
+      cairo_close_path(cr);
+    }
+    cairo_set_source_rgba(cr, 0.2, 0.2, 0.2, 0.8);
+    cairo_set_line_width(cr, std::clamp(0.05 * median_px, 0.4, 1.2));
+    cairo_stroke(cr);
+  }
+
+  // The input region, thin and dashed under the mesh's own curves (it differs where curves were simplified).
+  if (region) {
+    const double dash = 4.0;
+    cairo_set_dash(cr, &dash, 1, 0.0);
+    cairo_set_line_width(cr, 0.8);
+    for (const Ring& r : region->rings) {
+      for (std::size_t i = 0; i < r.points.size(); ++i) {
+        const auto [x, y] = px(r.points[i]);
+        i == 0 ? cairo_move_to(cr, x, y) : cairo_line_to(cr, x, y);
+      }
+      cairo_close_path(cr);
+    }
+    cairo_set_source_rgb(cr, 0.35, 0.35, 0.35);
+    cairo_stroke(cr);
+    for (const FeatureCurve& f : region->features) {
+      for (std::size_t i = 0; i < f.points.size(); ++i) {
+        const auto [x, y] = px(f.points[i]);
+        i == 0 ? cairo_move_to(cr, x, y) : cairo_line_to(cr, x, y);
+      }
+      if (f.closed) cairo_close_path(cr);
+    }
+    cairo_set_source_rgb(cr, 0.3, 0.6, 1.0);
+    cairo_stroke(cr);
+    cairo_set_dash(cr, nullptr, 0, 0.0);
+  }
+
+  // Valence of every quad node and whether it is on the boundary (edges with one quad).
+  std::unordered_map<std::uint64_t, int> edge_quads;
+  edge_quads.reserve(mesh.quads.size() * 2);
+  for (const auto& q : mesh.quads)
+    for (int k = 0; k < 4; ++k) edge_quads[edge_key(q[static_cast<std::size_t>(k)], q[static_cast<std::size_t>((k + 1) % 4)])]++;
+  std::vector<int> valence(mesh.nodes.size(), 0);
+  std::vector<std::uint8_t> on_boundary(mesh.nodes.size(), 0);
+  std::vector<std::array<std::int32_t, 2>> derived_boundary;
+  for (const auto& [key, count] : edge_quads) {
+    const auto a = static_cast<std::int32_t>(key >> 32), b = static_cast<std::int32_t>(key & 0xffffffffu);
+    valence[static_cast<std::size_t>(a)]++;
+    valence[static_cast<std::size_t>(b)]++;
+    if (count == 1) {
+      on_boundary[static_cast<std::size_t>(a)] = on_boundary[static_cast<std::size_t>(b)] = 1;
+      derived_boundary.push_back({a, b});
+    }
+  }
+
+  // Boundary (black) and feature (blue) edges; a mesh read without tags gets its one-quad edges as boundary.
+  auto stroke_edges = [&](const std::vector<std::array<std::int32_t, 2>>& edges, const Rgb& c, double width) {
+    for (const auto& e : edges) {
+      const auto [x0, y0] = px(node(e[0]));
+      const auto [x1, y1] = px(node(e[1]));
+      cairo_move_to(cr, x0, y0);
+      cairo_line_to(cr, x1, y1);
+    }
+    set(cr, c);
+    cairo_set_line_width(cr, width);
+    cairo_set_line_cap(cr, CAIRO_LINE_CAP_ROUND);
+    cairo_stroke(cr);
+  };
+  stroke_edges(mesh.boundary_edges.empty() ? derived_boundary : mesh.boundary_edges, {0, 0, 0}, 2.0);
+  stroke_edges(mesh.feature_edges, {0.0, 0.35, 0.95}, 2.0);
+
+  // Singular nodes by valence: filled discs inside, rings on the boundary. Where they are dense on the picture
+  // (a big mesh seen whole), the marks shrink so that they cover at most a tenth of the plot.
+  std::vector<std::size_t> singular;
+  for (std::size_t v = 0; v < mesh.nodes.size(); ++v) {
+    if (valence[v] == 0 || valence[v] == (on_boundary[v] ? 3 : 4)) continue;
+    const Vec2 p = mesh.nodes[v];
+    if (p.x < st.window.lo.x || p.x > st.window.hi.x || p.y < st.window.lo.y || p.y > st.window.hi.y) continue;
+    singular.push_back(v);
+  }
+  double radius = std::clamp(0.3 * median_px, 2.0, 6.0);
+  if (!singular.empty())
+    radius = std::max(1.0, std::min(radius, std::sqrt(0.1 * plot_w * plot_h / (M_PI * static_cast<double>(singular.size())))));
+  st.mark_radius_px = radius;
+  std::map<int, std::size_t> marked_by_extra;
+  for (std::size_t v : singular) {
+    const bool b = on_boundary[v] != 0;
+    const int extra = valence[v] - (b ? 3 : 4);
+    const auto [x, y] = px(mesh.nodes[v]);
+    cairo_new_sub_path(cr);
+    cairo_arc(cr, x, y, radius, 0, 2 * M_PI);
+    set(cr, valence_color(valence[v], b));
+    if (b) {
+      cairo_set_line_width(cr, std::max(1.0, radius / 2.5));
+      cairo_stroke(cr);
+    } else {
+      cairo_fill_preserve(cr);
+      cairo_set_source_rgb(cr, 1, 1, 1);
+      cairo_set_line_width(cr, 0.6);
+      cairo_stroke(cr);
+    }
+    ++st.singular_nodes_marked;
+    ++marked_by_extra[std::clamp(extra, -1, 2)];
+  }
+  cairo_restore(cr);
+
+  // The colour bar with its scale (sj, skew) or the subregion count, then the valence legend.
+  cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
+  cairo_set_font_size(cr, 12);
+  const double lx = options.width_px - column + 10;
+  double ly = pad + 16;
+  cairo_set_source_rgb(cr, 0, 0, 0);
+  if (options.color == RenderColor::sj || options.color == RenderColor::skew) {
+    text(cr, lx, ly, options.color == RenderColor::sj ? "scaled Jacobian" : "skew");
+    const double top = ly + 10, height = 200, bar_w = 20;
+    st.bar_x0 = lx;
+    st.bar_y0 = top;
+    st.bar_w = bar_w;
+    st.bar_h = height;
+    constexpr int slices = 100;
+    for (int s = 0; s < slices; ++s) {  // value 0 at the bottom, 1 at the top
+      const double v = (s + 0.5) / slices;
+      set(cr, measure_color(options.color, v));
+      cairo_rectangle(cr, lx, top + height * (1.0 - (s + 1.0) / slices), bar_w, height / slices + 0.5);
+      cairo_fill(cr);
+    }
+    cairo_set_source_rgb(cr, 0, 0, 0);
+    cairo_set_line_width(cr, 1.0);
+    cairo_rectangle(cr, lx, top, bar_w, height);
+    cairo_stroke(cr);
+    for (int t = 0; t <= 4; ++t) {
+      const double y = top + height * (1.0 - t / 4.0);
+      cairo_move_to(cr, lx + bar_w, y);
+      cairo_line_to(cr, lx + bar_w + 5, y);
+      cairo_stroke(cr);
+      text(cr, lx + bar_w + 8, y + 4, fixed(t / 4.0, 2));
+    }
+    // The range drawn: a bracket beside the bar from the smallest to the largest value.
+    const double ymin = top + height * (1.0 - std::clamp(st.value_min, 0.0, 1.0));
+    const double ymax = top + height * (1.0 - std::clamp(st.value_max, 0.0, 1.0));
+    cairo_move_to(cr, lx - 3, ymin);
+    cairo_line_to(cr, lx - 7, ymin);
+    cairo_line_to(cr, lx - 7, ymax);
+    cairo_line_to(cr, lx - 3, ymax);
+    cairo_set_line_width(cr, 1.5);
+    cairo_stroke(cr);
+    ly = top + height + 20;
+    text(cr, lx, ly, "min " + fixed(st.value_min, 3));
+    ly += 16;
+    text(cr, lx, ly, "max " + fixed(st.value_max, 3));
+    ly += 28;
+  } else if (options.color == RenderColor::part) {
+    int parts = 0;
+    for (std::size_t i : visible)
+      parts = std::max(parts, mesh.quad_part.size() == mesh.quads.size() ? mesh.quad_part[i] + 1 : 1);
+    text(cr, lx, ly, "subregions: " + std::to_string(parts));
+    ly += 28;
+  }
+  text(cr, lx, ly, "singular nodes");
+  ly += 18;
+  const std::array<std::pair<int, const char*>, 3> legend{{{-1, "valence 3 (boundary 2)"}, {1, "5 (boundary 4)"},
+                                                           {2, "6+ (boundary 5+)"}}};
+  for (const auto& [extra, label] : legend) {
+    cairo_new_sub_path(cr);
+    cairo_arc(cr, lx + 5, ly - 4, 5, 0, 2 * M_PI);
+    set(cr, valence_color(4 + extra, false));
+    cairo_fill(cr);
+    cairo_set_source_rgb(cr, 0, 0, 0);
+    const auto it = marked_by_extra.find(extra);
+    text(cr, lx + 15, ly, std::string(label) + ": " + std::to_string(it == marked_by_extra.end() ? 0 : it->second));
+    ly += 16;
+  }
+  text(cr, lx, ly, "(rings: boundary nodes)");
+  ly += 16;
+  if (!st.edges_drawn) text(cr, lx, ly, "(quad edges hidden)");
+
+  cairo_destroy(cr);
+  cairo_status_t status = cairo_surface_status(surface);
+  if (svg) {
+    cairo_surface_finish(surface);  // flushes the SVG into `bytes`
+    status = cairo_surface_status(surface);
+  } else if (status == CAIRO_STATUS_SUCCESS) {
+    status = cairo_surface_write_to_png_stream(surface, append_to_string, &bytes);
+  }
+  cairo_surface_destroy(surface);
+  if (status != CAIRO_STATUS_SUCCESS)
+    throw std::runtime_error(path.string() + ": drawing failed: " + cairo_status_to_string(status));
+  write_file_atomically(path, [&](std::ostream& os) { os.write(bytes.data(), static_cast<std::streamsize>(bytes.size())); },
+                        true);
+  return st;
+}
+
+}  // namespace polysquare

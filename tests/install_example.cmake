@@ -1,0 +1,50 @@
+# CTest script (cmake -P): installs the built polysquare into a fresh prefix, builds examples/mesh_in_code against
+# that installed package alone (find_package(polysquare), no source or build tree on its paths) and runs it.
+# Variables: SOURCE_DIR, BINARY_DIR (the polysquare build), WORK_DIR (scratch), GENERATOR, CXX_COMPILER, BUILD_TYPE.
+foreach(v SOURCE_DIR BINARY_DIR WORK_DIR GENERATOR CXX_COMPILER BUILD_TYPE)
+  if(NOT DEFINED ${v})
+    message(FATAL_ERROR "install_example.cmake: ${v} is not set")
+  endif()
+endforeach()
+file(REMOVE_RECURSE ${WORK_DIR})
+set(prefix ${WORK_DIR}/prefix)
+
+function(run what)
+  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "${what} failed (${rc}):\n${out}\n${err}")
+  endif()
+  set(last_output "${out}" PARENT_SCOPE)
+endfunction()
+
+run("cmake --install" ${CMAKE_COMMAND} --install ${BINARY_DIR} --prefix ${prefix})
+file(GLOB_RECURSE config ${prefix}/*/polysquareConfig.cmake)
+file(GLOB_RECURSE targets ${prefix}/*/polysquareTargets.cmake)
+if(NOT config OR NOT targets OR NOT EXISTS ${prefix}/include/polysquare/pipeline/mesh_region.h)
+  message(FATAL_ERROR "the install lacks polysquareConfig.cmake, polysquareTargets.cmake or the headers under ${prefix}")
+endif()
+# The installed package must point into the prefix only, never back at the source or build tree.
+file(GLOB_RECURSE installed_cmake ${prefix}/*.cmake)
+foreach(f IN LISTS installed_cmake)
+  file(READ ${f} text)
+  foreach(tree ${SOURCE_DIR} ${BINARY_DIR})
+    string(FIND "${text}" "${tree}/" at)
+    if(NOT at EQUAL -1)
+      message(FATAL_ERROR "${f} refers to ${tree}")
+    endif()
+  endforeach()
+endforeach()
+
+run("configuring the example" ${CMAKE_COMMAND} -S ${SOURCE_DIR}/examples/mesh_in_code -B ${WORK_DIR}/build -G ${GENERATOR}
+    -DCMAKE_BUILD_TYPE=${BUILD_TYPE} -DCMAKE_CXX_COMPILER=${CXX_COMPILER} -DCMAKE_PREFIX_PATH=${prefix}
+    -DCMAKE_FIND_USE_PACKAGE_REGISTRY=OFF)
+run("building the example" ${CMAKE_COMMAND} --build ${WORK_DIR}/build)
+run("running the example" ${WORK_DIR}/build/mesh_in_code ${WORK_DIR}/plate.msh)
+message(STATUS "${last_output}")
+if(NOT last_output MATCHES "polysquare [0-9.]+: [1-9][0-9]* quads, 0 triangles")
+  message(FATAL_ERROR "the example printed no quad count: ${last_output}")
+endif()
+file(READ ${WORK_DIR}/plate.msh head LIMIT 200)
+if(NOT head MATCHES "^\\$MeshFormat")
+  message(FATAL_ERROR "the example wrote no Gmsh file: ${head}")
+endif()
