@@ -76,6 +76,10 @@ int run_mesh(const MeshArgs& args) {
   result.report["input"]["warnings"] = notes.warnings;
   result.report["input"]["input_crs"] = notes.input_crs;
   result.report["domain"] = to_json(domain);
+  // Named groups (domains, ring pieces, features, boundary segments) from the region the mesh conforms to.
+  MeshGroups groups = mesh_groups(result.mesh, &result.region);
+  result.report["groups"] = to_json(groups);
+  for (const std::string& w : groups.warnings) std::cerr << "warning: " << w << "\n";
   // Outputs are written only after the whole mesh passed its checks, each atomically.
   const MeshWriteOptions write{args.binary,
                                args.msh_features == "lines" ? MshFeatures::lines
@@ -86,7 +90,8 @@ int run_mesh(const MeshArgs& args) {
                                                        {args.bathymetry_positive == "down"})
                                : args.depth_given ? std::vector<double>(result.mesh.nodes.size(), args.depth)
                                                   : std::vector<double>{},
-                               notes.input_crs};
+                               notes.input_crs,
+                               std::move(groups)};
   write_mesh(args.output, result.mesh, write);
   if (out_ext == ".nc" && fv.orthogonality_above > 0)
     std::cerr << "warning: " << fv.orthogonality_above << " of " << fv.interior_edges
@@ -185,6 +190,9 @@ int main(int argc, char** argv) {
                        "every layer, roles from a 'role' attribute or the geometry type")->required();
   cmd_mesh->add_option("--features", mesh.input_options.feature_files,
                        "more vector datasets whose layers are feature curves (repeatable)");
+  cmd_mesh->add_option("--boundary", mesh.input_options.boundary_files,
+                       "vector datasets whose lines lie on the domain boundary and split it into named segments "
+                       "(attributes 'name', 'kind': open, land, ...; repeatable)");
   cmd_mesh->add_option("--domain-layer", mesh.input_options.domain_layer,
                        "the input layer that is the domain (the other layers give features)");
   cmd_mesh->add_option("--feature-layer", mesh.input_options.feature_layers,
@@ -193,7 +201,7 @@ int main(int argc, char** argv) {
   cmd_mesh->add_option("--crs", mesh.input_options.crs,
                        "projected CRS to mesh geographic input in, e.g. EPSG:32615 (default: UTM zone of the centre)");
   cmd_mesh->add_option("--size", mesh.options.size, "target quad edge length h, in region units (metres for geographic input)")->required();
-  cmd_mesh->add_option("-o,--output", mesh.output, "output mesh (.msh Gmsh, .vtu VTK, .gr3 SCHISM hgrid, .nc D-Flow FM UGRID net file, .2dm SMS)")->required();
+  cmd_mesh->add_option("-o,--output", mesh.output, "output mesh (.msh Gmsh, .vtu VTK, .gr3 SCHISM hgrid, .nc D-Flow FM UGRID net file, .2dm SMS, .exo Exodus II)")->required();
   cmd_mesh->add_option("--depth", mesh.depth,
                        "constant water depth, positive down, for .gr3 (depth column), .nc (mesh2d_node_z = -depth) "
                        "and .2dm files");

@@ -133,7 +133,8 @@ void write_mesh(const std::filesystem::path& path, const QuadMesh& mesh, const M
   if (ext == ".gr3") return write_gr3(path, mesh, options);
   if (ext == ".nc") return write_ugrid(path, mesh, options);
   if (ext == ".2dm") return write_2dm(path, mesh, options);
-  throw InputError(path.string() + ": unsupported output format '" + ext + "' (supported: .msh, .vtu, .gr3, .nc, .2dm)");
+  if (ext == ".exo") return write_exodus(path, mesh, options);
+  throw InputError(path.string() + ": unsupported output format '" + ext + "' (supported: .msh, .vtu, .gr3, .nc, .2dm, .exo)");
 }
 
 void write_svg(const std::filesystem::path& path, const QuadMesh& mesh, const Region* region, const SvgOptions& options) {
