@@ -92,6 +92,7 @@ MeshGroups mesh_groups(const QuadMesh& mesh, const Region* region) {
       g.surfaces[it->second].quads.push_back(static_cast<std::int32_t>(q));
     }
     if (g.surfaces.empty()) g.surfaces.push_back({"domain", 1, {}});
+    g.surfaces[0].tag = 1;
   }
 
   // Rings: the tagged edges of each ring; with segments, the loop's edges that no segment covers.
