@@ -2,6 +2,7 @@
 #include <netcdf.h>
 
 #include <array>
+#include <cctype>
 #include <initializer_list>
 #include <utility>
 #include <string>
@@ -16,6 +17,7 @@
 #include "polysquare/quality/quality.h"
 
 namespace polysquare {
+namespace fs = std::filesystem;
 namespace {
 
 constexpr int kFillInt = -999;  // D-Flow FM's fill value for connectivity
@@ -150,6 +152,31 @@ void write_ugrid(const std::filesystem::path& path, const QuadMesh& mesh, const 
     f.put(face_nodes, fn);
     f.close();
   });
+  // D-Flow FM takes boundary conditions on polylines (.pli, Tekal blocks: name, "rows 2", then x y per row)
+  // named in its external forcing file; each open segment gets one along its boundary nodes.
+  const MeshGroups groups = options.groups.empty() ? mesh_groups(mesh) : options.groups;
+  for (const CurveGroup& g : groups.segments) {
+    if (g.kind != "open") continue;
+    write_file_atomically(pli_path(path, g.name), [&](std::ostream& os) {
+      os.precision(17);
+      for (std::size_t k = 0; k < g.chains.size(); ++k) {
+        os << g.name << (g.chains.size() > 1 ? "_" + std::to_string(k + 1) : std::string()) << "\n"
+           << g.chains[k].size() << " 2\n";
+        for (auto v : g.chains[k]) os << mesh.nodes[static_cast<std::size_t>(v)].x << " " << mesh.nodes[static_cast<std::size_t>(v)].y << "\n";
+      }
+    }, false);
+  }
+}
+
+std::string file_safe(const std::string& name) {
+  std::string out;
+  for (char ch : name)
+    out += (std::isalnum(static_cast<unsigned char>(ch)) || ch == '-' || ch == '_') ? ch : '_';
+  return out.empty() ? std::string("_") : out;
+}
+
+fs::path pli_path(const fs::path& net_file, const std::string& name) {
+  return net_file.parent_path() / (net_file.stem().string() + "_" + file_safe(name) + ".pli");
 }
 
 }  // namespace polysquare

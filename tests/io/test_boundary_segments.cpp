@@ -453,3 +453,36 @@ TEST(BoundarySegments, CliReadsBoundaryFileAndListsGroupsInTheReport) {
   EXPECT_NE(err.find("not on the domain boundary"), std::string::npos) << err;
   EXPECT_FALSE(fs::exists(out));
 }
+
+TEST(BoundarySegments, NetFileGetsOnePolylinePerOpenSegment) {
+  const Meshed& m = dam_open();
+  const fs::path nc = temp("dam_net.nc");
+  write_mesh(nc, m.result.mesh, with_groups(m.groups));
+  const fs::path gr3 = temp("dam_for_pli.gr3");
+  write_mesh(gr3, m.result.mesh, with_groups(m.groups));
+  const Gr3 g = parse_gr3(gr3);
+  ASSERT_EQ(g.open.size(), 2u);
+  // Tekal blocks as D-Flow FM reads them: a name line, "rows columns", then one "x y" line per row.
+  const char* names[] = {"inflow", "outflow"};
+  for (std::size_t k = 0; k < 2; ++k) {
+    const fs::path pli = temp(std::string("dam_net_") + names[k] + ".pli");
+    ASSERT_EQ(pli, pli_path(nc, names[k]));
+    std::ifstream in(pli);
+    ASSERT_TRUE(in) << pli;
+    std::string name;
+    std::getline(in, name);
+    EXPECT_EQ(name, names[k]);
+    std::size_t rows = 0, cols = 0;
+    in >> rows >> cols;
+    EXPECT_EQ(cols, 2u);
+    ASSERT_EQ(rows, g.open[k].size());
+    for (std::size_t i = 0; i < rows; ++i) {
+      std::string x, y;
+      in >> x >> y;
+      EXPECT_TRUE((Vec2{std::strtod(x.c_str(), nullptr), std::strtod(y.c_str(), nullptr)}) ==
+                  g.xy[static_cast<std::size_t>(g.open[k][i] - 1)]) << names[k] << " row " << i;
+    }
+  }
+  // Land segments get no polyline.
+  EXPECT_FALSE(fs::exists(temp("dam_net_boundary_ring_0.pli")));
+}
