@@ -486,3 +486,24 @@ TEST(BoundarySegments, NetFileGetsOnePolylinePerOpenSegment) {
   // Land segments get no polyline.
   EXPECT_FALSE(fs::exists(temp("dam_net_boundary_ring_0.pli")));
 }
+
+TEST(BoundarySegments, GdalReaderGivesTheSameSegmentsAndNames) {
+  const fs::path p = std::string(POLYSQUARE_DATA_DIR) + "/cases/dam_channel_open.geojson";
+  const Region native = read_region(p);
+  InputOptions through_ogr;
+  through_ogr.where = "1 = 1";  // a filter sends the file through GDAL/OGR
+  InputNotes notes;
+  const Region ogr = read_input(p, through_ogr, notes);
+  ASSERT_EQ(ogr.boundary_segments.size(), native.boundary_segments.size());
+  for (std::size_t s = 0; s < native.boundary_segments.size(); ++s) {
+    const BoundarySegment &a = native.boundary_segments[s], &b = ogr.boundary_segments[s];
+    EXPECT_EQ(a.name, b.name);
+    EXPECT_EQ(a.kind, b.kind);
+    EXPECT_EQ(a.ring, b.ring);
+    EXPECT_TRUE(a.start == b.start && a.end == b.end) << s;
+  }
+  ASSERT_EQ(ogr.rings.size(), 1u);
+  EXPECT_EQ(ogr.rings[0].name, "channel");
+  ASSERT_EQ(ogr.features.size(), 2u);
+  EXPECT_EQ(ogr.features[1].name, "dam_upper");
+}
