@@ -507,3 +507,68 @@ TEST(BoundarySegments, GdalReaderGivesTheSameSegmentsAndNames) {
   ASSERT_EQ(ogr.features.size(), 2u);
   EXPECT_EQ(ogr.features[1].name, "dam_upper");
 }
+
+TEST(BoundarySegments, NamedDomainsBecomeSurfacesAndExodusBlocks) {
+  const fs::path p = write_text("two_basins.geojson", R"({"type": "FeatureCollection", "features": [
+{"type": "Feature", "properties": {"role": "domain", "name": "west"}, "geometry": {"type": "Polygon", "coordinates": [[[0, 0], [20, 0], [20, 20], [0, 20], [0, 0]]]}},
+{"type": "Feature", "properties": {"role": "domain", "name": "east"}, "geometry": {"type": "Polygon", "coordinates": [[[30, 0], [60, 0], [60, 20], [30, 20], [30, 0]]]}},
+{"type": "Feature", "properties": {"role": "boundary", "name": "sluice", "kind": "open"}, "geometry": {"type": "LineString", "coordinates": [[30, 5], [30, 15]]}}]})");
+  const Meshed m = mesh_file(p, 2.0);
+  const QuadMesh& mesh = m.result.mesh;
+  ASSERT_EQ(m.groups.surfaces.size(), 2u);
+  // Tags: the first surface 1, rings 2 and 3, the segment 4, the second surface after it.
+  EXPECT_EQ(m.groups.surfaces[0].tag, 1);
+  EXPECT_EQ(m.groups.rings.size(), 2u);
+  ASSERT_EQ(m.groups.segments.size(), 1u);
+  EXPECT_EQ(m.groups.segments[0].tag, 4);
+  EXPECT_EQ(m.groups.surfaces[1].tag, 5);
+  std::map<std::string, double> area;
+  for (const SurfaceGroup& s : m.groups.surfaces)
+    for (auto q : s.quads) {
+      const auto& c = mesh.quads[static_cast<std::size_t>(q)];
+      double a = 0;
+      for (int k = 0; k < 4; ++k) a += cross(mesh.nodes[static_cast<std::size_t>(c[k])], mesh.nodes[static_cast<std::size_t>(c[(k + 1) % 4])]);
+      area[s.name] += 0.5 * a;
+    }
+  EXPECT_NEAR(area["west"], 400.0, 1e-6);
+  EXPECT_NEAR(area["east"], 600.0, 1e-6);
+  // The segment's quads are on the west side of the east basin: x = 30, y from 5 to 15.
+  for (const auto& e : m.groups.segments[0].edges)
+    for (auto v : e) {
+      EXPECT_EQ(mesh.nodes[static_cast<std::size_t>(v)].x, 30.0);
+      EXPECT_GE(mesh.nodes[static_cast<std::size_t>(v)].y, 5.0);
+      EXPECT_LE(mesh.nodes[static_cast<std::size_t>(v)].y, 15.0);
+    }
+  // MSH 4.1 read by meshio: one quad block per basin with its own physical tag.
+  const fs::path msh = temp("two.msh");
+  MeshWriteOptions o = with_groups(m.groups);
+  o.msh_version = MshVersion::v4_1;
+  write_mesh(msh, mesh, o);
+  const nlohmann::json j = meshio_json(msh, R"(
+quads = {}
+for block, tags in zip(m.cells, m.cell_data["gmsh:physical"]):
+    if block.type == "quad":
+        for t in tags:
+            quads[str(int(t))] = quads.get(str(int(t)), 0) + 1
+print(json.dumps({"groups": {k: [int(v[0]), int(v[1])] for k, v in m.field_data.items()}, "quads": quads}))
+)");
+  EXPECT_EQ(j["groups"]["west"], nlohmann::json({1, 2}));
+  EXPECT_EQ(j["groups"]["east"], nlohmann::json({5, 2}));
+  EXPECT_EQ(j["groups"]["sluice"], nlohmann::json({4, 1}));
+  EXPECT_EQ(j["quads"]["1"].get<std::size_t>(), m.groups.surfaces[0].quads.size());
+  EXPECT_EQ(j["quads"]["5"].get<std::size_t>(), m.groups.surfaces[1].quads.size());
+  // Exodus: two element blocks named after the basins, read by meshio as two quad blocks.
+  const fs::path exo = temp("two.exo");
+  write_mesh(exo, mesh, with_groups(m.groups));
+  const nlohmann::json e = meshio_json(exo, R"(
+import netCDF4
+ds = netCDF4.Dataset(sys.argv[1])
+ds.set_auto_mask(False)
+print(json.dumps({"blocks": [len(c.data) for c in m.cells],
+                  "names": [b"".join(r).decode().rstrip("\x00") for r in ds.variables["eb_names"][:]],
+                  "ids": ds.variables["eb_prop1"][:].tolist()}))
+)");
+  EXPECT_EQ(e["names"], nlohmann::json({"west", "east"}));
+  EXPECT_EQ(e["ids"], nlohmann::json({1, 5}));
+  EXPECT_EQ(e["blocks"], nlohmann::json({m.groups.surfaces[0].quads.size(), m.groups.surfaces[1].quads.size()}));
+}
