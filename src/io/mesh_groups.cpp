@@ -236,6 +236,25 @@ MeshGroups mesh_groups(const QuadMesh& mesh, const Region* region) {
   return g;
 }
 
+// One line naming the physical groups with their tags: domains, segments and named features in full, the rings
+// (which may be hundreds on a coast) as a tag range.
+std::string format_groups_text(const MeshGroups& g) {
+  std::string out = "  groups:";
+  for (const SurfaceGroup& s : g.surfaces) out += " " + s.name + " (" + std::to_string(s.tag) + "),";
+  if (!g.rings.empty())
+    out += " " + std::to_string(g.rings.size()) + " boundary ring(s) (" + std::to_string(g.rings.front().tag) +
+           (g.rings.size() > 1 ? "-" + std::to_string(g.rings.back().tag) : std::string()) + "),";
+  std::size_t unnamed = 0;
+  for (const CurveGroup& c : g.features) {
+    if (c.name.rfind("feature_", 0) == 0) ++unnamed;
+    else out += " " + c.name + " (" + std::to_string(c.tag) + "),";
+  }
+  if (unnamed) out += " " + std::to_string(unnamed) + " unnamed feature curve(s),";
+  for (const CurveGroup& c : g.segments) out += " " + c.name + " (" + std::to_string(c.tag) + ", " + c.kind + "),";
+  out.back() = '\n';
+  return out;
+}
+
 nlohmann::json to_json(const MeshGroups& groups) {
   nlohmann::json out = nlohmann::json::array();
   for (const SurfaceGroup& s : groups.surfaces)

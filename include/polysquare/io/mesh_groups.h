@@ -56,6 +56,10 @@ struct MeshGroups {
 /// its start node forward to its end node.
 MeshGroups mesh_groups(const QuadMesh& mesh, const Region* region = nullptr);
 
+/// One line for the CLI, "  groups: channel (1), 1 boundary ring(s) (2), dam_lower (3), inflow (5, open)\n":
+/// domains, named features and segments with their tags, the rings (hundreds on a coast) as a tag range.
+std::string format_groups_text(const MeshGroups& groups);
+
 /// For the report: per group name, tag, kind, dimension and counts (edges, nodes or quads).
 nlohmann::json to_json(const MeshGroups& groups);
 
