@@ -426,13 +426,21 @@ TEST(BoundarySegments, CliReadsBoundaryFileAndListsGroupsInTheReport) {
   int code = 0;
   const std::string printed =
       output_of(std::string(POLYSQUARE_CLI) + " mesh " + POLYSQUARE_DATA_DIR + "/cases/dam_channel.geojson --size 4 --boundary " +
-                    lines.string() + " -o " + gr3.string() + " --report " + report.string(), &code, true);
+                    lines.string() + " -o " + gr3.string() + " --report " + report.string() + " --picture " +
+                    temp("cli.svg").string(), &code, true);
   ASSERT_EQ(code, 0) << printed;
   EXPECT_NE(printed.find("groups: domain (1), 1 boundary ring(s) (2), 2 unnamed feature curve(s), south (5, open), north (6, open)"),
             std::string::npos) << printed;
   const Gr3 g = parse_gr3(gr3);
   EXPECT_EQ(g.open.size(), 2u);
   EXPECT_EQ(g.land.size(), 2u);
+  {  // the picture draws the open segments with their names
+    std::ifstream svg(temp("cli.svg"));
+    const std::string text((std::istreambuf_iterator<char>(svg)), std::istreambuf_iterator<char>());
+    EXPECT_NE(text.find("stroke=\"magenta\" stroke-width=\"3\" points=\"10,"), std::string::npos);
+    EXPECT_NE(text.find("<title>south</title>"), std::string::npos);
+    EXPECT_NE(text.find("<title>north</title>"), std::string::npos);
+  }
   std::ifstream in(report);
   const nlohmann::json r = nlohmann::json::parse(in);
   std::map<std::string, int> tags;
