@@ -53,7 +53,9 @@ int run_mesh(const MeshArgs& args) {
   InputNotes notes;
   const Region region = read_input(args.input, args.input_options, notes);
   for (const std::string& r : notes.repairs) std::cerr << "warning: repaired: " << r << "\n";
-  for (const std::string& w : notes.warnings) std::cerr << "warning: " << w << "\n";
+  for (std::size_t i = 0; i < notes.warnings.size() && i < 10; ++i) std::cerr << "warning: " << notes.warnings[i] << "\n";
+  if (notes.warnings.size() > 10)
+    std::cerr << "warning: ... and " << notes.warnings.size() - 10 << " more warnings about the input (see the report's input.warnings)\n";
   for (std::size_t i = 0; i < notes.snaps.size() && i < 5; ++i) std::cerr << "warning: " << notes.snaps[i] << "\n";
   if (notes.snaps.size() > 5) std::cerr << "warning: ... and " << notes.snaps.size() - 5 << " more snapped points (see the report)\n";
   if (notes.reprojected) std::cerr << "input in " << notes.input_crs << ", meshed in " << region.crs << " (--size in metres)\n";
