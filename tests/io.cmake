@@ -1,5 +1,6 @@
 list(APPEND TEST_SOURCES io/test_mesh_io.cpp)
 list(APPEND TEST_SOURCES io/test_solver_files.cpp)
+list(APPEND TEST_SOURCES io/test_boundary_segments.cpp)
 
 # deal.II as an independent reader of our MSH files, when it is installed (Debian: libdeal.ii-dev, about 200
 # packages and 1 GB, so scripts/install-deps does not pull it in; the test skips without it). deal.II's CMake

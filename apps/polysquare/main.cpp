@@ -81,7 +81,9 @@ int run_mesh(const MeshArgs& args) {
   const Region region = read_input(args.input, args.input_options, notes);
   progress.finish("read input");
   for (const std::string& r : notes.repairs) std::cerr << "warning: repaired: " << r << "\n";
-  for (const std::string& w : notes.warnings) std::cerr << "warning: " << w << "\n";
+  for (std::size_t i = 0; i < notes.warnings.size() && i < 10; ++i) std::cerr << "warning: " << notes.warnings[i] << "\n";
+  if (notes.warnings.size() > 10)
+    std::cerr << "warning: ... and " << notes.warnings.size() - 10 << " more warnings about the input (see the report's input.warnings)\n";
   for (std::size_t i = 0; i < notes.snaps.size() && i < 5; ++i) std::cerr << "warning: " << notes.snaps[i] << "\n";
   if (notes.snaps.size() > 5) std::cerr << "warning: ... and " << notes.snaps.size() - 5 << " more snapped points (see the report)\n";
   if (notes.reprojected) info << "input in " << notes.input_crs << ", meshed in " << region.crs << " (--size in metres)\n";
@@ -102,6 +104,12 @@ int run_mesh(const MeshArgs& args) {
   result.report["input"]["snapped"] = notes.snaps;
   result.report["input"]["warnings"] = notes.warnings;
   result.report["input"]["input_crs"] = notes.input_crs;
+  // Named groups (domains, ring pieces, features, boundary segments) from the region the mesh conforms to.
+  MeshGroups groups = mesh_groups(result.mesh, &result.region);
+  result.report["groups"] = to_json(groups);
+  result.report["input"]["boundary_segments"] = region.boundary_segments.size();
+  for (const std::string& w : groups.warnings) std::cerr << "warning: " << w << "\n";
+  const std::string group_summary = format_groups_text(groups);
   progress.finish("quality");
   progress.start("write");
   // Outputs are written only after the whole mesh passed its checks, each atomically.
@@ -114,7 +122,8 @@ int run_mesh(const MeshArgs& args) {
                                                        {args.bathymetry_positive == "down"})
                                : args.depth_given ? std::vector<double>(result.mesh.nodes.size(), args.depth)
                                                   : std::vector<double>{},
-                               notes.input_crs};
+                               notes.input_crs,
+                               std::move(groups)};
   write_mesh(args.output, result.mesh, write);
   if (!args.report.empty())
     write_file_atomically(args.report, [&](std::ostream& os) { os << report_text(result.report); }, false);
@@ -184,7 +193,7 @@ int run_mesh(const MeshArgs& args) {
   if (!args.quiet)
     std::cout << "polysquare: " << result.mesh.quads.size() << " quads, " << result.mesh.nodes.size() << " nodes -> "
             << args.output << "\n"
-            << format_quality_text(quality, &domain) << format_finite_volume_text(fv);
+            << group_summary << format_quality_text(quality, &domain) << format_finite_volume_text(fv);
   return 0;
 }
 
@@ -249,6 +258,9 @@ int main(int argc, char** argv) {
                        "every layer, roles from a 'role' attribute or the geometry type")->required();
   cmd_mesh->add_option("--features", mesh.input_options.feature_files,
                        "more vector datasets whose layers are feature curves (repeatable)");
+  cmd_mesh->add_option("--boundary", mesh.input_options.boundary_files,
+                       "vector datasets whose lines lie on the domain boundary and split it into named segments "
+                       "(attributes 'name', 'kind': open, land, ...; repeatable)");
   cmd_mesh->add_option("--domain-layer", mesh.input_options.domain_layer,
                        "the input layer that is the domain (the other layers give features)");
   cmd_mesh->add_option("--feature-layer", mesh.input_options.feature_layers,
@@ -257,7 +269,7 @@ int main(int argc, char** argv) {
   cmd_mesh->add_option("--crs", mesh.input_options.crs,
                        "projected CRS to mesh geographic input in, e.g. EPSG:32615 (default: UTM zone of the centre)");
   cmd_mesh->add_option("--size", mesh.options.size, "target quad edge length h, in region units (metres for geographic input)")->required();
-  cmd_mesh->add_option("-o,--output", mesh.output, "output mesh (.msh Gmsh, .vtu VTK, .gr3 SCHISM hgrid, .nc D-Flow FM UGRID net file, .2dm SMS)")->required();
+  cmd_mesh->add_option("-o,--output", mesh.output, "output mesh (.msh Gmsh, .vtu VTK, .gr3 SCHISM hgrid, .nc D-Flow FM UGRID net file, .2dm SMS, .exo Exodus II)")->required();
   cmd_mesh->add_option("--depth", mesh.depth,
                        "constant water depth, positive down, for .gr3 (depth column), .nc (mesh2d_node_z = -depth) "
                        "and .2dm files");

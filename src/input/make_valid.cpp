@@ -42,8 +42,9 @@ std::size_t make_parts_valid(Region& region, std::vector<std::string>* repairs) 
   std::size_t repaired = 0;
   for (int part = 0; part < region.num_parts; ++part) {
     int source = -1;
+    std::string name;
     for (const Ring& r : region.rings)
-      if (r.part == part) source = r.source_feature;
+      if (r.part == part) source = r.source_feature, name = r.name;
     const auto poly = to_ogr(region, part);
     if (poly->IsValid()) {
       for (const Ring& r : region.rings)
@@ -60,7 +61,9 @@ std::size_t make_parts_valid(Region& region, std::vector<std::string>* repairs) 
       if (!g || wkbFlatten(g->getGeometryType()) != wkbPolygon) return;  // lines and points of a collapse are dropped
       const auto* p = g->toPolygon();
       if (p->get_Area() <= 0.0) return;
+      const std::size_t first = rings.size();
       add_polygon(*p, parts++, source, rings);
+      for (std::size_t k = first; k < rings.size(); ++k) rings[k].name = name;
       ++made;
     };
     if (fixed && wkbFlatten(fixed->getGeometryType()) == wkbPolygon) take(fixed.get());

@@ -108,6 +108,7 @@ void project_region(Region& region, const std::string& target_crs, InputNotes& n
   for (Ring& r : region.rings) project(r.points, "feature " + std::to_string(r.source_feature));
   for (FeatureCurve& c : region.features) project(c.points, "feature " + std::to_string(c.source_feature));
   project(region.feature_points, "feature points");
+  for (BoundarySegment& b : region.boundary_segments) project(b.line, "feature " + std::to_string(b.source_feature));
   region.crs = target_name;
   region.units = units_of(target);
   notes.reprojected = true;

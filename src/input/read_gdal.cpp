@@ -86,6 +86,7 @@ struct Reader {
   std::string where;  // "FILE, layer 'L', FID n", for messages
   int source = -1;
   const OGRCoordinateTransformation* transform = nullptr;
+  std::string name, kind;  // the feature's `name` and `kind` attributes (empty when absent)
 
   [[noreturn]] void fail(const std::string& what) const { throw InputError(where + ": " + what); }
 
@@ -122,6 +123,34 @@ struct Reader {
     return pts;
   }
 
+  // A line with role "boundary": a named piece of a ring, placed on it by validation.
+  void add_boundary(const OGRGeometry& g) {
+    if (g.IsEmpty()) return;
+    if (g.hasCurveGeometry()) {
+      std::unique_ptr<OGRGeometry> linear(g.getLinearGeometry());
+      if (!linear) fail("cannot linearize a " + std::string(g.getGeometryName()));
+      add_boundary(*linear);
+      return;
+    }
+    switch (wkbFlatten(g.getGeometryType())) {
+      case wkbLineString: {
+        BoundarySegment b;
+        b.name = name;
+        b.kind = kind;
+        b.source_feature = source;
+        b.line = points(*g.toLineString());
+        region.boundary_segments.push_back(std::move(b));
+        return;
+      }
+      case wkbMultiLineString:
+      case wkbGeometryCollection:
+        for (const OGRGeometry* part : *g.toGeometryCollection()) add_boundary(*part);
+        return;
+      default:
+        fail("a boundary segment must be a line lying on the domain boundary, got " + std::string(g.getGeometryName()));
+    }
+  }
+
   void add(const OGRGeometry& g, bool domain) {
     if (g.IsEmpty()) return;
     if (g.hasCurveGeometry()) {  // arcs (GML, DXF) become polylines at GDAL's default step
@@ -137,10 +166,10 @@ struct Reader {
           const int part = region.num_parts++;
           for (int k = 0; k <= poly.getNumInteriorRings(); ++k) {
             const OGRLinearRing* r = k == 0 ? poly.getExteriorRing() : poly.getInteriorRing(k - 1);
-            region.rings.push_back({ring(*r, k), part, k > 0, source});
+            region.rings.push_back({ring(*r, k), part, k > 0, source, name});
           }
         } else {  // a polygon feature is a closed curve along its outer ring, as for GeoJSON
-          region.features.push_back({ring(*poly.getExteriorRing(), 0), true, source});
+          region.features.push_back({ring(*poly.getExteriorRing(), 0), true, source, name, kind});
         }
         return;
       }
@@ -148,9 +177,9 @@ struct Reader {
       case wkbLinearRing:
         if (domain) fail("a domain must be a polygon, got a line string (give it the role \"feature\")");
         if (wkbFlatten(g.getGeometryType()) == wkbLinearRing)
-          region.features.push_back({ring(*g.toLinearRing(), 0), true, source});
+          region.features.push_back({ring(*g.toLinearRing(), 0), true, source, name, kind});
         else
-          region.features.push_back({points(*g.toLineString()), false, source});
+          region.features.push_back({points(*g.toLineString()), false, source, name, kind});
         return;
       case wkbPoint: {
         if (domain) fail("a domain must be a polygon, got a point");
@@ -212,8 +241,9 @@ void read_gdal(const std::filesystem::path& path, LayerRole default_role, const 
   for (OGRLayer* layer : ds->GetLayers()) {
     const std::string name = layer->GetName();
     // Which role this layer's geometries take: forced by a layer option, else the attribute or the default.
-    enum class Mode { skip, by_attribute, domain, feature } mode = Mode::by_attribute;
-    if (name == options.domain_layer && default_role == LayerRole::by_geometry) mode = Mode::domain;
+    enum class Mode { skip, by_attribute, domain, feature, boundary } mode = Mode::by_attribute;
+    if (default_role == LayerRole::boundary) mode = Mode::boundary;
+    else if (name == options.domain_layer && default_role == LayerRole::by_geometry) mode = Mode::domain;
     else if (contains(options.feature_layers, name)) mode = Mode::feature;
     else if (!options.feature_layers.empty() && (default_role == LayerRole::feature || !options.domain_layer.empty())) mode = Mode::skip;
     else if (!options.domain_layer.empty()) mode = Mode::feature;
@@ -241,6 +271,8 @@ void read_gdal(const std::filesystem::path& path, LayerRole default_role, const 
       }
     }
     const int role_field = layer->GetLayerDefn()->GetFieldIndex("role");
+    const int name_field = layer->GetLayerDefn()->GetFieldIndex("name");
+    const int kind_field = layer->GetLayerDefn()->GetFieldIndex("kind");
     CPLErrorReset();
     layer->ResetReading();
     for (auto& feature : *layer) {
@@ -248,9 +280,15 @@ void read_gdal(const std::filesystem::path& path, LayerRole default_role, const 
                     file + ", layer '" + name + "', FID " + std::to_string(feature->GetFID()),
                     static_cast<int>(feature_names.size()), transform.get()};
       feature_names.push_back(reader.where);
+      if (name_field >= 0 && feature->IsFieldSetAndNotNull(name_field)) reader.name = feature->GetFieldAsString(name_field);
+      if (kind_field >= 0 && feature->IsFieldSetAndNotNull(kind_field)) reader.kind = feature->GetFieldAsString(kind_field);
       const OGRGeometry* g = feature->GetGeometryRef();
       if (!g) reader.fail("the feature has no geometry");
       bool is_domain = false;
+      if (mode == Mode::boundary) {
+        reader.add_boundary(*g);
+        continue;
+      }
       if (mode == Mode::domain || mode == Mode::feature) {
         is_domain = mode == Mode::domain;
       } else {
@@ -262,8 +300,11 @@ void read_gdal(const std::filesystem::path& path, LayerRole default_role, const 
                       (t == wkbPolygon || t == wkbMultiPolygon || t == wkbCurvePolygon || t == wkbMultiSurface);
         } else if (role == "domain" || role == "feature") {
           is_domain = role == "domain";
+        } else if (role == "boundary") {
+          reader.add_boundary(*g);
+          continue;
         } else {
-          reader.fail("unknown role \"" + role + "\" (expected \"domain\" or \"feature\")");
+          reader.fail("unknown role \"" + role + "\" (expected \"domain\", \"feature\" or \"boundary\")");
         }
       }
       reader.add(*g, is_domain);

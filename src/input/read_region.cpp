@@ -8,6 +8,7 @@
 #include "polysquare/core/error.h"
 #include "polysquare/io/atomic_file.h"
 #include "polysquare/io/geojson.h"
+#include "polysquare/input/boundary_segments.h"
 #include "polysquare/input/make_valid.h"
 #include "polysquare/input/project_region.h"
 #include "polysquare/input/read_gdal.h"
@@ -109,7 +110,8 @@ void dedupe(std::vector<Vec2>& pts, bool closed, const std::string& where, bool 
 
 }  // namespace
 
-void validate_region(Region& region, const InputOptions& options, std::vector<std::string>* repairs) {
+void validate_region(Region& region, const InputOptions& options, std::vector<std::string>* repairs,
+                     std::vector<std::string>* warnings) {
   const std::string& src = region.source;
   if (options.repair) {
     // Finite coordinates first: GEOS must not see NaN.
@@ -178,6 +180,8 @@ void validate_region(Region& region, const InputOptions& options, std::vector<st
         if (k != ring.part && in_domain_of_part(p, k))
           throw InputError(ring_name(r) + " lies inside polygon part " + std::to_string(k) + " (overlapping parts), at " + pt(p));
   }
+  // Boundary segments: on a ring, their end points ring vertices (and feature points, so they become nodes).
+  place_boundary_segments(region, options.boundary_snap_relative * region.bounding_box().diagonal());
   // Features: cut at crossings and clipped to the domain; then no curve may cross the boundary or another
   // curve except at end points (this catches self-crossing curves, which are not split).
   FeatureSplitOptions split;
@@ -185,6 +189,7 @@ void validate_region(Region& region, const InputOptions& options, std::vector<st
   const FeatureSplitStats split_stats = split_features(region, split);
   if (repairs && split_stats.pieces_in_holes > 0)
     repairs->push_back(src + ": clipped " + std::to_string(split_stats.pieces_in_holes) + " feature piece(s) inside holes");
+  if (warnings) warnings->insert(warnings->end(), split_stats.dropped.begin(), split_stats.dropped.end());
   std::vector<Segment> all;
   for (std::size_t r = 0; r < region.rings.size(); ++r) {
     const auto& p = region.rings[r].points;
@@ -248,7 +253,7 @@ Region read_input(const std::filesystem::path& path, const InputOptions& options
     region.source = name;
     read_gdal(path, LayerRole::by_geometry, options, region, names, notes);
   }
-  if (!options.feature_files.empty() && names.empty()) {
+  if ((!options.feature_files.empty() || !options.boundary_files.empty()) && names.empty()) {
     // The native reader's features keep their index; the feature files' features are numbered after them.
     int next = 0;
     for (const Ring& r : region.rings) next = std::max(next, r.source_feature + 1);
@@ -256,6 +261,7 @@ Region read_input(const std::filesystem::path& path, const InputOptions& options
     for (int k = 0; k < next; ++k) names.push_back(name + ", feature " + std::to_string(k));
   }
   for (const std::filesystem::path& f : options.feature_files) read_gdal(f, LayerRole::feature, options, region, names, notes);
+  for (const std::filesystem::path& f : options.boundary_files) read_gdal(f, LayerRole::boundary, options, region, names, notes);
   for (const std::string& layer : options.feature_layers) {
     bool found = false;
     for (const std::string& n : names) found |= n.find(", layer '" + layer + "', ") != std::string::npos;
@@ -267,7 +273,7 @@ Region read_input(const std::filesystem::path& path, const InputOptions& options
   try {
     project_region(region, options.crs, notes);
     snap_near_coincident(region, options.snap_relative, &notes.snaps);
-    validate_region(region, options, &notes.repairs);
+    validate_region(region, options, &notes.repairs, &notes.warnings);
   } catch (const InputError& e) {
     if (names.empty()) throw;
     throw InputError(name_feature(e.what(), names));

@@ -443,9 +443,16 @@ std::vector<DroppedCurve> drop_narrow_islands(Region& region, double min_width) 
     return true;
   };
   std::vector<Ring> rings;
-  for (Ring& r : region.rings)
-    if (!(r.hole && narrow(r.points, false, r.source_feature))) rings.push_back(std::move(r));
+  std::vector<int> new_index(region.rings.size(), -1);  // boundary segments follow their ring
+  for (std::size_t k = 0; k < region.rings.size(); ++k) {
+    Ring& r = region.rings[k];
+    if (r.hole && narrow(r.points, false, r.source_feature)) continue;
+    new_index[k] = static_cast<int>(rings.size());
+    rings.push_back(std::move(r));
+  }
   region.rings = std::move(rings);
+  for (BoundarySegment& b : region.boundary_segments)
+    if (b.ring >= 0) b.ring = new_index[static_cast<std::size_t>(b.ring)];
   std::vector<FeatureCurve> features;
   for (FeatureCurve& f : region.features)
     if (!(f.closed && narrow(f.points, true, f.source_feature))) features.push_back(std::move(f));

@@ -178,15 +178,21 @@ FeatureSplitStats split_features(Region& region, const FeatureSplitOptions& opti
       if (along_boundary || !in_domain(region, probe)) {
         on_boundary |= along_boundary;
         ++stats.pieces_dropped;
-        if (!along_boundary && inside_an_outer_ring(region, probe)) {  // inside a hole
+        const bool in_hole = !along_boundary && inside_an_outer_ring(region, probe);
+        if (in_hole) {
           if (!options.clip_holes)
             throw InputError(region.source + ": feature " + std::to_string(c.source_feature) + " (curve " + std::to_string(f) +
                              ") crosses a hole at " + pt(piece.front()) + " (--repair clips it)");
           ++stats.pieces_in_holes;
         }
+        stats.dropped.push_back(region.source + ": feature " + std::to_string(c.source_feature) + " (curve " +
+                                std::to_string(f) + "): a piece from " + pt(piece.front()) + " to " + pt(piece.back()) +
+                                (along_boundary ? " lies along the boundary and is meshed as boundary"
+                                 : in_hole      ? " lies in a hole and is left out"
+                                                : " lies outside the domain and is left out"));
         continue;
       }
-      out.push_back({std::move(piece), closed_kept, c.source_feature});
+      out.push_back({std::move(piece), closed_kept, c.source_feature, c.name, c.kind});
       kept = true;
     }
     if (!kept && !on_boundary)  // a curve lying along the boundary is already in the mesh

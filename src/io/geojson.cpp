@@ -50,11 +50,22 @@ std::vector<Vec2> ring(const json& arr, const Context& ctx, std::size_t ring_ind
   return pts;
 }
 
-void add_polygon(Region& region, const json& rings, const Context& ctx) {
+void add_polygon(Region& region, const json& rings, const Context& ctx, const std::string& name) {
   if (!rings.is_array() || rings.empty()) ctx.fail("a Polygon needs at least one ring");
   const int part = region.num_parts++;
   for (std::size_t r = 0; r < rings.size(); ++r)
-    region.rings.push_back({ring(rings[r], ctx, r), part, r > 0, static_cast<int>(ctx.feature)});
+    region.rings.push_back({ring(rings[r], ctx, r), part, r > 0, static_cast<int>(ctx.feature), name});
+}
+
+// A string property (numbers are spelled out, so `"name": 3` names the group "3"); empty when absent.
+std::string text_property(const json& feature, const char* key) {
+  if (!feature.contains("properties") || !feature["properties"].is_object()) return {};
+  const json& props = feature["properties"];
+  if (!props.contains(key)) return {};
+  const json& v = props[key];
+  if (v.is_string()) return v.get<std::string>();
+  if (v.is_number()) return v.dump();
+  return {};
 }
 
 std::string crs_of(const json& doc) {
@@ -129,23 +140,37 @@ Region parse_geojson(std::string_view text, const std::string& source_name) {
       role = feature["properties"]["role"].get<std::string>();
     if (role.empty()) role = (type == "Polygon" || type == "MultiPolygon") ? "domain" : "feature";
     const int src = static_cast<int>(ctx.feature);
+    const std::string name = text_property(feature, "name"), kind = text_property(feature, "kind");
     if (role == "domain") {
-      if (type == "Polygon") add_polygon(region, coords, ctx);
-      else if (type == "MultiPolygon" && coords.is_array()) for (const json& poly : coords) add_polygon(region, poly, ctx);
+      if (type == "Polygon") add_polygon(region, coords, ctx, name);
+      else if (type == "MultiPolygon" && coords.is_array()) for (const json& poly : coords) add_polygon(region, poly, ctx, name);
       else ctx.fail("a domain must be a Polygon or MultiPolygon, got " + type);
     } else if (role == "feature") {
-      if (type == "LineString") region.features.push_back({positions(coords, ctx), false, src});
+      auto curve = [&](std::vector<Vec2> pts, bool closed) { region.features.push_back({std::move(pts), closed, src, name, kind}); };
+      if (type == "LineString") curve(positions(coords, ctx), false);
       else if (type == "MultiLineString" && coords.is_array())
-        for (const json& line : coords) region.features.push_back({positions(line, ctx), false, src});
+        for (const json& line : coords) curve(positions(line, ctx), false);
       else if (type == "Polygon" && coords.is_array() && !coords.empty())
-        region.features.push_back({ring(coords[0], ctx, 0), true, src});
+        curve(ring(coords[0], ctx, 0), true);
       else if (type == "LinearRing")  // not in RFC 7946, but written by some tools for closed curves
-        region.features.push_back({ring(coords, ctx, 0), true, src});
+        curve(ring(coords, ctx, 0), true);
       else if (type == "Point") region.feature_points.push_back(position(coords, ctx));
       else if (type == "MultiPoint") for (Vec2 p : positions(coords, ctx)) region.feature_points.push_back(p);
       else ctx.fail("a feature must be a LineString, MultiLineString, Polygon, LinearRing, Point or MultiPoint, got " + type);
+    } else if (role == "boundary") {
+      auto segment = [&](std::vector<Vec2> pts) {
+        BoundarySegment b;
+        b.name = name;
+        b.kind = kind;
+        b.source_feature = src;
+        b.line = std::move(pts);
+        region.boundary_segments.push_back(std::move(b));
+      };
+      if (type == "LineString") segment(positions(coords, ctx));
+      else if (type == "MultiLineString" && coords.is_array()) for (const json& line : coords) segment(positions(line, ctx));
+      else ctx.fail("a boundary segment must be a LineString or MultiLineString lying on the domain boundary, got " + type);
     } else {
-      ctx.fail("unknown role \"" + role + "\" (expected \"domain\" or \"feature\")");
+      ctx.fail("unknown role \"" + role + "\" (expected \"domain\", \"feature\" or \"boundary\")");
     }
     ++ctx.feature;
   }

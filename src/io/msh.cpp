@@ -102,7 +102,8 @@ struct Builder {
     else if (type == 2) mesh.triangles.push_back({at(nodes[0], c), at(nodes[1], c), at(nodes[2], c)});
     else if (type == 15) {
       auto it = physical_names[0].find(physical);
-      if (it != physical_names[0].end() && it->second.rfind("feature", 0) == 0) feature_points[it->second].push_back(at(nodes[0], c));
+      // Every named point group is a curve's nodes (polysquare writes named features that way).
+      if (it != physical_names[0].end()) feature_points[it->second].push_back(at(nodes[0], c));
     } else if (type == 1) {
       auto it = physical_names[1].find(physical);
       if (it == physical_names[1].end()) return;
@@ -111,6 +112,34 @@ struct Builder {
       const int id = curve_id(n);
       if (n.rfind("boundary", 0) == 0) { mesh.boundary_edges.push_back(e); mesh.boundary_edge_ring.push_back(id); }
       else if (n.rfind("feature", 0) == 0) { mesh.feature_edges.push_back(e); mesh.feature_edge_curve.push_back(id); }
+      else other_lines[n].push_back(e);
+    }
+  }
+  // Lines of other names (named boundary segments, named features): boundary edges where one cell has the
+  // edge, feature edges where two do; each name its own ring or curve index after those read.
+  std::map<std::string, std::vector<std::array<std::int32_t, 2>>> other_lines;
+  void classify_other_lines() {
+    if (other_lines.empty()) return;
+    std::unordered_map<std::uint64_t, int> cells;
+    auto key = [](std::int32_t a, std::int32_t b) {
+      return static_cast<std::uint64_t>(std::min(a, b)) << 32 | static_cast<std::uint64_t>(std::max(a, b));
+    };
+    for (const auto& q : mesh.quads)
+      for (int k = 0; k < 4; ++k) cells[key(q[k], q[(k + 1) % 4])]++;
+    for (const auto& t : mesh.triangles)
+      for (int k = 0; k < 3; ++k) cells[key(t[k], t[(k + 1) % 3])]++;
+    int ring = 0, curve = 0;
+    for (auto r : mesh.boundary_edge_ring) ring = std::max(ring, r + 1);
+    for (auto f : mesh.feature_edge_curve) curve = std::max(curve, f + 1);
+    for (const auto& [name, edges] : other_lines) {
+      bool any_boundary = false, any_feature = false;
+      for (const auto& e : edges) {
+        const auto it = cells.find(key(e[0], e[1]));
+        if (it != cells.end() && it->second == 1) { mesh.boundary_edges.push_back(e); mesh.boundary_edge_ring.push_back(ring); any_boundary = true; }
+        else { mesh.feature_edges.push_back(e); mesh.feature_edge_curve.push_back(curve); any_feature = true; }
+      }
+      ring += any_boundary;
+      curve += any_feature;
     }
   }
   // A curve written as a point group becomes the cell edges joining two of its nodes (a group that also has
@@ -322,6 +351,7 @@ QuadMesh parse_msh(const std::string& data, const std::string& name) {
   else if (version.rfind("4.", 0) == 0) read_v4(c, b, binary);
   else c.fail("unsupported MSH version " + version);
   if (b.mesh.quads.empty() && b.mesh.triangles.empty()) throw InputError(name + ": the mesh has no quads or triangles");
+  b.classify_other_lines();
   b.feature_edges_from_points();
   return std::move(b.mesh);
 }
@@ -340,32 +370,32 @@ struct Group {
   Box2 box;
 };
 
-std::vector<Group> msh_groups(const QuadMesh& mesh, MshFeatures features) {
-  std::map<int, std::vector<std::array<std::int32_t, 2>>> rings, curves;
-  for (std::size_t e = 0; e < mesh.boundary_edges.size(); ++e) rings[mesh.boundary_edge_ring[e]].push_back(mesh.boundary_edges[e]);
-  if (features != MshFeatures::none)
-    for (std::size_t e = 0; e < mesh.feature_edges.size(); ++e) curves[mesh.feature_edge_curve[e]].push_back(mesh.feature_edges[e]);
+std::vector<Group> msh_groups(const QuadMesh& mesh, const MeshGroups& named, MshFeatures features) {
   std::vector<Group> groups;
   int entities[2] = {0, 0};
-  // Physical tags do not depend on the feature mode, so boundary ids stay the same in every file.
-  auto add = [&](const std::string& name, int dim, std::vector<std::array<std::int32_t, 2>> edges) {
+  // Physical tags come from the named groups and do not depend on the feature mode, so boundary ids stay the
+  // same in every file. Empty groups (a ring wholly covered by segments) are left out, their tags unused.
+  auto add = [&](const CurveGroup& c, int dim) {
+    if (c.edges.empty()) return;
     Group g;
     g.dim = dim;
     g.entity = ++entities[dim];
-    g.physical = static_cast<int>(groups.size()) + 2;
-    g.name = name;
-    for (const auto& e : edges) g.box.add(mesh.nodes[e[0]]), g.box.add(mesh.nodes[e[1]]);
-    if (dim == 1) g.lines = std::move(edges);
+    g.physical = c.tag;
+    g.name = c.name;
+    for (const auto& e : c.edges) g.box.add(mesh.nodes[e[0]]), g.box.add(mesh.nodes[e[1]]);
+    if (dim == 1) g.lines = c.edges;
     else {
       std::unordered_map<std::int32_t, bool> seen;
-      for (const auto& e : edges)
+      for (const auto& e : c.edges)
         for (auto v : e)
           if (seen.emplace(v, true).second) g.points.push_back(v);
     }
     groups.push_back(std::move(g));
   };
-  for (auto& [r, edges] : rings) add("boundary_ring_" + std::to_string(r), 1, std::move(edges));
-  for (auto& [c, edges] : curves) add("feature_" + std::to_string(c), features == MshFeatures::lines ? 1 : 0, std::move(edges));
+  for (const CurveGroup& c : named.rings) add(c, 1);
+  if (features != MshFeatures::none)
+    for (const CurveGroup& c : named.features) add(c, features == MshFeatures::lines ? 1 : 0);
+  for (const CurveGroup& c : named.segments) add(c, 1);
   return groups;
 }
 
@@ -380,20 +410,28 @@ struct MshStream {
   void end_binary() { if (bin) os << "\n"; }
 };
 
-void write_physical_names(std::ostream& os, const std::vector<Group>& groups) {
-  os << "$PhysicalNames\n" << groups.size() + 1 << "\n2 1 \"domain\"\n";
-  for (const Group& g : groups) os << g.dim << " " << g.physical << " \"" << g.name << "\"\n";
+// Physical names are quoted strings on one line: quotes and line breaks in an input name become '_'.
+std::string physical_name(std::string name) {
+  for (char& ch : name)
+    if (ch == '"' || ch == '\n' || ch == '\r') ch = '_';
+  return name;
+}
+
+void write_physical_names(std::ostream& os, const std::vector<SurfaceGroup>& surfaces, const std::vector<Group>& groups) {
+  os << "$PhysicalNames\n" << groups.size() + surfaces.size() << "\n";
+  for (const SurfaceGroup& s : surfaces) os << "2 " << s.tag << " \"" << physical_name(s.name) << "\"\n";
+  for (const Group& g : groups) os << g.dim << " " << g.physical << " \"" << physical_name(g.name) << "\"\n";
   os << "$EndPhysicalNames\n";
 }
 
-void write_v41(MshStream& w, const QuadMesh& mesh, const std::vector<Group>& groups) {
+void write_v41(MshStream& w, const QuadMesh& mesh, const std::vector<SurfaceGroup>& surfaces, const std::vector<Group>& groups) {
   std::ostream& os = w.os;
   Box2 all;
   for (Vec2 p : mesh.nodes) all.add(p);
   std::size_t count[2] = {0, 0};
   for (const Group& g : groups) count[g.dim]++;
   os << "$Entities\n";
-  w.size(count[0]); w.sep(" "); w.size(count[1]); w.sep(" "); w.size(1); w.sep(" "); w.size(0); w.sep("\n");
+  w.size(count[0]); w.sep(" "); w.size(count[1]); w.sep(" "); w.size(surfaces.size()); w.sep(" "); w.size(0); w.sep("\n");
   auto bbox = [&](const Box2& b) {
     for (double v : {b.lo.x, b.lo.y, 0.0, b.hi.x, b.hi.y, 0.0}) { w.f64(v); w.sep(" "); }
   };
@@ -411,7 +449,14 @@ void write_v41(MshStream& w, const QuadMesh& mesh, const std::vector<Group>& gro
       if (dim == 1) { w.size(0); w.sep(" "); }
       w.sep("\n");
     }
-  w.i32(1); w.sep(" "); bbox(all); w.size(1); w.sep(" "); w.i32(1); w.sep(" "); w.size(0); w.sep("\n");
+  for (std::size_t k = 0; k < surfaces.size(); ++k) {  // surface entity k + 1 holds surface group k
+    Box2 box;
+    for (auto q : surfaces[k].quads)
+      for (auto v : mesh.quads[static_cast<std::size_t>(q)]) box.add(mesh.nodes[static_cast<std::size_t>(v)]);
+    if (surfaces.size() == 1) box = all;
+    w.i32(static_cast<int>(k + 1)); w.sep(" "); bbox(box); w.size(1); w.sep(" "); w.i32(surfaces[k].tag); w.sep(" ");
+    w.size(0); w.sep("\n");
+  }
   w.end_binary();
   os << "$EndEntities\n$Nodes\n";
   const std::uint64_t nn = mesh.nodes.size();
@@ -423,7 +468,7 @@ void write_v41(MshStream& w, const QuadMesh& mesh, const std::vector<Group>& gro
   os << "$EndNodes\n$Elements\n";
   std::uint64_t nel = mesh.quads.size();
   for (const Group& g : groups) nel += g.lines.size() + g.points.size();
-  w.size(groups.size() + 1); w.sep(" "); w.size(nel); w.sep(" "); w.size(1); w.sep(" "); w.size(nel); w.sep("\n");
+  w.size(groups.size() + surfaces.size()); w.sep(" "); w.size(nel); w.sep(" "); w.size(1); w.sep(" "); w.size(nel); w.sep("\n");
   std::uint64_t tag = 1;
   auto node = [&](std::int32_t v) { w.sep(" "); w.size(static_cast<std::uint64_t>(v) + 1); };
   for (const Group& g : groups) {
@@ -432,11 +477,13 @@ void write_v41(MshStream& w, const QuadMesh& mesh, const std::vector<Group>& gro
     for (const auto& e : g.lines) { w.size(tag++); node(e[0]); node(e[1]); w.sep("\n"); }
     for (auto v : g.points) { w.size(tag++); node(v); w.sep("\n"); }
   }
-  w.i32(2); w.sep(" "); w.i32(1); w.sep(" "); w.i32(3); w.sep(" "); w.size(mesh.quads.size()); w.sep("\n");
-  for (const auto& q : mesh.quads) {
-    w.size(tag++);
-    for (auto v : q) node(v);
-    w.sep("\n");
+  for (std::size_t k = 0; k < surfaces.size(); ++k) {
+    w.i32(2); w.sep(" "); w.i32(static_cast<int>(k + 1)); w.sep(" "); w.i32(3); w.sep(" "); w.size(surfaces[k].quads.size()); w.sep("\n");
+    for (auto q : surfaces[k].quads) {
+      w.size(tag++);
+      for (auto v : mesh.quads[static_cast<std::size_t>(q)]) node(v);
+      w.sep("\n");
+    }
   }
   w.end_binary();
   os << "$EndElements\n";
@@ -444,7 +491,7 @@ void write_v41(MshStream& w, const QuadMesh& mesh, const std::vector<Group>& gro
 
 // MSH 2.2: no entities; every element carries its physical and elementary tags. Binary element blocks start with
 // (type, count, number of tags), and every value is a 32-bit int.
-void write_v22(MshStream& w, const QuadMesh& mesh, const std::vector<Group>& groups) {
+void write_v22(MshStream& w, const QuadMesh& mesh, const std::vector<SurfaceGroup>& surfaces, const std::vector<Group>& groups) {
   std::ostream& os = w.os;
   constexpr auto most = static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max() / 2);
   if (mesh.nodes.size() >= most || mesh.quads.size() >= most)
@@ -473,7 +520,13 @@ void write_v22(MshStream& w, const QuadMesh& mesh, const std::vector<Group>& gro
     block(1, g.lines.size(), g.physical, g.entity, [&](auto&& put) { for (const auto& e : g.lines) put({e[0], e[1]}); });
     block(15, g.points.size(), g.physical, g.entity, [&](auto&& put) { for (auto v : g.points) put({v}); });
   }
-  block(3, mesh.quads.size(), 1, 1, [&](auto&& put) { for (const auto& q : mesh.quads) put({q[0], q[1], q[2], q[3]}); });
+  for (std::size_t k = 0; k < surfaces.size(); ++k)
+    block(3, surfaces[k].quads.size(), surfaces[k].tag, static_cast<int>(k + 1), [&](auto&& put) {
+      for (auto qi : surfaces[k].quads) {
+        const auto& q = mesh.quads[static_cast<std::size_t>(qi)];
+        put({q[0], q[1], q[2], q[3]});
+      }
+    });
   w.end_binary();
   os << "$EndElements\n";
 }
@@ -481,7 +534,8 @@ void write_v22(MshStream& w, const QuadMesh& mesh, const std::vector<Group>& gro
 }  // namespace
 
 void write_msh(const std::filesystem::path& path, const QuadMesh& mesh, const MeshWriteOptions& options) {
-  const std::vector<Group> groups = msh_groups(mesh, options.msh_features);
+  const MeshGroups named = options.groups.empty() ? mesh_groups(mesh) : options.groups;
+  const std::vector<Group> groups = msh_groups(mesh, named, options.msh_features);
   const bool v41 = options.msh_version == MshVersion::v4_1;
   write_file_atomically(path, [&](std::ostream& os) {
     os.precision(17);
@@ -489,9 +543,9 @@ void write_msh(const std::filesystem::path& path, const QuadMesh& mesh, const Me
     os << "$MeshFormat\n" << (v41 ? "4.1 " : "2.2 ") << (w.bin ? 1 : 0) << " 8\n";
     if (w.bin) { w.i32(1); os << "\n"; }
     os << "$EndMeshFormat\n";
-    write_physical_names(os, groups);
-    if (v41) write_v41(w, mesh, groups);
-    else write_v22(w, mesh, groups);
+    write_physical_names(os, named.surfaces, groups);
+    if (v41) write_v41(w, mesh, named.surfaces, groups);
+    else write_v22(w, mesh, named.surfaces, groups);
   }, options.binary);
 }
 

@@ -33,7 +33,7 @@ void check_depth(const fs::path& path, const QuadMesh& mesh, const MeshWriteOpti
 
 // The gr3 body with node coordinates `xy` (projected or lon/lat).
 void write_gr3_text(std::ostream& os, const QuadMesh& mesh, const std::vector<Vec2>& xy, const std::string& header,
-                    const MeshWriteOptions& options, const std::vector<BoundaryLoop>& loops) {
+                    const MeshWriteOptions& options, const MeshGroups& groups) {
   os.precision(17);
   os << header << "\n" << mesh.quads.size() << " " << mesh.nodes.size() << "\n";
   for (std::size_t i = 0; i < xy.size(); ++i)
@@ -43,17 +43,32 @@ void write_gr3_text(std::ostream& os, const QuadMesh& mesh, const std::vector<Ve
     for (auto v : mesh.quads[q]) os << " " << v + 1;
     os << "\n";
   }
-  // No named open segments yet: every loop is a land boundary.
-  os << "0 = Number of open boundaries\n0 = Total number of open boundary nodes\n";
-  std::size_t listed = 0;
-  for (const BoundaryLoop& l : loops) listed += l.nodes.size() + (l.inner ? 0 : 1);
-  os << loops.size() << " = Number of land boundaries\n" << listed << " = Total number of land boundary nodes\n";
-  for (std::size_t k = 0; k < loops.size(); ++k) {
-    const BoundaryLoop& l = loops[k];
-    os << l.nodes.size() + (l.inner ? 0 : 1) << " " << (l.inner ? 1 : 0) << " = Number of nodes for land boundary "
-       << k + 1 << (l.inner ? " (island, ring " : " (ring ") << l.ring << ")\n";
-    for (auto v : l.nodes) os << v + 1 << "\n";
-    if (!l.inner) os << l.nodes.front() + 1 << "\n";
+  // Open boundaries: the chains of segments of kind "open". Land boundaries: every other boundary chain (named
+  // segments of another kind, and the rest of each ring); the rim of a hole without segments is an island.
+  struct Listed { const CurveGroup* group; const std::vector<std::int32_t>* nodes; };
+  std::vector<Listed> open, land;
+  for (const CurveGroup& g : groups.segments)
+    for (const auto& chain : g.chains) (g.kind == "open" ? open : land).push_back({&g, &chain});
+  for (const CurveGroup& g : groups.rings)
+    for (const auto& chain : g.chains) land.push_back({&g, &chain});
+  // Segments in ring order along the boundary, as SCHISM users list them.
+  std::stable_sort(land.begin(), land.end(), [](const Listed& a, const Listed& b) { return a.group->ring < b.group->ring; });
+  // An island closes on itself: its first node is not repeated.
+  auto count = [](const Listed& l) { return l.nodes->size() - (l.group->island ? 1 : 0); };
+  std::size_t open_nodes = 0, land_nodes = 0;
+  for (const Listed& l : open) open_nodes += count(l);
+  for (const Listed& l : land) land_nodes += count(l);
+  os << open.size() << " = Number of open boundaries\n" << open_nodes << " = Total number of open boundary nodes\n";
+  for (std::size_t k = 0; k < open.size(); ++k) {
+    os << count(open[k]) << " = Number of nodes for open boundary " << k + 1 << " (" << open[k].group->name << ")\n";
+    for (std::size_t i = 0; i < count(open[k]); ++i) os << (*open[k].nodes)[i] + 1 << "\n";
+  }
+  os << land.size() << " = Number of land boundaries\n" << land_nodes << " = Total number of land boundary nodes\n";
+  for (std::size_t k = 0; k < land.size(); ++k) {
+    const Listed& l = land[k];
+    os << count(l) << " " << (l.group->island ? 1 : 0) << " = Number of nodes for land boundary " << k + 1 << " ("
+       << (l.group->island ? "island, " : "") << l.group->name << ", ring " << l.group->ring << ")\n";
+    for (std::size_t i = 0; i < count(l); ++i) os << (*l.nodes)[i] + 1 << "\n";
   }
 }
 
@@ -106,29 +121,35 @@ std::vector<BoundaryLoop> boundary_loops(const QuadMesh& mesh) {
   return loops;
 }
 
+// The groups to write: the caller's, else the generated ones; every boundary edge must be in a chain.
+MeshGroups groups_for(const QuadMesh& mesh, const MeshWriteOptions& options) {
+  boundary_loops(mesh);  // throws when the boundary is not a set of loops
+  return options.groups.empty() ? mesh_groups(mesh) : options.groups;
+}
+
 void write_gr3(const fs::path& path, const QuadMesh& mesh, const MeshWriteOptions& options) {
   check_depth(path, mesh, options);
-  const std::vector<BoundaryLoop> loops = boundary_loops(mesh);
+  const MeshGroups groups = groups_for(mesh, options);
   const crs::CrsInfo input = crs::crs_info(options.input_crs);
   // The lon/lat companion first: a CRS that cannot be transformed fails before anything is written.
   std::vector<Vec2> lonlat;
   if (input.known && input.geographic) lonlat = crs::to_lonlat(mesh.nodes, mesh.crs);
   const std::string crs_text = mesh.crs.empty() ? "no CRS" : mesh.crs;
   write_file_atomically(path, [&](std::ostream& os) {
-    write_gr3_text(os, mesh, mesh.nodes, "polysquare " + crs_text, options, loops);
+    write_gr3_text(os, mesh, mesh.nodes, "polysquare " + crs_text, options, groups);
   }, false);
   if (!lonlat.empty()) {
     fs::path ll = path;
     ll.replace_extension(".ll");
     write_file_atomically(ll, [&](std::ostream& os) {
-      write_gr3_text(os, mesh, lonlat, "polysquare EPSG:4326 (lon/lat of " + crs_text + ")", options, loops);
+      write_gr3_text(os, mesh, lonlat, "polysquare EPSG:4326 (lon/lat of " + crs_text + ")", options, groups);
     }, false);
   }
 }
 
 void write_2dm(const fs::path& path, const QuadMesh& mesh, const MeshWriteOptions& options) {
   check_depth(path, mesh, options);
-  const std::vector<BoundaryLoop> loops = boundary_loops(mesh);
+  const MeshGroups groups = groups_for(mesh, options);
   write_file_atomically(path, [&](std::ostream& os) {
     os.precision(17);
     os << "MESH2D\nMESHNAME \"polysquare\"\n";
@@ -139,9 +160,15 @@ void write_2dm(const fs::path& path, const QuadMesh& mesh, const MeshWriteOption
     }
     for (std::size_t i = 0; i < mesh.nodes.size(); ++i)
       os << "ND " << i + 1 << " " << mesh.nodes[i].x << " " << mesh.nodes[i].y << " " << depth_at(options, i) << "\n";
-    for (const BoundaryLoop& l : loops) {
-      std::vector<std::int32_t> ids(l.nodes.begin(), l.nodes.end());
-      ids.push_back(l.nodes.front());
+    // One nodestring per boundary chain: the rest of each ring (a ring without segments closed, its first node
+    // repeated), then every named segment, in the order of the groups' tags.
+    std::vector<const std::vector<std::int32_t>*> strings;
+    for (const CurveGroup& g : groups.rings)
+      for (const auto& chain : g.chains) strings.push_back(&chain);
+    for (const CurveGroup& g : groups.segments)
+      for (const auto& chain : g.chains) strings.push_back(&chain);
+    for (const auto* chain : strings) {
+      const std::vector<std::int32_t>& ids = *chain;
       for (std::size_t k = 0; k < ids.size(); ++k) {
         if (k % 10 == 0) os << (k ? "\n" : "") << "NS";
         os << " " << (k + 1 == ids.size() ? -(ids[k] + 1) : ids[k] + 1);
@@ -152,7 +179,7 @@ void write_2dm(const fs::path& path, const QuadMesh& mesh, const MeshWriteOption
 }
 
 const std::vector<std::string>& output_extensions() {
-  static const std::vector<std::string> known{".msh", ".vtu", ".gr3", ".nc", ".2dm"};
+  static const std::vector<std::string> known{".msh", ".vtu", ".gr3", ".nc", ".2dm", ".exo"};
   return known;
 }
 

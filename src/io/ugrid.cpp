@@ -2,12 +2,14 @@
 #include <netcdf.h>
 
 #include <array>
+#include <cctype>
 #include <initializer_list>
 #include <utility>
 #include <string>
 #include <vector>
 
 #include "crs_info.h"
+#include "nc_file.h"
 #include "polysquare/core/error.h"
 #include "polysquare/core/version.h"
 #include "polysquare/io/atomic_file.h"
@@ -15,59 +17,8 @@
 #include "polysquare/quality/quality.h"
 
 namespace polysquare {
+namespace fs = std::filesystem;
 namespace {
-
-// One open netCDF file; every call is checked, the file is closed on every path.
-class NcFile {
- public:
-  NcFile(const std::filesystem::path& tmp, std::string name) : name_(std::move(name)) {
-    check(nc_create(tmp.c_str(), NC_CLOBBER | NC_64BIT_OFFSET, &id_), "create");
-    open_ = true;
-  }
-  ~NcFile() {
-    if (open_) nc_close(id_);
-  }
-  NcFile(const NcFile&) = delete;
-  NcFile& operator=(const NcFile&) = delete;
-
-  void check(int status, const std::string& what) const {
-    if (status != NC_NOERR) throw InputError(name_ + ": netCDF " + what + ": " + nc_strerror(status));
-  }
-  int dim(const std::string& n, std::size_t len) {
-    int d = 0;
-    check(nc_def_dim(id_, n.c_str(), len, &d), "dimension " + n);
-    return d;
-  }
-  int var(const std::string& n, nc_type type, std::vector<int> dims) {
-    int v = 0;
-    check(nc_def_var(id_, n.c_str(), type, static_cast<int>(dims.size()), dims.data(), &v), "variable " + n);
-    return v;
-  }
-  void text(int v, const std::string& att, const std::string& value) {
-    check(nc_put_att_text(id_, v, att.c_str(), value.size(), value.c_str()), "attribute " + att);
-  }
-  void texts(int v, std::initializer_list<std::pair<const char*, std::string>> atts) {
-    for (const auto& [att, value] : atts) text(v, att, value);
-  }
-  void integer(int v, const std::string& att, int value) {
-    check(nc_put_att_int(id_, v, att.c_str(), NC_INT, 1, &value), "attribute " + att);
-  }
-  void real(int v, const std::string& att, double value) {
-    check(nc_put_att_double(id_, v, att.c_str(), NC_DOUBLE, 1, &value), "attribute " + att);
-  }
-  void end_definitions() { check(nc_enddef(id_), "enddef"); }
-  void put(int v, const std::vector<double>& data) { check(nc_put_var_double(id_, v, data.data()), "write"); }
-  void put(int v, const std::vector<int>& data) { check(nc_put_var_int(id_, v, data.data()), "write"); }
-  void close() {
-    open_ = false;
-    check(nc_close(id_), "close");
-  }
-
- private:
-  std::string name_;
-  int id_ = -1;
-  bool open_ = false;
-};
 
 constexpr int kFillInt = -999;  // D-Flow FM's fill value for connectivity
 constexpr double kFillDouble = -999.0;
@@ -201,6 +152,31 @@ void write_ugrid(const std::filesystem::path& path, const QuadMesh& mesh, const 
     f.put(face_nodes, fn);
     f.close();
   });
+  // D-Flow FM takes boundary conditions on polylines (.pli, Tekal blocks: name, "rows 2", then x y per row)
+  // named in its external forcing file; each open segment gets one along its boundary nodes.
+  const MeshGroups groups = options.groups.empty() ? mesh_groups(mesh) : options.groups;
+  for (const CurveGroup& g : groups.segments) {
+    if (g.kind != "open") continue;
+    write_file_atomically(pli_path(path, g.name), [&](std::ostream& os) {
+      os.precision(17);
+      for (std::size_t k = 0; k < g.chains.size(); ++k) {
+        os << g.name << (g.chains.size() > 1 ? "_" + std::to_string(k + 1) : std::string()) << "\n"
+           << g.chains[k].size() << " 2\n";
+        for (auto v : g.chains[k]) os << mesh.nodes[static_cast<std::size_t>(v)].x << " " << mesh.nodes[static_cast<std::size_t>(v)].y << "\n";
+      }
+    }, false);
+  }
+}
+
+std::string file_safe(const std::string& name) {
+  std::string out;
+  for (char ch : name)
+    out += (std::isalnum(static_cast<unsigned char>(ch)) || ch == '-' || ch == '_') ? ch : '_';
+  return out.empty() ? std::string("_") : out;
+}
+
+fs::path pli_path(const fs::path& net_file, const std::string& name) {
+  return net_file.parent_path() / (net_file.stem().string() + "_" + file_safe(name) + ".pli");
 }
 
 }  // namespace polysquare

@@ -133,7 +133,8 @@ void write_mesh(const std::filesystem::path& path, const QuadMesh& mesh, const M
   if (ext == ".gr3") return write_gr3(path, mesh, options);
   if (ext == ".nc") return write_ugrid(path, mesh, options);
   if (ext == ".2dm") return write_2dm(path, mesh, options);
-  throw InputError(path.string() + ": unsupported output format '" + ext + "' (supported: .msh, .vtu, .gr3, .nc, .2dm)");
+  if (ext == ".exo") return write_exodus(path, mesh, options);
+  throw InputError(path.string() + ": unsupported output format '" + ext + "' (supported: .msh, .vtu, .gr3, .nc, .2dm, .exo)");
 }
 
 void write_svg(const std::filesystem::path& path, const QuadMesh& mesh, const Region* region, const SvgOptions& options) {
@@ -166,6 +167,15 @@ void write_svg(const std::filesystem::path& path, const QuadMesh& mesh, const Re
     };
     lines(mesh.boundary_edges, "black", 1.5);
     lines(mesh.feature_edges, "blue", 1.5);
+    // Named boundary segments over the boundary: open ones magenta, others orange.
+    if (region)
+      for (const BoundarySegment& b : region->boundary_segments) {
+        os << "<polyline fill=\"none\" stroke=\"" << (b.kind == "open" ? "magenta" : "orange") << "\" stroke-width=\"3\" points=\"";
+        for (Vec2 p : b.line) os << X(p) << "," << Y(p) << " ";
+        std::string title;
+        for (char ch : b.name) title += ch == '<' ? "&lt;" : ch == '>' ? "&gt;" : ch == '&' ? "&amp;" : std::string(1, ch);
+        os << "\"><title>" << title << "</title></polyline>\n";
+      }
     os << "<text x=\"10\" y=\"" << height - 15 << "\" font-family=\"sans-serif\" font-size=\"14\">" << mesh.quads.size()
        << " quads, scaled Jacobian min " << sj_min << " (red &lt;= 0.3, green = 1)</text>\n</svg>\n";
   }, false);

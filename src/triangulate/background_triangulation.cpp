@@ -8,6 +8,7 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Triangulation_vertex_base_with_info_2.h>
 
+#include <algorithm>
 #include <deque>
 #include <unordered_map>
 #include <string>
@@ -149,8 +150,15 @@ std::vector<RegionPart> split_into_parts(const Region& region) {
                        " does not lie inside the domain");
     parts[static_cast<std::size_t>(k)].features.push_back(static_cast<int>(f));
   }
+  // A point on a ring (a boundary segment's end point is a ring vertex) belongs to that ring's part; the
+  // even-odd test is undecided there.
+  auto ring_owner = [&](Vec2 p) {
+    for (const Ring& ring : region.rings)
+      if (std::find(ring.points.begin(), ring.points.end(), p) != ring.points.end()) return ring.part;
+    return owner(p);
+  };
   for (std::size_t f = 0; f < region.feature_points.size(); ++f) {
-    const int k = owner(region.feature_points[f]);
+    const int k = ring_owner(region.feature_points[f]);
     if (k >= 0) parts[static_cast<std::size_t>(k)].feature_points.push_back(static_cast<int>(f));
   }
   return parts;

@@ -1,7 +1,7 @@
 // Solver files (SCHISM .gr3/.ll, D-Flow FM UGRID .nc, SMS .2dm) read back by readers that are not ours and compared
 // node for node with the mesh; D-Flow FM's finite-volume figures on meshes whose answer follows from geometry.
 //
-// The gr3 and 2dm parsers below follow the formats' documentation (SCHISM manual, "hgrid.gr3": NE NP, nodes
+// The gr3 and 2dm parsers (io/solver_parsers.h) follow the formats' documentation (SCHISM manual, "hgrid.gr3": NE NP, nodes
 // "id x y depth", elements "id i34 n1..n4", then NOPE, NETA, per open segment its count and nodes, NBOU, NVEL, per
 // land segment "count flag" and nodes; SMS 2dm: cards MESH2D, E4Q id n1..n4 mat, ND id x y z, NS node ids with the
 // last one negative), not our writers. UGRID is read by python3-netcdf4.
@@ -28,8 +28,10 @@
 #include "polysquare/io/solver_files.h"
 #include "polysquare/pipeline/mesh_region.h"
 #include "polysquare/quality/quality.h"
+#include "io/solver_parsers.h"
 
 using namespace polysquare;
+using namespace polysquare::test;
 namespace fs = std::filesystem;
 
 namespace {
@@ -95,73 +97,6 @@ double signed_area(const std::vector<Vec2>& p) {
   return 0.5 * s;
 }
 
-// ---- SCHISM hgrid.gr3, parsed from the format's description ----
-struct Gr3 {
-  std::string header;
-  std::vector<Vec2> xy;
-  std::vector<double> depth;
-  std::vector<std::vector<std::int32_t>> elements;  // 1-based as in the file
-  std::vector<std::vector<std::int32_t>> open;
-  std::vector<std::vector<std::int32_t>> land;
-  std::vector<int> land_flag;
-  long neta = -1, nvel = -1;
-};
-// The leading integer of a line ("12 = Number of open boundaries" -> 12).
-long leading(std::istream& in, std::string* rest = nullptr) {
-  std::string line;
-  if (!std::getline(in, line)) throw std::runtime_error("gr3: truncated");
-  std::istringstream ls(line);
-  long v = 0;
-  if (!(ls >> v)) throw std::runtime_error("gr3: expected a number in '" + line + "'");
-  if (rest) std::getline(ls, *rest);
-  return v;
-}
-Gr3 parse_gr3(const fs::path& p) {
-  std::ifstream in(p);
-  Gr3 g;
-  std::getline(in, g.header);
-  long ne = 0, np = 0;
-  in >> ne >> np;
-  for (long i = 0; i < np; ++i) {
-    long id = 0;
-    std::string x, y, d;
-    in >> id >> x >> y >> d;
-    if (id != i + 1) throw std::runtime_error("gr3: node ids out of order");
-    g.xy.push_back({std::strtod(x.c_str(), nullptr), std::strtod(y.c_str(), nullptr)});
-    g.depth.push_back(std::strtod(d.c_str(), nullptr));
-  }
-  for (long i = 0; i < ne; ++i) {
-    long id = 0, i34 = 0;
-    in >> id >> i34;
-    std::vector<std::int32_t> e(static_cast<std::size_t>(i34));
-    for (auto& v : e) in >> v;
-    if (id != i + 1) throw std::runtime_error("gr3: element ids out of order");
-    g.elements.push_back(e);
-  }
-  std::string rest;
-  std::getline(in, rest);  // end of the last element line
-  const long nope = leading(in);
-  g.neta = leading(in);
-  for (long k = 0; k < nope; ++k) {
-    std::vector<std::int32_t> seg(static_cast<std::size_t>(leading(in)));
-    for (auto& v : seg) v = static_cast<std::int32_t>(leading(in));
-    g.open.push_back(seg);
-  }
-  const long nbou = leading(in);
-  g.nvel = leading(in);
-  for (long k = 0; k < nbou; ++k) {
-    const long count = leading(in, &rest);
-    std::istringstream flag(rest);
-    int f = -1;
-    flag >> f;
-    std::vector<std::int32_t> seg(static_cast<std::size_t>(count));
-    for (auto& v : seg) v = static_cast<std::int32_t>(leading(in));
-    g.land.push_back(seg);
-    g.land_flag.push_back(f);
-  }
-  return g;
-}
-
 void expect_gr3_matches(const Gr3& g, const Case& c, double depth, std::size_t holes) {
   const QuadMesh& m = c.mesh;
   ASSERT_EQ(g.xy.size(), m.nodes.size());
@@ -211,52 +146,6 @@ void expect_gr3_matches(const Gr3& g, const Case& c, double depth, std::size_t h
   EXPECT_EQ(islands, holes);
   EXPECT_EQ(g.land.size(), holes + 1);
   EXPECT_EQ(covered, one_quad_edges(m));  // every boundary edge, and nothing else, is on a land boundary
-}
-
-// ---- SMS 2dm ----
-struct Sms {
-  std::map<long, Vec2> nodes;
-  std::map<long, double> z;
-  std::map<long, std::vector<long>> e4q;
-  std::vector<std::vector<long>> strings;
-  bool mesh2d = false;
-};
-Sms parse_2dm(const fs::path& p) {
-  std::ifstream in(p);
-  Sms s;
-  std::string line;
-  std::vector<long> current;
-  while (std::getline(in, line)) {
-    std::istringstream ls(line);
-    std::string card;
-    ls >> card;
-    if (card == "MESH2D") s.mesh2d = true;
-    if (card == "ND") {
-      long id = 0;
-      std::string x, y, z;
-      ls >> id >> x >> y >> z;
-      s.nodes[id] = {std::strtod(x.c_str(), nullptr), std::strtod(y.c_str(), nullptr)};
-      s.z[id] = std::strtod(z.c_str(), nullptr);
-    }
-    if (card == "E4Q") {
-      long id = 0;
-      std::vector<long> n(4);
-      ls >> id >> n[0] >> n[1] >> n[2] >> n[3];
-      s.e4q[id] = n;
-    }
-    if (card == "NS") {
-      long v = 0;
-      while (ls >> v) {
-        current.push_back(std::abs(v));
-        if (v < 0) {
-          s.strings.push_back(current);
-          current.clear();
-        }
-      }
-    }
-  }
-  if (!current.empty()) throw std::runtime_error("2dm: a nodestring without its negative last node");
-  return s;
 }
 
 // Runs a shell command, returns its stdout (and stderr with `with_stderr`).

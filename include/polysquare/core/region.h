@@ -16,6 +16,7 @@ struct Ring {
   int part = 0;             ///< index of the polygon part this ring bounds
   bool hole = false;        ///< true for an inner ring (hole) of its part
   int source_feature = -1;  ///< index of the GeoJSON feature it came from (for error messages)
+  std::string name;         ///< the domain's `name` attribute (empty when none is given)
 };
 
 /// A feature curve the mesh must follow: a chain of mesh edges whose nodes lie on it.
@@ -25,6 +26,22 @@ struct FeatureCurve {
   std::vector<Vec2> points;
   bool closed = false;
   int source_feature = -1;  ///< index of the GeoJSON feature it came from
+  std::string name;         ///< the input's `name` attribute (empty: a name is generated, "feature_<c>")
+  std::string kind;         ///< the input's `kind` attribute (free text; empty when none is given)
+};
+
+/// A named piece of a boundary ring, from a line with role "boundary" (or a --boundary file) lying on it.
+/// The piece runs forward along the ring (its validated orientation: the domain on its left) from `start` to
+/// `end`, both vertices of the ring; start == end means the whole ring. Reading checks that the line lies on the
+/// ring, inserts its end points as ring vertices and adds them to Region::feature_points, so they survive
+/// simplification and are mesh nodes. Segments of one ring do not overlap.
+struct BoundarySegment {
+  int ring = -1;            ///< index into Region::rings
+  Vec2 start, end;          ///< end points (ring vertices), in ring order
+  std::string name;         ///< the input's `name` attribute (empty: "segment_<s>")
+  std::string kind;         ///< "open", "land" or anything else the input says (empty: "land")
+  int source_feature = -1;  ///< index of the input feature it came from
+  std::vector<Vec2> line;   ///< the input line as read (kept for messages); validation sets ring, start and end
 };
 
 /// A region to mesh. Coordinates are planar, in `units` of the CRS named by `crs` (empty when unknown).
@@ -32,6 +49,7 @@ struct Region {
   std::vector<Ring> rings;             ///< outer rings and holes of every part
   std::vector<FeatureCurve> features;  ///< feature curves (open or closed)
   std::vector<Vec2> feature_points;    ///< isolated points that must be mesh nodes
+  std::vector<BoundarySegment> boundary_segments;  ///< named pieces of the rings (open boundaries and others)
   int num_parts = 0;                   ///< number of polygon parts (disconnected pieces)
   std::string crs;                     ///< e.g. "EPSG:32616"; empty for arbitrary planar units
   std::string units;                   ///< e.g. "m"; empty when unknown

@@ -15,12 +15,14 @@ namespace polysquare {
 enum class LayerRole {
   by_geometry,  ///< polygons are the domain, lines and points are features (as for GeoJSON)
   feature,      ///< everything is a feature (polygons become closed feature curves): --features files
+  boundary,     ///< every line is a named boundary segment (BoundarySegment): --boundary files
 };
 
 /// Appends the geometries of the selected layers of `path` to `region` (not validated, not projected).
 /// A layer is selected by options.domain_layer / options.feature_layers (see InputOptions), and its features by
-/// options.where. A string `role` attribute ("domain" or "feature") overrides `default_role`, except in a layer
-/// named by --domain-layer or --feature-layer, whose role is the option's. Curved geometries are linearized,
+/// options.where. A string `role` attribute ("domain", "feature" or "boundary") overrides `default_role`, except in a layer
+/// named by --domain-layer or --feature-layer, whose role is the option's, and in a --boundary file (every line
+/// is a boundary segment). String attributes `name` and `kind` go to the ring, curve or segment read. Curved geometries are linearized,
 /// Z and M are dropped. Every geometry gets source_feature = feature_names.size() at the time it is read, and
 /// feature_names gets "FILE, layer 'L', FID n" for it.
 /// CRS: the first layer with a spatial reference sets region.crs (when still empty, e.g. "EPSG:32616", else

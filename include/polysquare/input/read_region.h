@@ -16,12 +16,16 @@ struct InputOptions {
                         ///< cross a hole (each repair is reported)
   // Files read through GDAL/OGR (every layer of every file, unless selected below).
   std::vector<std::filesystem::path> feature_files;  ///< more datasets whose layers give feature curves (--features)
+  std::vector<std::filesystem::path> boundary_files;  ///< datasets whose lines are named boundary segments (--boundary)
   std::string domain_layer;                 ///< only this layer gives the domain (--domain-layer); empty: roles
   std::vector<std::string> feature_layers;  ///< only these layers give features (--feature-layer); empty: roles
   std::string where;                        ///< OGR SQL attribute filter on every layer read (--where)
   std::string crs;  ///< projected CRS to mesh geographic input in (--crs "EPSG:n"); empty: UTM zone of the centre
   double snap_relative = 1e-9;  ///< end points and feature points this close (times the bounding-box diagonal)
                                 ///< to a vertex or a curve are moved onto it (reported)
+  double boundary_snap_relative = 1e-6;  ///< a boundary segment's points this close (times the bounding-box
+                                         ///< diagonal) to a ring lie on it; its end points this close to a ring
+                                         ///< vertex are that vertex
 };
 
 /// What reading changed or doubts, for the CLI and the report (one sentence each, naming file and coordinate).
@@ -37,9 +41,12 @@ struct InputNotes {
 /// points removed; rings with at least 3 distinct points and non-zero area; no ring crossing or touching itself
 /// or another ring; holes inside their outer ring; parts not inside one another; outer rings counter-clockwise
 /// and holes clockwise; feature curves with 2 distinct points, inside or on the domain, not crossing each other.
+/// Boundary segments are placed on their rings (place_boundary_segments).
 /// Throws InputError naming region.source, the feature index and a coordinate.
-/// With options.repair, each repair made is appended to `repairs` (a sentence naming the feature and coordinate).
-void validate_region(Region& region, const InputOptions& options = {}, std::vector<std::string>* repairs = nullptr);
+/// With options.repair, each repair made is appended to `repairs` (a sentence naming the feature and coordinate);
+/// feature pieces left out (outside the domain, along the boundary) are appended to `warnings`.
+void validate_region(Region& region, const InputOptions& options = {}, std::vector<std::string>* repairs = nullptr,
+                     std::vector<std::string>* warnings = nullptr);
 
 /// Reads `path` and options.feature_files, projects geographic coordinates (project_region), snaps
 /// near-coincident points (snap_near_coincident) and validates the result. GeoJSON (.geojson, .json) is parsed

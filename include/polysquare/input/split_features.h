@@ -2,6 +2,9 @@
 // the domain, so that afterwards curves meet each other and the boundary only at their end points.
 #pragma once
 
+#include <string>
+#include <vector>
+
 #include "polysquare/core/region.h"
 
 namespace polysquare {
@@ -17,6 +20,8 @@ struct FeatureSplitStats {
   std::size_t ring_vertices_added = 0;
   std::size_t pieces_dropped = 0;  ///< pieces outside the domain, inside a hole, or lying along the boundary
   std::size_t pieces_in_holes = 0; ///< of those, pieces inside a hole (clip_holes)
+  std::vector<std::string> dropped;  ///< one sentence per dropped piece (file, feature, coordinate): nothing is
+                                     ///< dropped silently
 };
 
 /// Splits every feature curve at its crossings (the crossing point is computed once and inserted into both

@@ -8,6 +8,7 @@
 
 #include "polysquare/core/quad_mesh.h"
 #include "polysquare/core/region.h"
+#include "polysquare/io/mesh_groups.h"
 
 namespace polysquare {
 
@@ -35,6 +36,9 @@ struct MeshWriteOptions {
   /// The CRS the input was read in (InputNotes::input_crs). When it is geographic, a .gr3 gets its lon/lat
   /// companion `<stem>.ll` (hgrid.gr3 -> hgrid.ll) next to it, nodes projected back from mesh.crs to EPSG:4326.
   std::string input_crs;
+  /// Named groups (mesh_groups(mesh, &region)): physical names and tags in MSH, open/land boundaries in gr3,
+  /// nodestrings in 2dm, side sets in Exodus. Empty: mesh_groups(mesh), the generated names.
+  MeshGroups groups;
 };
 
 /// Reads a mesh by extension (.msh, .vtu). Quads and triangles are kept; lines of physical curves named
@@ -51,9 +55,12 @@ QuadMesh read_vtu(const std::filesystem::path& path);
 QuadMesh parse_msh(const std::string& data, const std::string& name);
 QuadMesh parse_vtu(const std::string& xml, const std::string& name);
 
-/// Writes by extension, atomically. .msh = Gmsh MSH 2.2 or 4.1: the quads are physical surface "domain" (tag 1),
-/// boundary ring r is physical curve "boundary_ring_<r>" of line elements (tags 2, 3, ... in ring order, which
-/// deal.II and MFEM take as boundary ids), feature curve c is "feature_<c>" (the next tags) as options say;
+/// Writes by extension, atomically. .msh = Gmsh MSH 2.2 or 4.1 with the physical groups of options.groups
+/// (mesh_groups.h): the quads are physical surface "domain" (tag 1; one surface per domain name when the input
+/// names them), boundary ring r is physical curve "boundary_ring_<r>" of line elements (tags 2, 3, ... in ring
+/// order, which deal.II and MFEM take as boundary ids; with segments, the part of the ring no segment covers),
+/// feature curve c is "feature_<c>" or its name (the next tags) as options say, then every named boundary
+/// segment a physical curve of line elements; .exo = Exodus II (write_exodus);
 /// .vtu = VTK XML with per-cell quality fields; .gr3 = SCHISM hgrid (write_gr3), .nc = D-Flow FM UGRID-1.0 net
 /// file (write_ugrid), .2dm = SMS (write_2dm), see solver_files.h.
 void write_mesh(const std::filesystem::path& path, const QuadMesh& mesh, const MeshWriteOptions& options = {});
@@ -63,5 +70,10 @@ std::string lower_extension(const std::filesystem::path& path);
 /// write_mesh for one format, whatever the extension.
 void write_msh(const std::filesystem::path& path, const QuadMesh& mesh, const MeshWriteOptions& options = {});
 void write_vtu(const std::filesystem::path& path, const QuadMesh& mesh);
+/// Exodus II (.exo) through netCDF (classic, 64-bit offset; no Debian package has an Exodus library): one element
+/// block of QUAD4 per surface group (eb_names, ids = tags), one side set per boundary group (the rest of each ring
+/// and every named segment; side k joins a quad's local nodes k-1 and k, 1-based), one node set per boundary and
+/// feature group (ns_names, ids = tags); coordinates coordx/coordy. Written atomically.
+void write_exodus(const std::filesystem::path& path, const QuadMesh& mesh, const MeshWriteOptions& options = {});
 
 }  // namespace polysquare

@@ -37,12 +37,21 @@ std::vector<BoundaryLoop> boundary_loops(const QuadMesh& mesh);
 /// transformed.
 void write_gr3(const std::filesystem::path& path, const QuadMesh& mesh, const MeshWriteOptions& options = {});
 
+/// `name` with every character other than letters, digits, '-' and '_' replaced by '_' (for file names).
+std::string file_safe(const std::string& name);
+
+/// The boundary polyline write_ugrid writes beside `net_file` for the open segment group `name`:
+/// `<stem>_<file_safe(name)>.pli` (mesh_net.nc, "ocean" -> mesh_net_ocean.pli).
+std::filesystem::path pli_path(const std::filesystem::path& net_file, const std::string& name);
+
 /// D-Flow FM UGRID-1.0 net file (netCDF classic, 64-bit offset), as Deltares' tools write it: topology variable
 /// mesh2d (cf_role mesh_topology, topology_dimension 2), mesh2d_node_x/y, mesh2d_edge_nodes (edges in
 /// edge_table order), mesh2d_face_nodes (counter-clockwise, start_index 1, _FillValue -999), edge midpoints and
 /// face circumcentres (face_circumcentres) as edge/face coordinates, mesh2d_node_z = -depth when a depth is given,
 /// and the CRS variable: `projected_coordinate_system` (epsg, EPSG_code "EPSG:n"; epsg 0 when the mesh names no
-/// CRS) or `wgs84` for a geographic one. Written atomically.
+/// CRS) or `wgs84` for a geographic one. Written atomically. Every boundary segment group of kind "open" also
+/// gets a D-Flow FM boundary polyline (pli_path) through its boundary nodes, for the
+/// external forcing file.
 void write_ugrid(const std::filesystem::path& path, const QuadMesh& mesh, const MeshWriteOptions& options = {});
 
 /// SMS 2D mesh: MESH2D, one "E4Q id n1 n2 n3 n4 1" per quad (counter-clockwise), one "ND id x y z" per node

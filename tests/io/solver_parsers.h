@@ -1,0 +1,135 @@
+// Parsers of solver files for the tests, written from the formats' documentation, not from our writers:
+// SCHISM hgrid.gr3 (SCHISM manual, "hgrid.gr3": header, NE NP, nodes "id x y depth", elements "id i34 n1..n4",
+// then NOPE, NETA, per open boundary its node count and nodes, NBOU, NVEL, per land boundary "count flag" and its
+// nodes) and SMS 2dm (cards MESH2D, E4Q id n1..n4 mat, ND id x y z, NS node ids with the last one negative).
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "polysquare/core/geometry.h"
+
+namespace polysquare::test {
+
+// ---- SCHISM hgrid.gr3, parsed from the format's description ----
+struct Gr3 {
+  std::string header;
+  std::vector<Vec2> xy;
+  std::vector<double> depth;
+  std::vector<std::vector<std::int32_t>> elements;  // 1-based as in the file
+  std::vector<std::vector<std::int32_t>> open;
+  std::vector<std::vector<std::int32_t>> land;
+  std::vector<int> land_flag;
+  long neta = -1, nvel = -1;
+};
+// The leading integer of a line ("12 = Number of open boundaries" -> 12).
+inline long leading(std::istream& in, std::string* rest = nullptr) {
+  std::string line;
+  if (!std::getline(in, line)) throw std::runtime_error("gr3: truncated");
+  std::istringstream ls(line);
+  long v = 0;
+  if (!(ls >> v)) throw std::runtime_error("gr3: expected a number in '" + line + "'");
+  if (rest) std::getline(ls, *rest);
+  return v;
+}
+inline Gr3 parse_gr3(const std::filesystem::path& p) {
+  std::ifstream in(p);
+  Gr3 g;
+  std::getline(in, g.header);
+  long ne = 0, np = 0;
+  in >> ne >> np;
+  for (long i = 0; i < np; ++i) {
+    long id = 0;
+    std::string x, y, d;
+    in >> id >> x >> y >> d;
+    if (id != i + 1) throw std::runtime_error("gr3: node ids out of order");
+    g.xy.push_back({std::strtod(x.c_str(), nullptr), std::strtod(y.c_str(), nullptr)});
+    g.depth.push_back(std::strtod(d.c_str(), nullptr));
+  }
+  for (long i = 0; i < ne; ++i) {
+    long id = 0, i34 = 0;
+    in >> id >> i34;
+    std::vector<std::int32_t> e(static_cast<std::size_t>(i34));
+    for (auto& v : e) in >> v;
+    if (id != i + 1) throw std::runtime_error("gr3: element ids out of order");
+    g.elements.push_back(e);
+  }
+  std::string rest;
+  std::getline(in, rest);  // end of the last element line
+  const long nope = leading(in);
+  g.neta = leading(in);
+  for (long k = 0; k < nope; ++k) {
+    std::vector<std::int32_t> seg(static_cast<std::size_t>(leading(in)));
+    for (auto& v : seg) v = static_cast<std::int32_t>(leading(in));
+    g.open.push_back(seg);
+  }
+  const long nbou = leading(in);
+  g.nvel = leading(in);
+  for (long k = 0; k < nbou; ++k) {
+    const long count = leading(in, &rest);
+    std::istringstream flag(rest);
+    int f = -1;
+    flag >> f;
+    std::vector<std::int32_t> seg(static_cast<std::size_t>(count));
+    for (auto& v : seg) v = static_cast<std::int32_t>(leading(in));
+    g.land.push_back(seg);
+    g.land_flag.push_back(f);
+  }
+  return g;
+}
+
+// ---- SMS 2dm ----
+struct Sms {
+  std::map<long, Vec2> nodes;
+  std::map<long, double> z;
+  std::map<long, std::vector<long>> e4q;
+  std::vector<std::vector<long>> strings;
+  bool mesh2d = false;
+};
+inline Sms parse_2dm(const std::filesystem::path& p) {
+  std::ifstream in(p);
+  Sms s;
+  std::string line;
+  std::vector<long> current;
+  while (std::getline(in, line)) {
+    std::istringstream ls(line);
+    std::string card;
+    ls >> card;
+    if (card == "MESH2D") s.mesh2d = true;
+    if (card == "ND") {
+      long id = 0;
+      std::string x, y, z;
+      ls >> id >> x >> y >> z;
+      s.nodes[id] = {std::strtod(x.c_str(), nullptr), std::strtod(y.c_str(), nullptr)};
+      s.z[id] = std::strtod(z.c_str(), nullptr);
+    }
+    if (card == "E4Q") {
+      long id = 0;
+      std::vector<long> n(4);
+      ls >> id >> n[0] >> n[1] >> n[2] >> n[3];
+      s.e4q[id] = n;
+    }
+    if (card == "NS") {
+      long v = 0;
+      while (ls >> v) {
+        current.push_back(std::abs(v));
+        if (v < 0) {
+          s.strings.push_back(current);
+          current.clear();
+        }
+      }
+    }
+  }
+  if (!current.empty()) throw std::runtime_error("2dm: a nodestring without its negative last node");
+  return s;
+}
+
+}  // namespace polysquare::test
