@@ -135,6 +135,11 @@ void validate_region(Region& region, const InputOptions& options, std::vector<st
   for (std::size_t f = 0; f < region.features.size(); ++f) {
     FeatureCurve& c = region.features[f];
     check_points(c.points, feature_name(f), options);
+    // A line that ends where it starts is a closed loop (an island's shoreline), whatever geometry type carried it.
+    if (!c.closed && c.points.size() >= 4 && c.points.front() == c.points.back()) {
+      c.closed = true;
+      c.points.pop_back();
+    }
     dedupe(c.points, c.closed, feature_name(f), options.repair, repairs);
     if (c.points.size() < 2 || (c.closed && c.points.size() < 3))
       throw InputError(feature_name(f) + " has too few distinct points" +

@@ -161,3 +161,22 @@ TEST(NarrowFaces, DeltaBoxSliversGoAndNothingNarrowIsLeft) {
   EXPECT_NO_THROW(validate_region(r));
   EXPECT_TRUE(collapse_narrow_faces(r, 200.0).empty());
 }
+
+TEST(NarrowIslands, DeltaBoxIslandLoopsNarrowerThanTheSizeGo) {
+  // delta_box's islands are closed shoreline features; at 200 m a dozen of them hold no 200 m disk.
+  Region r = read_region(std::string(POLYSQUARE_DATA_DIR) + "/cases/delta_box.geojson");
+  std::size_t loops = 0;
+  for (const FeatureCurve& c : r.features) loops += c.closed;
+  const std::vector<DroppedCurve> d = drop_narrow_islands(r, 200.0);
+  EXPECT_GE(d.size(), 10u);
+  for (const DroppedCurve& c : d) {
+    EXPECT_EQ(c.kind, DroppedCurve::Kind::feature_loop);
+    EXPECT_LT(c.width, 200.0);
+  }
+  std::size_t left = 0;
+  for (const FeatureCurve& c : r.features) left += c.closed;
+  EXPECT_EQ(left, loops - d.size());
+  EXPECT_GT(left, 0u);  // the wider islands stay
+  EXPECT_NO_THROW(validate_region(r));
+  EXPECT_TRUE(drop_narrow_islands(r, 200.0).empty());
+}
