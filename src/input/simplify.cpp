@@ -357,8 +357,9 @@ std::vector<DroppedCurve> collapse_narrow_faces(Region& region, double min_width
         const auto i = static_cast<std::size_t>(std::find(cycle.begin(), cycle.end(), h) - cycle.begin());
         for (std::size_t k = 1; k < cycle.size(); ++k) g.append(cycle[(i + k) % cycle.size()], rest);
         rest.push_back(e.points[h % 2 == 0 ? 0 : e.points.size() - 1]);
-        double d = 0.0;
-        for (Vec2 q : e.points) d = std::max(d, polyline_distance(q, rest));
+        double d = 0.0;  // over its vertices and points along its segments (a straight piece has only its ends)
+        for (std::size_t k = 0; k + 1 < e.points.size(); ++k)
+          for (double t : {0.0, 0.25, 0.5, 0.75, 1.0}) d = std::max(d, polyline_distance(lerp(e.points[k], e.points[k + 1], t), rest));
         if (d <= min_width && d < best.distance) best = {e.feature, d, width, area};
       }
     }
