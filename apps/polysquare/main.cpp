@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
 
+#include <cmath>
 #include <csignal>
 #include <filesystem>
 #include <fstream>
@@ -17,6 +18,7 @@
 #include "polysquare/io/solver_files.h"
 #include "polysquare/io/svg.h"
 #include "polysquare/partition/partition.h"
+#include "polysquare/pipeline/check_options.h"
 #include "polysquare/pipeline/mesh_region.h"
 #include "polysquare/quality/quality.h"
 
@@ -42,12 +44,35 @@ struct MeshArgs {
   MeshOptions options;
 };
 
+// Every output is checked before any work (format, directory, writability, distinct, not an input): a refusal
+// takes milliseconds, not a meshing run.
+void check_outputs(const MeshArgs& args) {
+  check_output_path(args.output);
+  std::vector<std::pair<fs::path, std::string>> outputs{{args.output, "-o"}}, inputs{{args.input, "input"}};
+  if (lower_extension(args.output) == ".gr3")
+    outputs.push_back({fs::path(args.output).replace_extension(".ll"), "the .ll companion of -o"});
+  auto optional = [&](const std::string& path, const char* what, const char* ext) {
+    if (path.empty()) return;
+    check_output_file(path, what, {ext});
+    outputs.push_back({path, what});
+  };
+  optional(args.report, "--report", ".json");
+  optional(args.picture, "--picture", ".svg");
+  optional(args.partition_picture, "--partition-picture", ".svg");
+  for (const auto& f : args.input_options.feature_files) inputs.push_back({f, "--features file"});
+  if (!args.bathymetry.empty()) inputs.push_back({args.bathymetry, "--bathymetry raster"});
+  check_distinct_files(outputs, inputs);
+}
+
 int run_mesh(const MeshArgs& args) {
-  check_output_path(args.output);  // before minutes of meshing
+  check_mesh_options(args.options);
+  check_outputs(args);  // before minutes of meshing
   const std::string out_ext = lower_extension(args.output);
   if ((args.depth_given || !args.bathymetry.empty()) && (out_ext == ".msh" || out_ext == ".vtu"))
     std::cerr << "warning: depths are written to .gr3, .nc and .2dm files only, not to " << args.output << "\n";
   if (args.depth_given && !args.bathymetry.empty()) throw InputError("--depth and --bathymetry exclude each other");
+  if (args.depth_given && !std::isfinite(args.depth))
+    throw InputError("--depth must be a finite number, got " + short_number(args.depth));
   if (!args.bathymetry.empty() && !fs::is_regular_file(args.bathymetry))
     throw InputError(args.bathymetry + ": the bathymetry raster does not exist");
   InputNotes notes;
@@ -58,6 +83,7 @@ int run_mesh(const MeshArgs& args) {
   if (notes.snaps.size() > 5) std::cerr << "warning: ... and " << notes.snaps.size() - 5 << " more snapped points (see the report)\n";
   if (notes.reprojected) std::cerr << "input in " << notes.input_crs << ", meshed in " << region.crs << " (--size in metres)\n";
   MeshOptions options = args.options;
+  check_mesh_size(region, options);
   options.keep_partition = !args.partition_picture.empty();
   options.map.composition = args.map == "gpm" ? MapComposition::gpm : MapComposition::ppm;
   options.map.layout.straight_interfaces = !args.bend_interfaces;
@@ -76,7 +102,9 @@ int run_mesh(const MeshArgs& args) {
   result.report["input"]["warnings"] = notes.warnings;
   result.report["input"]["input_crs"] = notes.input_crs;
   result.report["domain"] = to_json(domain);
-  // Outputs are written only after the whole mesh passed its checks, each atomically.
+  // Outputs are written only after the whole mesh passed its checks, and committed together: each goes to a
+  // synced temporary, and all are renamed onto their targets only when every one was written.
+  OutputBatch batch;
   const MeshWriteOptions write{args.binary,
                                args.msh_features == "lines" ? MshFeatures::lines
                                : args.msh_features == "none" ? MshFeatures::none : MshFeatures::nodes,
@@ -101,9 +129,18 @@ int run_mesh(const MeshArgs& args) {
     partition.triangle_part = result.background_part;
     write_partition_svg(args.partition_picture, result.background, partition);
   }
-  for (const auto& d : result.report["dropped_parts"])
-    std::cerr << "warning: part " << d["part"] << " left out: its area " << d["area"] << " is less than one element, at ("
-              << d["at"][0] << ", " << d["at"][1] << ")\n";
+  batch.commit();
+  // Parts left out as smaller than one element: the first few by place, then one line for the rest.
+  const auto& dropped = result.report["dropped_parts"];
+  for (std::size_t i = 0; i < dropped.size() && i < 3; ++i)
+    std::cerr << "warning: part " << dropped[i]["part"] << " left out: its area " << dropped[i]["area"]
+              << " is less than one element, at (" << dropped[i]["at"][0] << ", " << dropped[i]["at"][1] << ")\n";
+  if (dropped.size() > 3) {
+    double area = 0;
+    for (const auto& d : dropped) area += d["area"].get<double>();
+    std::cerr << "warning: " << dropped.size() << " parts smaller than one element left out in all (total area "
+              << short_number(area) << "); the report's dropped_parts lists each\n";
+  }
   for (const auto& u : result.report["unstructured"])
     if (u["meshed_by"] == "patch")
       std::cerr << "warning: part " << u["part"] << ": subregion " << u["subregion"] << " at (" << u["at"][0] << ", "
@@ -148,6 +185,7 @@ int run_mesh(const MeshArgs& args) {
 
 int run_quality(const std::string& mesh_path, const std::string& domain_path, bool json, bool require_quads) {
   const QuadMesh mesh = read_mesh(mesh_path);
+  check_judgeable(mesh, mesh_path);
   const QualityReport quality = compute_quality(mesh);
   const FiniteVolumeQuality fv = finite_volume_quality(mesh);
   // Shape figures cover quads only, so a mesh of triangles would otherwise read as SJ 0 and pass.
@@ -230,7 +268,7 @@ int main(int argc, char** argv) {
                        "simplify curves finer than the size first: drop vertices whose triangle area < (F*size)^2, each within size of the result (0 = off: the mesh follows every input vertex)")
       ->capture_default_str();
   cmd_mesh->add_option("--max-quads", mesh.options.max_quads, "refuse sizes that need more quads than this")
-      ->capture_default_str();
+      ->check(CLI::PositiveNumber)->capture_default_str();  // "-5" would otherwise wrap around to 2^64 - 5
   cmd_mesh->add_option("--min-sj", mesh.options.min_scaled_jacobian,
                        "refuse a mesh whose worst scaled Jacobian is below this (0 accepts any valid mesh)")
       ->capture_default_str();

@@ -5,6 +5,8 @@
 #include <fstream>
 #include <sstream>
 
+#include <CGAL/box_intersection_d.h>
+
 #include "polysquare/core/error.h"
 #include "polysquare/io/atomic_file.h"
 #include "polysquare/io/geojson.h"
@@ -69,20 +71,41 @@ bool adjacent(const Segment& s, const Segment& t) {
   return d == 1 || (s.closed && d == s.count - 1);
 }
 
-// Sweep over segments sorted by their smallest x; calls `report` for every meeting pair that is not two
-// consecutive segments of one chain. Stops at the first pair for which report returns true.
+// Every meeting pair that is not two consecutive segments of one chain, in a fixed order (segments sorted by
+// their smallest x, then pairs by their first and second segment), so messages name the same place every run.
+// Candidate pairs come from CGAL's box intersection (a segment tree: n log n plus the overlapping pairs; a sweep
+// over x alone compared every pair of a comb's teeth when they run along x: 30,000 teeth took 50 s). Stops at
+// the first pair for which report returns true.
 template <typename F>
 void for_each_meeting(std::vector<Segment>& segs, F report) {
   std::sort(segs.begin(), segs.end(), [](const Segment& s, const Segment& t) {
     return std::min(s.a.x, s.b.x) < std::min(t.a.x, t.b.x);
   });
+  using Box = CGAL::Box_intersection_d::Box_with_info_d<double, 2, std::size_t, CGAL::Box_intersection_d::ID_EXPLICIT>;
+  std::vector<Box> boxes;
+  boxes.reserve(segs.size());
   for (std::size_t i = 0; i < segs.size(); ++i) {
-    const double maxx = std::max(segs[i].a.x, segs[i].b.x);
-    for (std::size_t j = i + 1; j < segs.size() && std::min(segs[j].a.x, segs[j].b.x) <= maxx; ++j) {
-      if (adjacent(segs[i], segs[j])) continue;
-      Vec2 at;
-      if (segments_meet(segs[i], segs[j], at) && report(segs[i], segs[j], at)) return;
-    }
+    const Segment& s = segs[i];
+    double lo[2] = {std::min(s.a.x, s.b.x), std::min(s.a.y, s.b.y)};
+    double hi[2] = {std::max(s.a.x, s.b.x), std::max(s.a.y, s.b.y)};
+    boxes.emplace_back(lo, hi, i);
+  }
+  std::vector<std::pair<std::size_t, std::size_t>> meets;
+  // Closed boxes: segments that only touch at a box edge (a vertical meeting a horizontal at its end) are pairs.
+  CGAL::box_self_intersection_d<CGAL::Sequential_tag>(
+      boxes.begin(), boxes.end(),
+      [&](const Box& p, const Box& q) {
+        const std::size_t i = std::min(p.info(), q.info()), j = std::max(p.info(), q.info());
+        if (adjacent(segs[i], segs[j])) return;
+        Vec2 at;
+        if (segments_meet(segs[i], segs[j], at)) meets.emplace_back(i, j);
+      },
+      std::ptrdiff_t(10), CGAL::Box_intersection_d::CLOSED);
+  std::sort(meets.begin(), meets.end());
+  for (const auto& [i, j] : meets) {
+    Vec2 at;
+    segments_meet(segs[i], segs[j], at);
+    if (report(segs[i], segs[j], at)) return;
   }
 }
 

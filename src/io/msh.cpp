@@ -111,6 +111,12 @@ struct Builder {
       const int id = curve_id(n);
       if (n.rfind("boundary", 0) == 0) { mesh.boundary_edges.push_back(e); mesh.boundary_edge_ring.push_back(id); }
       else if (n.rfind("feature", 0) == 0) { mesh.feature_edges.push_back(e); mesh.feature_edge_curve.push_back(id); }
+    } else if (type == 4 || type == 5) {  // skipping them would judge what is left of a 3D mesh
+      c.fail(std::string("a 3D element (") + (type == 4 ? "tetrahedron" : "hexahedron") +
+             "); only 2D meshes of triangles and quadrilaterals are read");
+    } else if (type == 9 || type == 10) {
+      c.fail(std::string("a second-order ") + (type == 9 ? "triangle" : "quadrilateral") +
+             " (element type " + std::to_string(type) + "); only linear triangles and quadrilaterals are read");
     }
   }
   // A curve written as a point group becomes the cell edges joining two of its nodes (a group that also has

@@ -7,6 +7,8 @@
 #include <unordered_map>
 #include <unordered_set>
 
+#include "polysquare/core/error.h"
+
 namespace polysquare {
 namespace {
 
@@ -87,6 +89,7 @@ QuadMetrics quad_metrics(const QuadMesh& mesh) {
       const Vec2 p = mesh.nodes[quad[k]];
       const Vec2 en = mesh.nodes[quad[(k + 1) % 4]] - p, ep = mesh.nodes[quad[(k + 3) % 4]] - p;
       const double ln = norm(en), lp = norm(ep);
+      if (!std::isfinite(ln) || !std::isfinite(lp)) { degenerate = true; continue; }  // NaN compares false below
       lmin = std::min(lmin, ln);
       lmax = std::max(lmax, ln);
       if (ln == 0 || lp == 0) { degenerate = true; continue; }
@@ -114,6 +117,22 @@ QuadMetrics quad_metrics(const QuadMesh& mesh) {
 }
 
 QualityReport compute_quality(const QuadMesh& mesh) { return compute_quality(mesh, quad_metrics(mesh)); }
+
+void check_judgeable(const QuadMesh& mesh, const std::string& name) {
+  auto check_node = [&](std::int32_t v) {
+    const Vec2 p = mesh.nodes[static_cast<std::size_t>(v)];
+    if (!std::isfinite(p.x) || !std::isfinite(p.y)) {
+      std::ostringstream os;
+      os << name << ": node " << v + 1 << " has a non-finite coordinate (" << p.x << ", " << p.y << ")";
+      throw InputError(os.str());
+    }
+  };
+  for (const auto& q : mesh.quads) for (auto v : q) check_node(v);
+  for (const auto& t : mesh.triangles) for (auto v : t) check_node(v);
+  if (mesh.quads.empty())
+    throw InputError(name + ": the mesh has no quadrilaterals (" + std::to_string(mesh.triangles.size()) +
+                     " triangles, " + std::to_string(mesh.nodes.size()) + " nodes): there is nothing to judge");
+}
 
 QualityReport compute_quality(const QuadMesh& mesh, const QuadMetrics& m) {
   QualityReport r;

@@ -40,6 +40,10 @@ struct QualityReport {
 /// Valence counts the distinct quad edges at a vertex; triangles (from other tools) are not counted, as in
 /// anchors.md. non_manifold_edges and boundary_edges are over the quads too.
 QualityReport compute_quality(const QuadMesh& mesh);
+/// Throws InputError naming `name` when `mesh` cannot be judged by compute_quality: it has no quadrilateral (no
+/// cells, or triangles only: figures over no quads would read as a perfect or a zero mesh), or a node of a cell
+/// has a non-finite coordinate (the node and its coordinate are named).
+void check_judgeable(const QuadMesh& mesh, const std::string& name);
 /// The same from per-quad metrics already computed for `mesh` (quad_metrics).
 QualityReport compute_quality(const QuadMesh& mesh, const QuadMetrics& metrics);
 
