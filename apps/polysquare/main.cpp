@@ -91,6 +91,12 @@ int run_mesh(const MeshArgs& args) {
   const QualityReport quality = compute_quality(result.mesh);
   DomainDistanceOptions measure{args.options.corner_threshold_deg, {}};
   for (const auto& d : result.report["dropped_parts"]) measure.skip_parts.push_back(d["part"].get<int>());
+  // The mesh covers the (simplified) domain it conforms to, less the parts left out as too small, up to the
+  // chords along curves: a larger change is said, never silent.
+  if (const double change = area_relative_mismatch(result.mesh, result.region, measure.skip_parts);
+      !(std::abs(change) <= 0.01))
+    std::cerr << "warning: the mesh's area differs from the domain's by " << short_number(100 * change)
+              << " % (more than 1 %: chords of coarse curves, or a region read wrongly)\n";
   const DomainDistance domain = domain_distance(result.mesh, region, measure);
   const FiniteVolumeQuality fv = finite_volume_quality(result.mesh);
   result.report["quality"] = to_json(quality);

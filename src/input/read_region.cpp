@@ -42,6 +42,13 @@ struct Segment {
 
 int sgn(double v) { return (v > 0) - (v < 0); }
 
+std::string pt_number(double v) {
+  std::ostringstream os;
+  os.precision(6);
+  os << v;
+  return os.str();
+}
+
 // Intersection of two segments (touching included); writes a point of contact.
 bool segments_meet(const Segment& s, const Segment& t, Vec2& at) {
   const int d1 = sgn(orient2(s.a, s.b, t.a)), d2 = sgn(orient2(s.a, s.b, t.b));
@@ -113,7 +120,7 @@ void check_points(const std::vector<Vec2>& pts, const std::string& where, const 
   for (Vec2 p : pts) {
     if (!std::isfinite(p.x) || !std::isfinite(p.y)) throw InputError(where + " has a non-finite coordinate " + pt(p));
     if (std::abs(p.x) > o.max_abs_coordinate || std::abs(p.y) > o.max_abs_coordinate)
-      throw InputError(where + " has a coordinate beyond " + std::to_string(o.max_abs_coordinate) + ": " + pt(p));
+      throw InputError(where + " has a coordinate beyond the limit of " + pt_number(o.max_abs_coordinate) + ": " + pt(p));
   }
 }
 
@@ -132,7 +139,8 @@ void dedupe(std::vector<Vec2>& pts, bool closed, const std::string& where, bool 
 
 }  // namespace
 
-void validate_region(Region& region, const InputOptions& options, std::vector<std::string>* repairs) {
+void validate_region(Region& region, const InputOptions& options, std::vector<std::string>* repairs,
+                     std::vector<std::string>* warnings) {
   const std::string& src = region.source;
   if (options.repair) {
     // Finite coordinates first: GEOS must not see NaN.
@@ -174,6 +182,31 @@ void validate_region(Region& region, const InputOptions& options, std::vector<st
     if (s.owner == t.owner) throw InputError(ring_name(static_cast<std::size_t>(s.owner)) + " intersects itself at " + pt(at));
     throw InputError(ring_name(static_cast<std::size_t>(s.owner)) + " meets ring " + std::to_string(t.owner) + " at " + pt(at));
   });
+  // A hole inside another hole of its polygon (a third ring of a GeoJSON Polygon) is an island in a lake: it
+  // becomes a part of its own, said in a warning; a ring inside that island too is refused (rings no longer
+  // cross, so one point tells where a ring lies). Meshed as given, the island was domain and its lake too.
+  {
+    std::vector<int> depth(region.rings.size(), 0), container(region.rings.size(), -1);
+    for (std::size_t r = 0; r < region.rings.size(); ++r)
+      for (std::size_t h = 0; h < region.rings.size() && region.rings[r].hole; ++h)
+        if (h != r && region.rings[h].hole && region.rings[h].part == region.rings[r].part &&
+            point_in_ring(region.rings[r].points.front(), region.rings[h].points))
+          ++depth[r], container[r] = static_cast<int>(h);
+    for (std::size_t r = 0; r < region.rings.size(); ++r) {
+      if (depth[r] > 1)
+        throw InputError(ring_name(r) + " lies inside ring " + std::to_string(container[r]) +
+                         ", which lies inside another hole of the same polygon: give islands in lakes as polygons of "
+                         "their own, at " + pt(region.rings[r].points.front()));
+      if (depth[r] == 1) {
+        region.rings[r].hole = false;
+        region.rings[r].part = region.num_parts++;
+        if (warnings)
+          warnings->push_back(ring_name(r) + " lies inside hole ring " + std::to_string(container[r]) +
+                              " of the same polygon: meshed as an island (polygon part " +
+                              std::to_string(region.rings[r].part) + "), at " + pt(region.rings[r].points.front()));
+      }
+    }
+  }
   // Orientation after the crossing check, so a bow-tie is reported as what it is rather than as zero area.
   for (std::size_t r = 0; r < region.rings.size(); ++r) {
     Ring& ring = region.rings[r];
@@ -201,11 +234,38 @@ void validate_region(Region& region, const InputOptions& options, std::vector<st
         if (k != ring.part && in_domain_of_part(p, k))
           throw InputError(ring_name(r) + " lies inside polygon part " + std::to_string(k) + " (overlapping parts), at " + pt(p));
   }
+  // Feature points must lie in the domain or on its boundary, like curves (with --repair, points in holes or
+  // outside are dropped and reported).
+  {
+    const double tol = options.snap_relative * region.bounding_box().diagonal();
+    std::vector<Vec2> kept;
+    for (Vec2 p : region.feature_points) {
+      bool inside = false;
+      for (int k = 0; k < region.num_parts && !inside; ++k) inside = in_domain_of_part(p, k);
+      double d = INFINITY;
+      for (std::size_t r = 0; r < region.rings.size() && !inside && d > tol; ++r) {
+        const auto& q = region.rings[r].points;
+        for (std::size_t i = 0; i < q.size(); ++i) d = std::min(d, point_segment_distance(p, q[i], q[(i + 1) % q.size()]));
+      }
+      if (inside || d <= tol) {
+        kept.push_back(p);
+        continue;
+      }
+      bool in_hole = false;
+      for (int k = 0; k < region.num_parts; ++k)
+        in_hole |= point_in_ring(p, region.rings[static_cast<std::size_t>(outer[static_cast<std::size_t>(k)])].points);
+      const std::string what = src + ": feature point " + pt(p) + (in_hole ? " lies in a hole" : " lies outside the domain");
+      if (!options.repair) throw InputError(what + " (--repair drops it)");
+      if (repairs) repairs->push_back(what + ": dropped");
+    }
+    region.feature_points = std::move(kept);
+  }
   // Features: cut at crossings and clipped to the domain; then no curve may cross the boundary or another
   // curve except at end points (this catches self-crossing curves, which are not split).
   FeatureSplitOptions split;
   split.clip_holes = options.repair;
   const FeatureSplitStats split_stats = split_features(region, split);
+  if (warnings) warnings->insert(warnings->end(), split_stats.warnings.begin(), split_stats.warnings.end());
   if (repairs && split_stats.pieces_in_holes > 0)
     repairs->push_back(src + ": clipped " + std::to_string(split_stats.pieces_in_holes) + " feature piece(s) inside holes");
   std::vector<Segment> all;
@@ -266,7 +326,7 @@ Region read_input(const std::filesystem::path& path, const InputOptions& options
   Region region;
   std::vector<std::string> names;  // per source_feature, for GDAL input only
   if ((ext == ".geojson" || ext == ".json") && !selects) {
-    region = parse_geojson(read_file(path), name);
+    region = parse_geojson(read_file(path), name, &notes.warnings);
   } else {
     region.source = name;
     read_gdal(path, LayerRole::by_geometry, options, region, names, notes);
@@ -290,7 +350,7 @@ Region read_input(const std::filesystem::path& path, const InputOptions& options
   try {
     project_region(region, options.crs, notes);
     snap_near_coincident(region, options.snap_relative, &notes.snaps);
-    validate_region(region, options, &notes.repairs);
+    validate_region(region, options, &notes.repairs, &notes.warnings);
   } catch (const InputError& e) {
     if (names.empty()) throw;
     throw InputError(name_feature(e.what(), names));

@@ -118,6 +118,32 @@ QuadMetrics quad_metrics(const QuadMesh& mesh) {
 
 QualityReport compute_quality(const QuadMesh& mesh) { return compute_quality(mesh, quad_metrics(mesh)); }
 
+double mesh_area(const QuadMesh& mesh) {
+  double a = 0.0;
+  for (const auto& q : mesh.quads) {
+    const Vec2 o = mesh.nodes[q[0]];
+    a += 0.5 * cross(mesh.nodes[q[2]] - o, mesh.nodes[q[3]] - mesh.nodes[q[1]]);
+  }
+  return a;
+}
+
+double domain_area(const Region& region, const std::vector<int>& skip_parts) {
+  double a = 0.0;
+  for (const Ring& r : region.rings) {
+    if (std::find(skip_parts.begin(), skip_parts.end(), r.part) != skip_parts.end() || r.points.empty()) continue;
+    const Vec2 o = r.points.front();
+    double s = 0.0;
+    for (std::size_t i = 0; i < r.points.size(); ++i) s += cross(r.points[i] - o, r.points[(i + 1) % r.points.size()] - o);
+    a += r.hole ? -std::abs(0.5 * s) : std::abs(0.5 * s);
+  }
+  return a;
+}
+
+double area_relative_mismatch(const QuadMesh& mesh, const Region& region, const std::vector<int>& skip_parts) {
+  const double r = domain_area(region, skip_parts);
+  return r != 0 ? (mesh_area(mesh) - r) / r : INFINITY;
+}
+
 void check_judgeable(const QuadMesh& mesh, const std::string& name) {
   auto check_node = [&](std::int32_t v) {
     const Vec2 p = mesh.nodes[static_cast<std::size_t>(v)];

@@ -39,7 +39,11 @@ struct InputNotes {
 /// and holes clockwise; feature curves with 2 distinct points, inside or on the domain, not crossing each other.
 /// Throws InputError naming region.source, the feature index and a coordinate.
 /// With options.repair, each repair made is appended to `repairs` (a sentence naming the feature and coordinate).
-void validate_region(Region& region, const InputOptions& options = {}, std::vector<std::string>* repairs = nullptr);
+/// A hole inside another hole of its polygon becomes a polygon part of its own (an island in a lake), said in
+/// `warnings`, which also get the stretches of feature curves left to the boundary (split_features); feature
+/// points outside the domain or in a hole are refused (dropped and listed in `repairs` with options.repair).
+void validate_region(Region& region, const InputOptions& options = {}, std::vector<std::string>* repairs = nullptr,
+                     std::vector<std::string>* warnings = nullptr);
 
 /// Reads `path` and options.feature_files, projects geographic coordinates (project_region), snaps
 /// near-coincident points (snap_near_coincident) and validates the result. GeoJSON (.geojson, .json) is parsed
