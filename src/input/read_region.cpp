@@ -26,9 +26,10 @@ std::string pt(Vec2 p) {
   return os.str();
 }
 
+// Relative to the first point: far from the origin (1e11) products of absolute coordinates cancel to zero.
 double signed_area(const std::vector<Vec2>& r) {
   double s = 0.0;
-  for (std::size_t i = 0; i < r.size(); ++i) s += cross(r[i], r[(i + 1) % r.size()]);
+  for (std::size_t i = 0; i < r.size(); ++i) s += cross(r[i] - r[0], r[(i + 1) % r.size()] - r[0]);
   return 0.5 * s;
 }
 

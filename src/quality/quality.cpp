@@ -208,7 +208,7 @@ DomainDistance domain_distance(const QuadMesh& mesh, const Region& region, const
     double s = 0;
     for (std::size_t i = 0; i < r.points.size(); ++i) {
       ring_segs.push_back({r.points[i], r.points[(i + 1) % r.points.size()]});
-      s += cross(r.points[i], r.points[(i + 1) % r.points.size()]);
+      s += cross(r.points[i] - r.points[0], r.points[(i + 1) % r.points.size()] - r.points[0]);
     }
     region_area += r.hole ? -std::abs(0.5 * s) : std::abs(0.5 * s);
   }
@@ -239,10 +239,8 @@ DomainDistance domain_distance(const QuadMesh& mesh, const Region& region, const
     for (const auto& e : mesh.feature_edges)
       for (auto v : e) d.feature_node_max_distance = std::max(d.feature_node_max_distance, features.nearest(mesh.nodes[v]));
   }
-  double mesh_area = 0;
-  for (const auto& q : mesh.quads)
-    mesh_area += 0.5 * (cross(mesh.nodes[q[0]], mesh.nodes[q[1]]) + cross(mesh.nodes[q[1]], mesh.nodes[q[2]]) +
-                        cross(mesh.nodes[q[2]], mesh.nodes[q[3]]) + cross(mesh.nodes[q[3]], mesh.nodes[q[0]]));
+  // Areas relative to a cell's own nodes: products of absolute coordinates far from the origin cancel.
+  double mesh_area = polysquare::mesh_area(mesh);
   for (const auto& t : mesh.triangles) mesh_area += 0.5 * orient2(mesh.nodes[t[0]], mesh.nodes[t[1]], mesh.nodes[t[2]]);
   d.area_relative_change = region_area != 0 ? (mesh_area - region_area) / region_area : 0;
   // Sharp input vertices must coincide with a mesh node.
