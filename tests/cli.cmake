@@ -1,1 +1,2 @@
 list(APPEND TEST_SOURCES cli/test_cli.cpp)
+list(APPEND TEST_SOURCES cli/test_cli_outputs.cpp)
