@@ -66,13 +66,13 @@ void check_outputs(const MeshArgs& args) {
 
 int run_mesh(const MeshArgs& args) {
   check_mesh_options(args.options);
+  if (args.depth_given && !std::isfinite(args.depth))
+    throw InputError("--depth must be a finite number, got " + short_number(args.depth));
   check_outputs(args);  // before minutes of meshing
   const std::string out_ext = lower_extension(args.output);
   if ((args.depth_given || !args.bathymetry.empty()) && (out_ext == ".msh" || out_ext == ".vtu"))
     std::cerr << "warning: depths are written to .gr3, .nc and .2dm files only, not to " << args.output << "\n";
   if (args.depth_given && !args.bathymetry.empty()) throw InputError("--depth and --bathymetry exclude each other");
-  if (args.depth_given && !std::isfinite(args.depth))
-    throw InputError("--depth must be a finite number, got " + short_number(args.depth));
   if (!args.bathymetry.empty() && !fs::is_regular_file(args.bathymetry))
     throw InputError(args.bathymetry + ": the bathymetry raster does not exist");
   InputNotes notes;
