@@ -19,6 +19,7 @@
 #include "polysquare/io/svg.h"
 #include "polysquare/partition/partition.h"
 #include "polysquare/pipeline/check_options.h"
+#include "polysquare/pipeline/local_frame.h"
 #include "polysquare/pipeline/mesh_region.h"
 #include "polysquare/quality/quality.h"
 
@@ -87,7 +88,29 @@ int run_mesh(const MeshArgs& args) {
   options.keep_partition = !args.partition_picture.empty();
   options.map.composition = args.map == "gpm" ? MapComposition::gpm : MapComposition::ppm;
   options.map.layout.straight_interfaces = !args.bend_interfaces;
-  MeshResult result = mesh_region(region, options);
+  // Far from the origin (1e8 .. 1e11 around a small domain) the region is meshed in a local frame and the mesh
+  // moved back before writing; figures are measured in the local frame, places printed in the input's.
+  const Vec2 origin = local_origin(region);
+  const bool moved = origin.x != 0 || origin.y != 0;
+  Region local = region;
+  if (moved) {
+    translate(local, {-origin.x, -origin.y});
+    std::cerr << "meshed relative to (" << short_number(origin.x) << ", " << short_number(origin.y)
+              << "), " << short_number(std::max(std::abs(origin.x), std::abs(origin.y)) / region.bounding_box().diagonal())
+              << " times the domain's size away from the origin; written back in the input's coordinates\n";
+  }
+  auto place = [&](const nlohmann::json& at) {
+    return "(" + short_number(at[0].get<double>() + origin.x) + ", " + short_number(at[1].get<double>() + origin.y) + ")";
+  };
+  MeshResult result;
+  try {
+    result = mesh_region(local, options);
+  } catch (const MeshingError& e) {
+    if (!moved) throw;
+    throw MeshingError(std::string(e.what()) + " (places relative to (" + short_number(origin.x) + ", " +
+                       short_number(origin.y) + "))");
+  }
+  if (moved) result.report["input"]["local_origin"] = {origin.x, origin.y};
   const QualityReport quality = compute_quality(result.mesh);
   DomainDistanceOptions measure{args.options.corner_threshold_deg, {}};
   for (const auto& d : result.report["dropped_parts"]) measure.skip_parts.push_back(d["part"].get<int>());
@@ -97,8 +120,10 @@ int run_mesh(const MeshArgs& args) {
       !(std::abs(change) <= 0.01))
     std::cerr << "warning: the mesh's area differs from the domain's by " << short_number(100 * change)
               << " % (more than 1 %: chords of coarse curves, or a region read wrongly)\n";
-  const DomainDistance domain = domain_distance(result.mesh, region, measure);
-  const FiniteVolumeQuality fv = finite_volume_quality(result.mesh);
+  const DomainDistance domain = domain_distance(result.mesh, local, measure);
+  FiniteVolumeQuality fv = finite_volume_quality(result.mesh);
+  fv.orthogonality_worst_at = fv.orthogonality_worst_at + origin;
+  fv.smoothness_worst_at = fv.smoothness_worst_at + origin;
   result.report["quality"] = to_json(quality);
   result.report["quality"]["finite_volume"] = to_json(fv);
   result.report["summary"]["sj_min"] = quality.sj.min;
@@ -110,6 +135,7 @@ int run_mesh(const MeshArgs& args) {
   result.report["domain"] = to_json(domain);
   // Outputs are written only after the whole mesh passed its checks, and committed together: each goes to a
   // synced temporary, and all are renamed onto their targets only when every one was written.
+  translate(result.mesh, origin);
   OutputBatch batch;
   const MeshWriteOptions write{args.binary,
                                args.msh_features == "lines" ? MshFeatures::lines
@@ -140,7 +166,7 @@ int run_mesh(const MeshArgs& args) {
   const auto& dropped = result.report["dropped_parts"];
   for (std::size_t i = 0; i < dropped.size() && i < 3; ++i)
     std::cerr << "warning: part " << dropped[i]["part"] << " left out: its area " << dropped[i]["area"]
-              << " is less than one element, at (" << dropped[i]["at"][0] << ", " << dropped[i]["at"][1] << ")\n";
+              << " is less than one element, at " << place(dropped[i]["at"]) << "\n";
   if (dropped.size() > 3) {
     double area = 0;
     for (const auto& d : dropped) area += d["area"].get<double>();
@@ -149,8 +175,8 @@ int run_mesh(const MeshArgs& args) {
   }
   for (const auto& u : result.report["unstructured"])
     if (u["meshed_by"] == "patch")
-      std::cerr << "warning: part " << u["part"] << ": subregion " << u["subregion"] << " at (" << u["at"][0] << ", "
-                << u["at"][1] << ") is an unstructured patch of " << u["quads"] << " quads: "
+      std::cerr << "warning: part " << u["part"] << ": subregion " << u["subregion"] << " at " << place(u["at"])
+                << " is an unstructured patch of " << u["quads"] << " quads: "
                 << u["reason"].get<std::string>() << "\n";
   if (const auto& simp = result.report["simplify"]; simp["vertices_after"] != simp["vertices_before"])
     std::cerr << "simplified curves finer than the size: " << simp["vertices_before"] << " -> " << simp["vertices_after"]
@@ -167,8 +193,8 @@ int run_mesh(const MeshArgs& args) {
         std::cerr << "warning: part " << c["part"] << ": " << c["quads_pinned_by_sharp_input"]
                   << " quads lie in input corners sharper than the --min-sj gate and are left out of it (scaled "
                      "Jacobian min "
-                  << c["pinned_min_scaled_jacobian"] << " at (" << c["pinned_worst_at"][0] << ", "
-                  << c["pinned_worst_at"][1] << "); the others' min is " << c["unpinned_min_scaled_jacobian"] << ")\n";
+                  << c["pinned_min_scaled_jacobian"] << " at " << place(c["pinned_worst_at"])
+                  << "; the others' min is " << c["unpinned_min_scaled_jacobian"] << ")\n";
       if (c.contains("chosen") && c.contains("fallback")) {
         std::cerr << "warning: part " << c["part"] << ": none of " << part.size() - 1
                   << " poly-square candidates meshed it; meshed unstructured by splitting triangles into quads ("

@@ -227,3 +227,24 @@ TEST(CliOutputs, HoleInAHoleIsMeshedAsAnIsland) {
   EXPECT_NEAR(polysquare::mesh_area(mesh), 6800.0, 1e-6);
   EXPECT_EQ(r.err.find("area differs"), std::string::npos) << r.err;
 }
+
+TEST(CliOutputs, FarFromTheOriginIsMeshedInALocalFrame) {
+  TempDir dir("cli_far");
+  const fs::path out = dir.path / "m.msh";
+  const CliResult r = run("mesh " + adversarial("far_smile_1e11.geojson") + " --size 2.5 -o " + out.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("meshed relative to (1e+11, 1e+11)"), std::string::npos) << r.err;
+  polysquare::QuadMesh mesh = polysquare::read_mesh(out);
+  // Written back in the input's coordinates: smile spans [-50, 50]^2 around (1e11, 1e11).
+  for (const auto& p : mesh.nodes) {
+    ASSERT_GE(p.x, 1e11 - 50.001);
+    ASSERT_LE(p.x, 1e11 + 50.001);
+    ASSERT_GE(p.y, 1e11 - 50.001);
+    ASSERT_LE(p.y, 1e11 + 50.001);
+  }
+  for (auto& p : mesh.nodes) p = {p.x - 1e11, p.y - 1e11};  // judged next to the origin, where digits suffice
+  const polysquare::QualityReport q = polysquare::compute_quality(mesh);
+  EXPECT_EQ(q.inverted, 0u);
+  EXPECT_GT(q.sj.min, 0.2);
+  EXPECT_GT(q.quads, 500u);
+}

@@ -12,6 +12,7 @@
 #include "polysquare/input/read_region.h"
 #include "polysquare/io/geojson.h"
 #include "polysquare/pipeline/check_options.h"
+#include "polysquare/pipeline/local_frame.h"
 #include "polysquare/quality/quality.h"
 
 using namespace polysquare;
@@ -191,4 +192,23 @@ TEST(MeshOptionsCheck, SizeMessagesArePlainNumbers) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("(100 x 100)"), std::string::npos) << e.what();
   }
+}
+
+TEST(LocalFrame, FarRegionsMoveExactlyAndNearOnesStay) {
+  InputNotes notes;
+  const Region far = read_input(adversarial("far_smile_1e11.geojson"), {}, notes);
+  const Vec2 o = local_origin(far);
+  EXPECT_EQ(o.x, 1e11);  // the centre rounded to a multiple of 256 (the power of two above the diagonal, 141)
+  EXPECT_EQ(o.y, 1e11);
+  Region local = far;
+  translate(local, {-o.x, -o.y});
+  const Box2 box = local.bounding_box();
+  EXPECT_LE(std::max(std::abs(box.lo.x), std::abs(box.hi.x)), 50.0);
+  translate(local, o);
+  for (std::size_t r = 0; r < far.rings.size(); ++r)
+    for (std::size_t i = 0; i < far.rings[r].points.size(); ++i)
+      ASSERT_EQ(local.rings[r].points[i], far.rings[r].points[i]) << "ring " << r << " point " << i;  // exact
+  const Region near = read_input(fs::path(POLYSQUARE_DATA_DIR) / "cases" / "smile.geojson", {}, notes);
+  EXPECT_EQ(local_origin(near).x, 0.0);
+  EXPECT_EQ(local_origin(near).y, 0.0);
 }
