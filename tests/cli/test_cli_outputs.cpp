@@ -187,6 +187,10 @@ TEST(CliOutputs, CombsAreRefusedWithinFiveSeconds) {
     EXPECT_NE(r.err.find("intersects itself at ("), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists("/tmp/polysquare_comb_never.msh"));
   }
+  const CliResult r = run("mesh " + adversarial("comb_30000_feature_outside.geojson") + " --size 1 -o /tmp/polysquare_comb_never.msh");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_LT(r.seconds, 5.0);  // 46 s before feature splitting used box intersection
+  EXPECT_NE(r.err.find("lies outside the domain, at (-5, 60001.5)"), std::string::npos) << r.err;
 }
 
 TEST(CliOutputs, MessagesNameThingsPlainly) {
