@@ -78,10 +78,14 @@ int run_mesh(const MeshArgs& args) {
     throw InputError(args.bathymetry + ": the bathymetry raster does not exist");
   InputNotes notes;
   const Region region = read_input(args.input, args.input_options, notes);
-  for (const std::string& r : notes.repairs) std::cerr << "warning: repaired: " << r << "\n";
-  for (const std::string& w : notes.warnings) std::cerr << "warning: " << w << "\n";
-  for (std::size_t i = 0; i < notes.snaps.size() && i < 5; ++i) std::cerr << "warning: " << notes.snaps[i] << "\n";
-  if (notes.snaps.size() > 5) std::cerr << "warning: ... and " << notes.snaps.size() - 5 << " more snapped points (see the report)\n";
+  // Each kind of note: the first few, then one line with the count (all of them are in the report).
+  auto summarise = [](const std::vector<std::string>& lines, const char* prefix, const char* what) {
+    for (std::size_t i = 0; i < lines.size() && i < 5; ++i) std::cerr << "warning: " << prefix << lines[i] << "\n";
+    if (lines.size() > 5) std::cerr << "warning: ... and " << lines.size() - 5 << " more " << what << " (see the report)\n";
+  };
+  summarise(notes.repairs, "repaired: ", "repairs");
+  summarise(notes.warnings, "", "input warnings");
+  summarise(notes.snaps, "", "snapped points");
   if (notes.reprojected) std::cerr << "input in " << notes.input_crs << ", meshed in " << region.crs << " (--size in metres)\n";
   MeshOptions options = args.options;
   check_mesh_size(region, options);
@@ -173,11 +177,17 @@ int run_mesh(const MeshArgs& args) {
     std::cerr << "warning: " << dropped.size() << " parts smaller than one element left out in all (total area "
               << short_number(area) << "); the report's dropped_parts lists each\n";
   }
+  std::size_t patches = 0, patch_quads = 0;
   for (const auto& u : result.report["unstructured"])
-    if (u["meshed_by"] == "patch")
+    if (u["meshed_by"] == "patch" && ++patches <= 5)
       std::cerr << "warning: part " << u["part"] << ": subregion " << u["subregion"] << " at " << place(u["at"])
                 << " is an unstructured patch of " << u["quads"] << " quads: "
                 << u["reason"].get<std::string>() << "\n";
+    else if (u["meshed_by"] == "patch")
+      patch_quads += u["quads"].get<std::size_t>();
+  if (patches > 5)
+    std::cerr << "warning: ... and " << patches - 5 << " more unstructured patches (" << patch_quads
+              << " quads; the report's unstructured lists each)\n";
   if (const auto& simp = result.report["simplify"]; simp["vertices_after"] != simp["vertices_before"])
     std::cerr << "simplified curves finer than the size: " << simp["vertices_before"] << " -> " << simp["vertices_after"]
               << " vertices, largest distance moved " << simp["max_distance"] << " (" << simp["max_distance_over_size"]

@@ -209,6 +209,24 @@ TEST(CliOutputs, MessagesNameThingsPlainly) {
     EXPECT_EQ(r.err.find("-9223372036854775808"), std::string::npos) << r.err;
     EXPECT_LT(r.err.size(), 300u) << r.err;
   }
+  {  // 50 feature points dropped by --repair: five named, then one line with the count
+    std::ofstream f(dir.path / "points.geojson");
+    f << R"({"type":"FeatureCollection","features":[{"type":"Feature","properties":{"role":"domain"},"geometry":)"
+      << R"({"type":"Polygon","coordinates":[[[0,0],[20,0],[20,20],[0,20],[0,0]]]}})";
+    for (int k = 0; k < 50; ++k)
+      f << R"(,{"type":"Feature","properties":{"role":"feature"},"geometry":{"type":"Point","coordinates":[)" << 30 + k
+        << ",5]}}";
+    f << "]}";
+    f.close();
+    const CliResult r = run("mesh " + (dir.path / "points.geojson").string() + " --size 2 --repair -o " + out);
+    EXPECT_EQ(r.code, 0) << r.err;
+    std::size_t repaired = 0;
+    for (std::size_t at = r.err.find("warning: repaired: "); at != std::string::npos; at = r.err.find("warning: repaired: ", at + 1))
+      ++repaired;
+    EXPECT_EQ(repaired, 5u) << r.err;
+    EXPECT_NE(r.err.find("feature point (30, 5) lies outside the domain: dropped"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("... and 45 more repairs"), std::string::npos) << r.err;
+  }
   {  // 1,000 dropped parts: a few lines and one summary, not 1,000 warnings
     const CliResult r = run("mesh " + adversarial("dropped_1000_parts.geojson") + " --size 2 -o " + out);
     EXPECT_EQ(r.code, 0) << r.err;
