@@ -270,3 +270,28 @@ TEST(CliOutputs, FarFromTheOriginIsMeshedInALocalFrame) {
   EXPECT_GT(q.sj.min, 0.2);
   EXPECT_GT(q.quads, 500u);
 }
+
+TEST(OutputBatchTest, AllOutputsOrNone) {
+  TempDir dir("batch");
+  const fs::path a = dir.path / "a.msh", b = dir.path / "b.json";
+  std::ofstream(a) << "old a";
+  {  // the second writer fails: the first output is not replaced, nothing new appears, no temporary is left
+    polysquare::OutputBatch batch;
+    polysquare::write_file_atomically(a, [](std::ostream& os) { os << "new a"; }, false);
+    EXPECT_EQ(slurp(a), "old a");  // staged, not yet renamed
+    EXPECT_THROW(polysquare::write_file_atomically(b, [](std::ostream& os) { os << "partial"; throw std::runtime_error("boom"); }, false),
+                 std::runtime_error);
+  }
+  EXPECT_EQ(slurp(a), "old a");
+  EXPECT_EQ(dir.entries(), std::vector<std::string>{"a.msh"});
+  {  // both written: both replaced at commit
+    polysquare::OutputBatch batch;
+    polysquare::write_file_atomically(a, [](std::ostream& os) { os << "new a"; }, false);
+    polysquare::write_file_atomically(b, [](std::ostream& os) { os << "new b"; }, false);
+    EXPECT_EQ(dir.entries().size(), 3u);  // a.msh and two temporaries
+    batch.commit();
+  }
+  EXPECT_EQ(slurp(a), "new a");
+  EXPECT_EQ(slurp(b), "new b");
+  EXPECT_EQ(dir.entries(), (std::vector<std::string>{"a.msh", "b.json"}));
+}
