@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
 
+#include <cmath>
 #include <csignal>
 #include <filesystem>
 #include <fstream>
@@ -21,6 +22,8 @@
 #include "polysquare/io/solver_files.h"
 #include "polysquare/io/svg.h"
 #include "polysquare/partition/partition.h"
+#include "polysquare/pipeline/check_options.h"
+#include "polysquare/pipeline/local_frame.h"
 #include "polysquare/pipeline/mesh_region.h"
 #include "polysquare/pipeline/report.h"
 #include "polysquare/quality/quality.h"
@@ -61,10 +64,34 @@ void write_picture(const fs::path& picture, const QuadMesh& mesh, const Region& 
   render_mesh(to, mesh, &region, ro);
 }
 
+// Every output is checked before any work (format, directory, writability, distinct, not an input): a refusal
+// takes milliseconds, not a meshing run.
+void check_outputs(const MeshArgs& args) {
+  check_output_path(args.output);
+  std::vector<std::pair<fs::path, std::string>> outputs{{args.output, "-o"}}, inputs{{args.input, "input"}};
+  if (lower_extension(args.output) == ".gr3")
+    outputs.push_back({fs::path(args.output).replace_extension(".ll"), "the .ll companion of -o"});
+  auto optional = [&](const std::string& path, const char* what, const char* ext) {
+    if (path.empty()) return;
+    check_output_file(path, what, {ext});
+    outputs.push_back({path, what});
+  };
+  optional(args.report, "--report", ".json");
+  if (!args.picture.empty()) {
+    check_output_file(args.picture, "--picture", {".png", ".svg"});
+    outputs.push_back({args.picture, "--picture"});
+  }
+  optional(args.partition_picture, "--partition-picture", ".svg");
+  for (const auto& f : args.input_options.feature_files) inputs.push_back({f, "--features file"});
+  if (!args.bathymetry.empty()) inputs.push_back({args.bathymetry, "--bathymetry raster"});
+  check_distinct_files(outputs, inputs);
+}
+
 int run_mesh(const MeshArgs& args) {
-  check_output_path(args.output);  // before minutes of meshing
-  if (const std::string p = lower_extension(args.picture); !args.picture.empty() && p != ".png" && p != ".svg")
-    throw InputError(args.picture + ": pictures are .png or .svg");
+  check_mesh_options(args.options);
+  if (args.depth_given && !std::isfinite(args.depth))
+    throw InputError("--depth must be a finite number, got " + short_number(args.depth));
+  check_outputs(args);  // before minutes of meshing
   const std::string out_ext = lower_extension(args.output);
   if ((args.depth_given || !args.bathymetry.empty()) && (out_ext == ".msh" || out_ext == ".vtu"))
     std::cerr << "warning: depths are written to .gr3, .nc and .2dm files only, not to " << args.output << "\n";
@@ -80,25 +107,58 @@ int run_mesh(const MeshArgs& args) {
   progress.start("read input");
   const Region region = read_input(args.input, args.input_options, notes);
   progress.finish("read input");
-  for (const std::string& r : notes.repairs) std::cerr << "warning: repaired: " << r << "\n";
-  for (std::size_t i = 0; i < notes.warnings.size() && i < 10; ++i) std::cerr << "warning: " << notes.warnings[i] << "\n";
-  if (notes.warnings.size() > 10)
-    std::cerr << "warning: ... and " << notes.warnings.size() - 10 << " more warnings about the input (see the report's input.warnings)\n";
-  for (std::size_t i = 0; i < notes.snaps.size() && i < 5; ++i) std::cerr << "warning: " << notes.snaps[i] << "\n";
-  if (notes.snaps.size() > 5) std::cerr << "warning: ... and " << notes.snaps.size() - 5 << " more snapped points (see the report)\n";
+  // Each kind of note: the first few, then one line with the count (all of them are in the report).
+  auto summarise = [](const std::vector<std::string>& lines, const char* prefix, const char* what) {
+    for (std::size_t i = 0; i < lines.size() && i < 5; ++i) std::cerr << "warning: " << prefix << lines[i] << "\n";
+    if (lines.size() > 5) std::cerr << "warning: ... and " << lines.size() - 5 << " more " << what << " (see the report)\n";
+  };
+  summarise(notes.repairs, "repaired: ", "repairs");
+  summarise(notes.warnings, "", "input warnings");
+  summarise(notes.snaps, "", "snapped points");
   if (notes.reprojected) info << "input in " << notes.input_crs << ", meshed in " << region.crs << " (--size in metres)\n";
   MeshOptions options = args.options;
+  check_mesh_size(region, options);
   options.keep_partition = !args.partition_picture.empty();
   options.map.composition = args.map == "gpm" ? MapComposition::gpm : MapComposition::ppm;
   options.map.layout.straight_interfaces = !args.bend_interfaces;
+  // Far from the origin (1e8 .. 1e11 around a small domain) the region is meshed in a local frame and the mesh
+  // moved back before writing; figures are measured in the local frame, places printed in the input's.
+  const Vec2 origin = local_origin(region);
+  const bool moved = origin.x != 0 || origin.y != 0;
+  Region local = region;
+  if (moved) {
+    translate(local, {-origin.x, -origin.y});
+    std::cerr << "meshed relative to (" << short_number(origin.x) << ", " << short_number(origin.y)
+              << "), " << short_number(std::max(std::abs(origin.x), std::abs(origin.y)) / region.bounding_box().diagonal())
+              << " times the domain's size away from the origin; written back in the input's coordinates\n";
+  }
+  auto place = [&](const nlohmann::json& at) {
+    return "(" + short_number(at[0].get<double>() + origin.x) + ", " + short_number(at[1].get<double>() + origin.y) + ")";
+  };
   options.progress = shown.callback();
-  MeshResult result = mesh_region(region, options);
+  MeshResult result;
+  try {
+    result = mesh_region(local, options);
+  } catch (const MeshingError& e) {
+    if (!moved) throw;
+    throw MeshingError(std::string(e.what()) + " (places relative to (" + short_number(origin.x) + ", " +
+                       short_number(origin.y) + "))");
+  }
+  if (moved) result.report["input"]["local_origin"] = {origin.x, origin.y};
   progress.start("quality");
   const QualityReport quality = compute_quality(result.mesh);
   DomainDistanceOptions measure{args.options.corner_threshold_deg, {}};
   for (const auto& d : result.report["dropped_parts"]) measure.skip_parts.push_back(d["part"].get<int>());
-  const DomainDistance domain = domain_distance(result.mesh, region, measure);
-  const FiniteVolumeQuality fv = finite_volume_quality(result.mesh);
+  // The mesh covers the (simplified) domain it conforms to, less the parts left out as too small, up to the
+  // chords along curves: a larger change is said, never silent.
+  if (const double change = area_relative_mismatch(result.mesh, result.region, measure.skip_parts);
+      !(std::abs(change) <= 0.01))
+    std::cerr << "warning: the mesh's area differs from the domain's by " << short_number(100 * change)
+              << " % (more than 1 %: chords of coarse curves, or a region read wrongly)\n";
+  const DomainDistance domain = domain_distance(result.mesh, local, measure);
+  FiniteVolumeQuality fv = finite_volume_quality(result.mesh);
+  fv.orthogonality_worst_at = fv.orthogonality_worst_at + origin;
+  fv.smoothness_worst_at = fv.smoothness_worst_at + origin;
   add_quality_to_report(result.report, quality, fv, domain, args.options.size);
   result.report["input"]["repairs"] = notes.repairs;
   result.report["input"]["snapped"] = notes.snaps;
@@ -112,7 +172,10 @@ int run_mesh(const MeshArgs& args) {
   const std::string group_summary = format_groups_text(groups);
   progress.finish("quality");
   progress.start("write");
-  // Outputs are written only after the whole mesh passed its checks, each atomically.
+  // Outputs are written only after the whole mesh passed its checks, and committed together: each goes to a
+  // synced temporary, and all are renamed onto their targets only when every one was written.
+  translate(result.mesh, origin);
+  OutputBatch batch;
   const MeshWriteOptions write{args.binary,
                                args.msh_features == "lines" ? MshFeatures::lines
                                : args.msh_features == "none" ? MshFeatures::none : MshFeatures::nodes,
@@ -133,15 +196,24 @@ int run_mesh(const MeshArgs& args) {
     partition.triangle_part = result.background_part;
     write_partition_svg(args.partition_picture, result.background, partition);
   }
+  batch.commit();
   progress.finish("write");
   if (out_ext == ".nc" && fv.orthogonality_above > 0)
     std::cerr << "warning: " << fv.orthogonality_above << " of " << fv.interior_edges
               << " interior edges have a D-Flow FM orthogonality above " << fv.orthogonality_limit
               << ", which D-Flow FM refuses; the worst, " << fv.orthogonality.max << ", at "
               << at_text(fv.orthogonality_worst_at) << "\n";
-  for (const auto& d : result.report["dropped_parts"])
-    std::cerr << "warning: part " << d["part"] << " left out: its area " << d["area"] << " is less than one element, at ("
-              << d["at"][0] << ", " << d["at"][1] << ")\n";
+  // Parts left out as smaller than one element: the first few by place, then one line for the rest.
+  const auto& dropped = result.report["dropped_parts"];
+  for (std::size_t i = 0; i < dropped.size() && i < 3; ++i)
+    std::cerr << "warning: part " << dropped[i]["part"] << " left out: its area " << dropped[i]["area"]
+              << " is less than one element, at " << place(dropped[i]["at"]) << "\n";
+  if (dropped.size() > 3) {
+    double area = 0;
+    for (const auto& d : dropped) area += d["area"].get<double>();
+    std::cerr << "warning: " << dropped.size() << " parts smaller than one element left out in all (total area "
+              << short_number(area) << "); the report's dropped_parts lists each\n";
+  }
   if (const auto& curves = result.report["dropped_curves"]; !curves.empty()) {
     std::map<std::string, std::size_t> kinds;
     const nlohmann::json* widest = &curves.front();
@@ -151,14 +223,20 @@ int run_mesh(const MeshArgs& args) {
     }
     std::cerr << "warning: " << curves.size() << " curves around regions narrower than the size left out (";
     for (const auto& [kind, n] : kinds) std::cerr << (kind == kinds.begin()->first ? "" : ", ") << n << " " << kind;
-    std::cerr << "; the widest " << (*widest)["width"] << " at (" << (*widest)["at"][0] << ", " << (*widest)["at"][1]
-              << "); the report's dropped_curves lists them; --min-island-width 0 keeps them)\n";
+    std::cerr << "; the widest " << (*widest)["width"] << " at " << place((*widest)["at"])
+              << "; the report's dropped_curves lists them; --min-island-width 0 keeps them)\n";
   }
+  std::size_t patches = 0, patch_quads = 0;
   for (const auto& u : result.report["unstructured"])
-    if (u["meshed_by"] == "patch")
-      std::cerr << "warning: part " << u["part"] << ": subregion " << u["subregion"] << " at (" << u["at"][0] << ", "
-                << u["at"][1] << ") is an unstructured patch of " << u["quads"] << " quads: "
+    if (u["meshed_by"] == "patch" && ++patches <= 5)
+      std::cerr << "warning: part " << u["part"] << ": subregion " << u["subregion"] << " at " << place(u["at"])
+                << " is an unstructured patch of " << u["quads"] << " quads: "
                 << u["reason"].get<std::string>() << "\n";
+    else if (u["meshed_by"] == "patch")
+      patch_quads += u["quads"].get<std::size_t>();
+  if (patches > 5)
+    std::cerr << "warning: ... and " << patches - 5 << " more unstructured patches (" << patch_quads
+              << " quads; the report's unstructured lists each)\n";
   if (const auto& simp = result.report["simplify"]; simp["vertices_after"] != simp["vertices_before"])
     info << "simplified curves finer than the size: " << simp["vertices_before"] << " -> " << simp["vertices_after"]
               << " vertices, largest distance moved " << simp["max_distance"] << " (" << simp["max_distance_over_size"]
@@ -174,8 +252,8 @@ int run_mesh(const MeshArgs& args) {
         std::cerr << "warning: part " << c["part"] << ": " << c["quads_pinned_by_sharp_input"]
                   << " quads lie in input corners sharper than the --min-sj gate and are left out of it (scaled "
                      "Jacobian min "
-                  << c["pinned_min_scaled_jacobian"] << " at (" << c["pinned_worst_at"][0] << ", "
-                  << c["pinned_worst_at"][1] << "); the others' min is " << c["unpinned_min_scaled_jacobian"] << ")\n";
+                  << c["pinned_min_scaled_jacobian"] << " at " << place(c["pinned_worst_at"])
+                  << "; the others' min is " << c["unpinned_min_scaled_jacobian"] << ")\n";
       if (c.contains("chosen") && c.contains("fallback")) {
         std::cerr << "warning: part " << c["part"] << ": none of " << part.size() - 1
                   << " poly-square candidates meshed it; meshed unstructured by splitting triangles into quads ("
@@ -221,6 +299,7 @@ int run_render(const RenderArgs& args) {
 
 int run_quality(const std::string& mesh_path, const std::string& domain_path, bool json, bool require_quads) {
   const QuadMesh mesh = read_mesh(mesh_path);
+  check_judgeable(mesh, mesh_path);
   const QualityReport quality = compute_quality(mesh);
   const FiniteVolumeQuality fv = finite_volume_quality(mesh);
   // Shape figures cover quads only, so a mesh of triangles would otherwise read as SJ 0 and pass.
@@ -311,7 +390,7 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
   cmd_mesh->add_option("--max-quads", mesh.options.max_quads, "refuse sizes that need more quads than this")
-      ->capture_default_str();
+      ->check(CLI::PositiveNumber)->capture_default_str();  // "-5" would otherwise wrap around to 2^64 - 5
   cmd_mesh->add_option("--min-sj", mesh.options.min_scaled_jacobian,
                        "refuse a mesh whose worst scaled Jacobian is below this (0 accepts any valid mesh)")
       ->capture_default_str();

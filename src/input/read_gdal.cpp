@@ -168,8 +168,10 @@ struct Reader {
             const OGRLinearRing* r = k == 0 ? poly.getExteriorRing() : poly.getInteriorRing(k - 1);
             region.rings.push_back({ring(*r, k), part, k > 0, source, name});
           }
-        } else {  // a polygon feature is a closed curve along its outer ring, as for GeoJSON
-          region.features.push_back({ring(*poly.getExteriorRing(), 0), true, source, name, kind});
+        } else {  // a polygon feature is a closed curve along each of its rings, as for GeoJSON
+          for (int k = 0; k <= poly.getNumInteriorRings(); ++k)
+            region.features.push_back({ring(k == 0 ? *poly.getExteriorRing() : *poly.getInteriorRing(k - 1), k), true,
+                                       source, name, kind});
         }
         return;
       }

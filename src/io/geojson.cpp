@@ -3,6 +3,8 @@
 #include <nlohmann/json.hpp>
 
 #include <cctype>
+#include <cmath>
+#include <cstdint>
 
 #include "polysquare/core/error.h"
 
@@ -16,18 +18,25 @@ constexpr int kMaxNesting = 32;
 struct Context {
   const std::string& source;
   std::size_t feature = 0;
+  // Third coordinates of the current feature: polysquare meshes in 2D, so varying z is dropped with a warning.
+  double z_min = INFINITY, z_max = -INFINITY;
   [[noreturn]] void fail(const std::string& what) const {
     throw InputError(source + ": feature " + std::to_string(feature) + ": " + what);
   }
 };
 
-Vec2 position(const json& p, const Context& ctx) {
+Vec2 position(const json& p, Context& ctx) {
   if (!p.is_array() || p.size() < 2 || !p[0].is_number() || !p[1].is_number())
     ctx.fail("a position must be an array of at least two numbers, got " + p.dump().substr(0, 80));
+  if (p.size() > 2 && p[2].is_number()) {
+    const double z = p[2].get<double>();
+    ctx.z_min = std::fmin(ctx.z_min, z);
+    ctx.z_max = std::fmax(ctx.z_max, z);
+  }
   return {p[0].get<double>(), p[1].get<double>()};
 }
 
-std::vector<Vec2> positions(const json& arr, const Context& ctx) {
+std::vector<Vec2> positions(const json& arr, Context& ctx) {
   if (!arr.is_array()) ctx.fail("expected an array of positions");
   std::vector<Vec2> out;
   out.reserve(arr.size());
@@ -36,7 +45,7 @@ std::vector<Vec2> positions(const json& arr, const Context& ctx) {
 }
 
 // A GeoJSON ring repeats its first point at the end; the closing point is dropped here.
-std::vector<Vec2> ring(const json& arr, const Context& ctx, std::size_t ring_index) {
+std::vector<Vec2> ring(const json& arr, Context& ctx, std::size_t ring_index) {
   std::vector<Vec2> pts = positions(arr, ctx);
   if (pts.size() < 4)
     ctx.fail("ring " + std::to_string(ring_index) + " has " + std::to_string(pts.size()) +
@@ -50,7 +59,7 @@ std::vector<Vec2> ring(const json& arr, const Context& ctx, std::size_t ring_ind
   return pts;
 }
 
-void add_polygon(Region& region, const json& rings, const Context& ctx, const std::string& name) {
+void add_polygon(Region& region, const json& rings, Context& ctx, const std::string& name) {
   if (!rings.is_array() || rings.empty()) ctx.fail("a Polygon needs at least one ring");
   const int part = region.num_parts++;
   for (std::size_t r = 0; r < rings.size(); ++r)
@@ -90,7 +99,7 @@ std::string crs_of(const json& doc) {
 
 }  // namespace
 
-Region parse_geojson(std::string_view text, const std::string& source_name) {
+Region parse_geojson(std::string_view text, const std::string& source_name, std::vector<std::string>* warnings) {
   // GeoJSON needs about six levels of nesting; a bound keeps the recursive JSON parser's stack small whatever
   // the input (brackets inside strings are skipped).
   {
@@ -126,6 +135,7 @@ Region parse_geojson(std::string_view text, const std::string& source_name) {
   region.crs = crs_of(doc);
   if (!region.crs.empty()) region.units = "m";
   Context ctx{source_name};
+  std::size_t varying_z = 0, first_varying_z = SIZE_MAX;
   for (const json& feature : doc["features"]) {
     if (!feature.is_object() || !feature.contains("geometry") || !feature["geometry"].is_object())
       ctx.fail("expected a Feature object with a geometry");
@@ -144,14 +154,15 @@ Region parse_geojson(std::string_view text, const std::string& source_name) {
     if (role == "domain") {
       if (type == "Polygon") add_polygon(region, coords, ctx, name);
       else if (type == "MultiPolygon" && coords.is_array()) for (const json& poly : coords) add_polygon(region, poly, ctx, name);
+      else if (type == "MultiPolygon") ctx.fail("a MultiPolygon's coordinates must be an array of polygons, got " + coords.dump().substr(0, 80));
       else ctx.fail("a domain must be a Polygon or MultiPolygon, got " + type);
     } else if (role == "feature") {
       auto curve = [&](std::vector<Vec2> pts, bool closed) { region.features.push_back({std::move(pts), closed, src, name, kind}); };
       if (type == "LineString") curve(positions(coords, ctx), false);
       else if (type == "MultiLineString" && coords.is_array())
         for (const json& line : coords) curve(positions(line, ctx), false);
-      else if (type == "Polygon" && coords.is_array() && !coords.empty())
-        curve(ring(coords[0], ctx, 0), true);
+      else if (type == "Polygon" && coords.is_array() && !coords.empty())  // every ring a closed curve
+        for (std::size_t r = 0; r < coords.size(); ++r) curve(ring(coords[r], ctx, r), true);
       else if (type == "LinearRing")  // not in RFC 7946, but written by some tools for closed curves
         curve(ring(coords, ctx, 0), true);
       else if (type == "Point") region.feature_points.push_back(position(coords, ctx));
@@ -172,10 +183,16 @@ Region parse_geojson(std::string_view text, const std::string& source_name) {
     } else {
       ctx.fail("unknown role \"" + role + "\" (expected \"domain\", \"feature\" or \"boundary\")");
     }
+    if (ctx.z_min < ctx.z_max) ++varying_z, first_varying_z = std::min(first_varying_z, ctx.feature);
+    ctx.z_min = INFINITY, ctx.z_max = -INFINITY;
     ++ctx.feature;
   }
   if (region.rings.empty())
     throw InputError(source_name + ": no domain: the collection has no Polygon or MultiPolygon with role \"domain\"");
+  if (varying_z > 0 && warnings)
+    warnings->push_back(source_name + (varying_z > 1 ? ": features " : ": feature ") + std::to_string(first_varying_z) +
+                        (varying_z > 1 ? " and " + std::to_string(varying_z - 1) + " more have" : std::string(" has")) +
+                        " positions whose third coordinate (z) varies; the mesh is 2D and z is dropped");
   return region;
 }
 

@@ -113,6 +113,12 @@ struct Builder {
       if (n.rfind("boundary", 0) == 0) { mesh.boundary_edges.push_back(e); mesh.boundary_edge_ring.push_back(id); }
       else if (n.rfind("feature", 0) == 0) { mesh.feature_edges.push_back(e); mesh.feature_edge_curve.push_back(id); }
       else other_lines[n].push_back(e);
+    } else if (type == 4 || type == 5) {  // skipping them would judge what is left of a 3D mesh
+      c.fail(std::string("a 3D element (") + (type == 4 ? "tetrahedron" : "hexahedron") +
+             "); only 2D meshes of triangles and quadrilaterals are read");
+    } else if (type == 9 || type == 10) {
+      c.fail(std::string("a second-order ") + (type == 9 ? "triangle" : "quadrilateral") +
+             " (element type " + std::to_string(type) + "); only linear triangles and quadrilaterals are read");
     }
   }
   // Lines of other names (named boundary segments, named features): boundary edges where one cell has the

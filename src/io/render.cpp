@@ -298,6 +298,17 @@ RenderStats render_mesh(const std::filesystem::path& path, const QuadMesh& mesh,
     cairo_stroke(cr);
   };
   stroke_edges(mesh.boundary_edges.empty() ? derived_boundary : mesh.boundary_edges, {0, 0, 0}, 2.0);
+  // Named boundary segments over the boundary: open ones magenta, other kinds orange.
+  if (region)
+    for (const BoundarySegment& b : region->boundary_segments) {
+      for (std::size_t i = 0; i < b.line.size(); ++i) {
+        const auto [x, y] = px(b.line[i]);
+        i == 0 ? cairo_move_to(cr, x, y) : cairo_line_to(cr, x, y);
+      }
+      set(cr, b.kind == "open" ? Rgb{1.0, 0.0, 1.0} : Rgb{1.0, 0.55, 0.0});
+      cairo_set_line_width(cr, 3.0);
+      cairo_stroke(cr);
+    }
   stroke_edges(mesh.feature_edges, {0.0, 0.35, 0.95}, 2.0);
 
   // Singular nodes by valence: filled discs inside, rings on the boundary. Where they are dense on the picture

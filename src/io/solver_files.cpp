@@ -183,23 +183,6 @@ const std::vector<std::string>& output_extensions() {
   return known;
 }
 
-void check_output_path(const fs::path& path) {
-  const std::string ext = lower_extension(path);
-  const auto& known = output_extensions();
-  if (std::find(known.begin(), known.end(), ext) == known.end()) {
-    std::string list;
-    for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
-    throw InputError(path.string() + ": unknown output format '" + ext + "' (known: " + list + ")");
-  }
-  std::error_code ec;
-  if (fs::is_directory(path, ec)) throw InputError(path.string() + ": is a directory, not an output file");
-  const fs::path dir = path.parent_path().empty() ? fs::path(".") : path.parent_path();
-  if (!fs::is_directory(dir, ec)) throw InputError(path.string() + ": the directory " + dir.string() + " does not exist");
-  // Outputs are written to a temporary beside the target and renamed, so the directory must be writable.
-  if (::access(dir.c_str(), W_OK | X_OK) != 0)
-    throw InputError(path.string() + ": the directory " + dir.string() + " is not writable");
-  if (fs::exists(path, ec) && ::access(path.c_str(), W_OK) != 0)
-    throw InputError(path.string() + ": the file exists and is not writable");
-}
+void check_output_path(const fs::path& path) { check_output_file(path, "output", output_extensions()); }
 
 }  // namespace polysquare

@@ -70,6 +70,10 @@ QuadMesh parse_vtu(const std::string& xml, const std::string& name) {
     if (end < start) throw InputError(name + ": decreasing offsets");
     if (types[c] == 9 && end - start == 4) mesh.quads.push_back({node(start), node(start + 1), node(start + 2), node(start + 3)});
     else if (types[c] == 5 && end - start == 3) mesh.triangles.push_back({node(start), node(start + 1), node(start + 2)});
+    else if (types[c] != 1 && types[c] != 3 && types[c] != 4)  // vertices and lines carry no area
+      throw InputError(name + ": cell " + std::to_string(c) + " has VTK type " + std::to_string(types[c]) + " with " +
+                       std::to_string(end - start) + " nodes; only triangles (5) and quadrilaterals (9) are read" +
+                       (types[c] >= 10 && types[c] <= 14 ? " (it is a 3D cell)" : ""));
     start = end;
   }
   return mesh;

@@ -7,6 +7,8 @@
 #include <unordered_map>
 #include <unordered_set>
 
+#include "polysquare/core/error.h"
+
 namespace polysquare {
 namespace {
 
@@ -87,6 +89,7 @@ QuadMetrics quad_metrics(const QuadMesh& mesh) {
       const Vec2 p = mesh.nodes[quad[k]];
       const Vec2 en = mesh.nodes[quad[(k + 1) % 4]] - p, ep = mesh.nodes[quad[(k + 3) % 4]] - p;
       const double ln = norm(en), lp = norm(ep);
+      if (!std::isfinite(ln) || !std::isfinite(lp)) { degenerate = true; continue; }  // NaN compares false below
       lmin = std::min(lmin, ln);
       lmax = std::max(lmax, ln);
       if (ln == 0 || lp == 0) { degenerate = true; continue; }
@@ -114,6 +117,48 @@ QuadMetrics quad_metrics(const QuadMesh& mesh) {
 }
 
 QualityReport compute_quality(const QuadMesh& mesh) { return compute_quality(mesh, quad_metrics(mesh)); }
+
+double mesh_area(const QuadMesh& mesh) {
+  double a = 0.0;
+  for (const auto& q : mesh.quads) {
+    const Vec2 o = mesh.nodes[q[0]];
+    a += 0.5 * cross(mesh.nodes[q[2]] - o, mesh.nodes[q[3]] - mesh.nodes[q[1]]);
+  }
+  return a;
+}
+
+double domain_area(const Region& region, const std::vector<int>& skip_parts) {
+  double a = 0.0;
+  for (const Ring& r : region.rings) {
+    if (std::find(skip_parts.begin(), skip_parts.end(), r.part) != skip_parts.end() || r.points.empty()) continue;
+    const Vec2 o = r.points.front();
+    double s = 0.0;
+    for (std::size_t i = 0; i < r.points.size(); ++i) s += cross(r.points[i] - o, r.points[(i + 1) % r.points.size()] - o);
+    a += r.hole ? -std::abs(0.5 * s) : std::abs(0.5 * s);
+  }
+  return a;
+}
+
+double area_relative_mismatch(const QuadMesh& mesh, const Region& region, const std::vector<int>& skip_parts) {
+  const double r = domain_area(region, skip_parts);
+  return r != 0 ? (mesh_area(mesh) - r) / r : INFINITY;
+}
+
+void check_judgeable(const QuadMesh& mesh, const std::string& name) {
+  auto check_node = [&](std::int32_t v) {
+    const Vec2 p = mesh.nodes[static_cast<std::size_t>(v)];
+    if (!std::isfinite(p.x) || !std::isfinite(p.y)) {
+      std::ostringstream os;
+      os << name << ": node " << v + 1 << " has a non-finite coordinate (" << p.x << ", " << p.y << ")";
+      throw InputError(os.str());
+    }
+  };
+  for (const auto& q : mesh.quads) for (auto v : q) check_node(v);
+  for (const auto& t : mesh.triangles) for (auto v : t) check_node(v);
+  if (mesh.quads.empty())
+    throw InputError(name + ": the mesh has no quadrilaterals (" + std::to_string(mesh.triangles.size()) +
+                     " triangles, " + std::to_string(mesh.nodes.size()) + " nodes): there is nothing to judge");
+}
 
 QualityReport compute_quality(const QuadMesh& mesh, const QuadMetrics& m) {
   QualityReport r;
@@ -163,7 +208,7 @@ DomainDistance domain_distance(const QuadMesh& mesh, const Region& region, const
     double s = 0;
     for (std::size_t i = 0; i < r.points.size(); ++i) {
       ring_segs.push_back({r.points[i], r.points[(i + 1) % r.points.size()]});
-      s += cross(r.points[i], r.points[(i + 1) % r.points.size()]);
+      s += cross(r.points[i] - r.points[0], r.points[(i + 1) % r.points.size()] - r.points[0]);
     }
     region_area += r.hole ? -std::abs(0.5 * s) : std::abs(0.5 * s);
   }
@@ -194,10 +239,8 @@ DomainDistance domain_distance(const QuadMesh& mesh, const Region& region, const
     for (const auto& e : mesh.feature_edges)
       for (auto v : e) d.feature_node_max_distance = std::max(d.feature_node_max_distance, features.nearest(mesh.nodes[v]));
   }
-  double mesh_area = 0;
-  for (const auto& q : mesh.quads)
-    mesh_area += 0.5 * (cross(mesh.nodes[q[0]], mesh.nodes[q[1]]) + cross(mesh.nodes[q[1]], mesh.nodes[q[2]]) +
-                        cross(mesh.nodes[q[2]], mesh.nodes[q[3]]) + cross(mesh.nodes[q[3]], mesh.nodes[q[0]]));
+  // Areas relative to a cell's own nodes: products of absolute coordinates far from the origin cancel.
+  double mesh_area = polysquare::mesh_area(mesh);
   for (const auto& t : mesh.triangles) mesh_area += 0.5 * orient2(mesh.nodes[t[0]], mesh.nodes[t[1]], mesh.nodes[t[2]]);
   d.area_relative_change = region_area != 0 ? (mesh_area - region_area) / region_area : 0;
   // Sharp input vertices must coincide with a mesh node.

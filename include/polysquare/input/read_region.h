@@ -43,8 +43,10 @@ struct InputNotes {
 /// and holes clockwise; feature curves with 2 distinct points, inside or on the domain, not crossing each other.
 /// Boundary segments are placed on their rings (place_boundary_segments).
 /// Throws InputError naming region.source, the feature index and a coordinate.
-/// With options.repair, each repair made is appended to `repairs` (a sentence naming the feature and coordinate);
-/// feature pieces left out (outside the domain, along the boundary) are appended to `warnings`.
+/// With options.repair, each repair made is appended to `repairs` (a sentence naming the feature and coordinate).
+/// A hole inside another hole of its polygon becomes a polygon part of its own (an island in a lake), said in
+/// `warnings`, which also get the stretches of feature curves left to the boundary (split_features); feature
+/// points outside the domain or in a hole are refused (dropped and listed in `repairs` with options.repair).
 void validate_region(Region& region, const InputOptions& options = {}, std::vector<std::string>* repairs = nullptr,
                      std::vector<std::string>* warnings = nullptr);
 

@@ -20,13 +20,18 @@ struct FeatureSplitStats {
   std::size_t ring_vertices_added = 0;
   std::size_t pieces_dropped = 0;  ///< pieces outside the domain, inside a hole, or lying along the boundary
   std::size_t pieces_in_holes = 0; ///< of those, pieces inside a hole (clip_holes)
-  std::vector<std::string> dropped;  ///< one sentence per dropped piece (file, feature, coordinate): nothing is
-                                     ///< dropped silently
+  std::size_t stretches_along_boundary = 0;  ///< stretches of a curve within the snap distance of a ring, left to
+                                             ///< the ring (their neighbouring stretches are kept, ends on the ring)
+  std::vector<std::string> warnings;  ///< one sentence per dropped stretch along the boundary, naming the file,
+                                      ///< the feature and its two ends
 };
 
 /// Splits every feature curve at its crossings (the crossing point is computed once and inserted into both
 /// curves, and into the ring when the other curve is a ring), drops pieces outside the domain, inside holes or
-/// along the boundary, and keeps source_feature on every piece. Rings must already be valid (validate_region).
+/// along the boundary, and keeps source_feature on every piece. Pieces are judged segment by segment: a stretch
+/// of segments whose midpoints lie within the snap distance of a ring runs along the boundary and is dropped
+/// (with a warning), and a stretch of the same curve that then leaves the boundary is kept, its end moved onto
+/// the ring (inserted there as a vertex), so a curve that starts along the boundary is not lost whole. Rings must already be valid (validate_region).
 /// Throws InputError naming the file, the feature and a coordinate when a feature has no piece in the domain.
 FeatureSplitStats split_features(Region& region, const FeatureSplitOptions& options = {});
 

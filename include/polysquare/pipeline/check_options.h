@@ -1,0 +1,30 @@
+// Option values checked before any work, next to the options structs whose defaults they guard.
+#pragma once
+
+#include <string>
+
+#include "polysquare/core/region.h"
+#include "polysquare/pipeline/mesh_region.h"
+
+namespace polysquare {
+
+/// Largest MeshOptions::threads accepted (tbb's global_control takes any count; a billion ended in bad_alloc).
+constexpr int kMaxThreads = 4096;
+
+/// Throws InputError for an option value the pipeline cannot honour, naming the option (by its CLI flag and its
+/// field) and the value: NaN or infinite values anywhere; size <= 0; min_scaled_jacobian outside [0, 1];
+/// max_edge_ratio below 1; corner_threshold_deg and refine.flat_corner_deg outside [0, 180]; simplify,
+/// map.deform.boundary_weight and map.deform.feature_weight below 0; feature_tolerance <= 0; max_quads 0;
+/// threads outside [0, kMaxThreads]; parts below 0. A NaN gate would otherwise compare false and pass every mesh.
+void check_mesh_options(const MeshOptions& options);
+
+/// Throws InputError when `options.size` does not suit `region` (read and validated): larger than half the
+/// region's smaller extent, or an estimated quad count (area / size^2) above options.max_quads. Figures in the
+/// messages are printed with 6 significant digits; a region whose extent or area is not a finite positive number
+/// is refused as such. The message starts with region.source.
+void check_mesh_size(const Region& region, const MeshOptions& options);
+
+/// `v` with 6 significant digits ("1e+300", "0.25", "nan"): numbers in messages.
+std::string short_number(double v);
+
+}  // namespace polysquare

@@ -1,0 +1,85 @@
+#include "polysquare/pipeline/check_options.h"
+
+#include <cmath>
+#include <sstream>
+
+#include "polysquare/core/error.h"
+
+namespace polysquare {
+
+std::string short_number(double v) {
+  std::ostringstream os;
+  os.precision(6);
+  os << v;
+  return os.str();
+}
+
+namespace {
+
+void require(bool ok, const char* flag, const char* field, double value, const char* range) {
+  if (ok) return;
+  throw InputError(std::string(flag) + " (" + field + ") must be " + range + ", got " + short_number(value));
+}
+
+// `lo <= v <= hi`, false for NaN.
+bool within(double v, double lo, double hi) { return v >= lo && v <= hi; }
+
+}  // namespace
+
+void check_mesh_options(const MeshOptions& o) {
+  require(std::isfinite(o.size) && o.size > 0, "--size", "size", o.size, "a positive finite number");
+  require(within(o.min_scaled_jacobian, 0.0, 1.0), "--min-sj", "min_scaled_jacobian", o.min_scaled_jacobian,
+          "in [0, 1]");
+  require(std::isfinite(o.max_edge_ratio) && o.max_edge_ratio >= 1.0, "--max-edge-ratio", "max_edge_ratio",
+          o.max_edge_ratio, "a finite number >= 1 (the longest edge of a quad over its shortest)");
+  require(within(o.corner_threshold_deg, 0.0, 180.0), "--corner-angle", "corner_threshold_deg", o.corner_threshold_deg,
+          "in [0, 180] degrees");
+  require(within(o.refine.flat_corner_deg, 0.0, 180.0), "--flat-corner-angle", "refine.flat_corner_deg",
+          o.refine.flat_corner_deg, "in [0, 180] degrees (180 = off)");
+  require(std::isfinite(o.simplify) && o.simplify >= 0, "--simplify", "simplify", o.simplify,
+          "a finite number >= 0 (0 = off)");
+  require(std::isfinite(o.map.deform.boundary_weight) && o.map.deform.boundary_weight >= 0, "--boundary-weight",
+          "map.deform.boundary_weight", o.map.deform.boundary_weight, "a finite number >= 0");
+  require(std::isfinite(o.map.deform.feature_weight) && o.map.deform.feature_weight >= 0, "--feature-weight",
+          "map.deform.feature_weight", o.map.deform.feature_weight, "a finite number >= 0");
+  require(std::isfinite(o.feature_tolerance) && o.feature_tolerance > 0, "--feature-tolerance", "feature_tolerance",
+          o.feature_tolerance, "a positive finite fraction of the size");
+  require(o.max_quads >= 1, "--max-quads", "max_quads", static_cast<double>(o.max_quads), "at least 1");
+  require(o.threads >= 0 && o.threads <= kMaxThreads, "--threads", "threads", o.threads,
+          "in [0, 4096] (0 = all cores)");
+  require(o.parts >= 0, "--parts", "parts", o.parts, ">= 0 (0 = automatic)");
+}
+
+void check_mesh_size(const Region& region, const MeshOptions& o) {
+  check_mesh_options(o);
+  const std::string src = region.source.empty() ? std::string("region") : region.source;
+  const Box2 box = region.bounding_box();
+  const double w = box.hi.x - box.lo.x, h = box.hi.y - box.lo.y;
+  if (!(std::isfinite(w) && std::isfinite(h) && w > 0 && h > 0))
+    throw InputError(src + ": the domain's extent is not a finite positive size (" + short_number(w) + " x " +
+                     short_number(h) + ")");
+  double area = 0.0;
+  for (const Ring& r : region.rings) {
+    double s = 0.0;
+    const auto& p = r.points;
+    // Relative to the box corner, so that coordinates far from the origin keep their digits.
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      const Vec2 a{p[i].x - box.lo.x, p[i].y - box.lo.y};
+      const Vec2 b{p[(i + 1) % p.size()].x - box.lo.x, p[(i + 1) % p.size()].y - box.lo.y};
+      s += a.x * b.y - a.y * b.x;
+    }
+    area += r.hole ? -std::abs(0.5 * s) : std::abs(0.5 * s);
+  }
+  if (!(std::isfinite(area) && area > 0))
+    throw InputError(src + ": the domain's area is not a finite positive number (" + short_number(area) + ")");
+  if (o.size > 0.5 * std::min(w, h))
+    throw InputError(src + ": size " + short_number(o.size) + " is larger than half the region's extent (" +
+                     short_number(w) + " x " + short_number(h) + ")");
+  const double estimate = area / (o.size * o.size);
+  if (!(estimate <= static_cast<double>(o.max_quads)))
+    throw InputError(src + ": size " + short_number(o.size) + " would need about " + short_number(estimate) +
+                     " quads (area " + short_number(area) + " / size^2), more than the limit of " +
+                     std::to_string(o.max_quads) + " (raise --max-quads)");
+}
+
+}  // namespace polysquare
