@@ -372,6 +372,187 @@ std::vector<DroppedCurve> collapse_narrow_faces(Region& region, double min_width
   return dropped;
 }
 
+namespace {
+
+// The closest point to q on a polyline: segment index, parameter along it, the point.
+struct Foot {
+  std::size_t segment = 0;
+  double t = 0.0;
+  Vec2 at{};
+  double distance = INFINITY;
+};
+Foot closest_on(Vec2 q, const std::vector<Vec2>& line) {
+  Foot best;
+  for (std::size_t i = 0; i + 1 < line.size(); ++i) {
+    const Vec2 d = line[i + 1] - line[i];
+    const double len2 = dot(d, d);
+    const double t = len2 > 0.0 ? std::clamp(dot(q - line[i], d) / len2, 0.0, 1.0) : 0.0;
+    const Vec2 at = line[i] + t * d;
+    const double dist = distance(q, at);
+    if (dist < best.distance) best = {i, t, at, dist};
+  }
+  return best;
+}
+
+// A curve leaving a meeting point: a feature piece (forward from its first point or backward from its last) or
+// a ring walked one way from one of its vertices.
+struct Dart {
+  bool ring = false;
+  int index = -1;      // feature or ring
+  bool reversed = false;  // feature: walked from its last point; ring: walked against its order
+  std::size_t vertex = 0;  // ring: the meeting vertex
+};
+
+std::vector<Vec2> dart_points(const Region& region, const Dart& d, double max_length) {
+  std::vector<Vec2> out;
+  if (!d.ring) {
+    out = region.features[static_cast<std::size_t>(d.index)].points;
+    if (d.reversed) std::reverse(out.begin(), out.end());
+    return out;
+  }
+  const auto& p = region.rings[static_cast<std::size_t>(d.index)].points;
+  const std::size_t n = p.size();
+  double length = 0.0;
+  for (std::size_t k = 0; k <= n && length <= max_length; ++k) {
+    out.push_back(p[(d.vertex + (d.reversed ? n - k % n : k)) % n]);
+    if (out.size() > 1) length += distance(out[out.size() - 2], out.back());
+  }
+  return out;
+}
+
+double polyline_length(const std::vector<Vec2>& line) {
+  double l = 0.0;
+  for (std::size_t i = 0; i + 1 < line.size(); ++i) l += distance(line[i], line[i + 1]);
+  return l;
+}
+
+// Direction in which a polyline leaves its first point, read at `reach` along it (short first segments of a
+// finely drawn curve say little about where it goes).
+Vec2 leaving_direction(const std::vector<Vec2>& line, double reach) {
+  for (std::size_t i = 1; i < line.size(); ++i)
+    if (distance(line[0], line[i]) >= reach || i + 1 == line.size()) return line[i] - line[0];
+  return {0, 0};
+}
+
+}  // namespace
+
+std::vector<DroppedCurve> open_narrow_wedges(Region& region, double min_width, double max_angle_deg) {
+  std::vector<DroppedCurve> done;
+  if (!(min_width > 0.0)) return done;
+  const double cos_max = std::cos(max_angle_deg * M_PI / 180.0);
+  for (int round = 0; round < 10000; ++round) {
+    // Meeting points: ends of open feature pieces, with every curve leaving them.
+    std::map<std::pair<double, double>, std::vector<Dart>> at;
+    for (std::size_t f = 0; f < region.features.size(); ++f) {
+      const FeatureCurve& c = region.features[f];
+      if (c.closed || c.points.size() < 2) continue;
+      at[{c.points.front().x, c.points.front().y}].push_back({false, static_cast<int>(f), false, 0});
+      at[{c.points.back().x, c.points.back().y}].push_back({false, static_cast<int>(f), true, 0});
+    }
+    for (std::size_t r = 0; r < region.rings.size(); ++r)
+      for (std::size_t i = 0; i < region.rings[r].points.size(); ++i) {
+        const Vec2 p = region.rings[r].points[i];
+        if (auto it = at.find({p.x, p.y}); it != at.end()) {
+          it->second.push_back({true, static_cast<int>(r), false, i});
+          it->second.push_back({true, static_cast<int>(r), true, i});
+        }
+      }
+    bool changed = false;
+    for (auto& [key, darts] : at) {
+      for (std::size_t b = 0; b < darts.size() && !changed; ++b) {
+        if (darts[b].ring) continue;
+        const std::vector<Vec2> bp = dart_points(region, darts[b], 0.0);
+        const Vec2 db = leaving_direction(bp, 0.25 * min_width);
+        for (std::size_t a = 0; a < darts.size() && !changed; ++a) {
+          if (a == b || (darts[a].ring == darts[b].ring && darts[a].index == darts[b].index)) continue;
+          const std::vector<Vec2> ap = dart_points(region, darts[a], polyline_length(bp) + 2.0 * min_width);
+          const Vec2 da = leaving_direction(ap, 0.25 * min_width);
+          const double la = std::hypot(da.x, da.y), lb = std::hypot(db.x, db.y);
+          if (!(la > 0.0 && lb > 0.0) || dot(da, db) < cos_max * la * lb) continue;
+          // The first vertex of B at least min_width from A (B's stretch before it goes).
+          auto first_away = [&](const std::vector<Vec2>& from, const std::vector<Vec2>& to) {
+            std::size_t k = 1;
+            while (k < from.size() && closest_on(from[k], to).distance < min_width) ++k;
+            return k;
+          };
+          const std::size_t k = first_away(bp, ap);
+          if (k >= bp.size()) continue;  // B stays beside A to its end: a narrow face, not a wedge
+          // Of two features, the one that loses the shorter stretch leaves the other (a river leaves the
+          // shoreline it runs along); ties go by index.
+          auto prefix = [](const std::vector<Vec2>& line, std::size_t k) {
+            return polyline_length(std::vector<Vec2>(line.begin(), line.begin() + static_cast<std::ptrdiff_t>(k + 1)));
+          };
+          if (!darts[a].ring) {
+            const std::vector<Vec2> whole_a = dart_points(region, darts[a], 0.0);
+            const std::size_t ka = first_away(whole_a, bp);
+            if (ka < whole_a.size() &&
+                (prefix(whole_a, ka) < prefix(bp, k) || (prefix(whole_a, ka) == prefix(bp, k) && darts[a].index < darts[b].index)))
+              continue;
+          }
+          double stretch = 0.0;
+          for (std::size_t i = 1; i < k; ++i) stretch = std::max(stretch, closest_on(bp[i], ap).distance);
+          const Foot foot = closest_on(bp[k], ap);
+          if (foot.segment == 0 && foot.t == 0.0) continue;
+          if (!darts[a].ring && foot.segment + 2 == ap.size() && foot.t == 1.0) continue;  // A's far end: no room
+          Region next = region;
+          // B now starts at the foot.
+          std::vector<Vec2> nb{foot.at};
+          nb.insert(nb.end(), bp.begin() + static_cast<std::ptrdiff_t>(k), bp.end());
+          if (darts[b].reversed) std::reverse(nb.begin(), nb.end());
+          next.features[static_cast<std::size_t>(darts[b].index)].points = nb;
+          // The foot becomes a vertex of A (a feature is cut there: curves meet only at their ends).
+          const bool at_vertex = foot.t == 0.0 || foot.t == 1.0;
+          const std::size_t vertex = foot.segment + (foot.t == 1.0 ? 1 : 0);
+          if (!darts[a].ring) {
+            FeatureCurve& fa = next.features[static_cast<std::size_t>(darts[a].index)];
+            std::vector<Vec2> first(ap.begin(), ap.begin() + static_cast<std::ptrdiff_t>(at_vertex ? vertex + 1 : foot.segment + 1));
+            if (!at_vertex) first.push_back(foot.at);
+            std::vector<Vec2> second{foot.at};
+            second.insert(second.end(), ap.begin() + static_cast<std::ptrdiff_t>(at_vertex ? vertex + 1 : foot.segment + 1), ap.end());
+            if (darts[a].reversed) {
+              std::reverse(first.begin(), first.end());
+              std::reverse(second.begin(), second.end());
+            }
+            FeatureCurve other = fa;
+            fa.points = std::move(first);
+            other.points = std::move(second);
+            next.features.push_back(std::move(other));
+          } else if (!at_vertex) {
+            auto& rp = next.rings[static_cast<std::size_t>(darts[a].index)].points;
+            const std::size_t n = rp.size();
+            // Walked forward the foot lies after ring vertex (v0 + segment); walked backward, before (v0 - segment).
+            const std::size_t after = darts[a].reversed ? (darts[a].vertex + n - foot.segment - 1) % n
+                                                         : (darts[a].vertex + foot.segment) % n;
+            rp.insert(rp.begin() + static_cast<std::ptrdiff_t>(after + 1), foot.at);
+          }
+          // The link may touch nothing but its own two ends.
+          const Vec2 p0 = foot.at, p1 = bp[k];
+          bool crosses = false;
+          auto test = [&](Vec2 u, Vec2 v) {
+            if (u == p0 || v == p0 || u == p1 || v == p1) return;
+            crosses = crosses || segments_touch(p0, p1, u, v);
+          };
+          for (const Ring& r : next.rings)
+            for (std::size_t i = 0; i < r.points.size() && !crosses; ++i) test(r.points[i], r.points[(i + 1) % r.points.size()]);
+          for (const FeatureCurve& c : next.features)
+            for (std::size_t i = 0; i + (c.closed ? 0 : 1) < c.points.size() && !crosses; ++i)
+              test(c.points[i], c.points[(i + 1) % c.points.size()]);
+          for (Vec2 q : next.feature_points) crosses = crosses || point_segment_distance(q, p0, p1) == 0.0;
+          if (crosses) continue;
+          const double opening = std::acos(std::min(1.0, dot(da, db) / (la * lb)));
+          done.push_back({DroppedCurve::Kind::wedge_stretch, region.features[static_cast<std::size_t>(darts[b].index)].source_feature,
+                          2.0 * min_width * std::sin(0.5 * opening), 0.0, stretch, bp.front()});
+          region = std::move(next);
+          changed = true;
+        }
+      }
+      if (changed) break;
+    }
+    if (!changed) break;
+  }
+  return done;
+}
+
 double inscribed_width(const std::vector<Vec2>& ring, double tolerance, double enough) {
   // Best-first search over square cells (the largest-inscribed-circle search): a cell's centre is at distance d
   // from the ring (negative outside), and no point of the cell is farther than d + half its diagonal, so cells

@@ -72,8 +72,10 @@ nlohmann::json part_json(const PartMapStats& s) {
 nlohmann::json dropped_json(const std::vector<DroppedCurve>& curves) {
   nlohmann::json out = nlohmann::json::array();
   for (const DroppedCurve& d : curves) {
-    const char* kind = d.kind == DroppedCurve::Kind::hole ? "hole"
-                       : d.kind == DroppedCurve::Kind::feature_loop ? "feature_loop" : "feature_piece";
+    const char* kind = d.kind == DroppedCurve::Kind::hole           ? "hole"
+                       : d.kind == DroppedCurve::Kind::feature_loop  ? "feature_loop"
+                       : d.kind == DroppedCurve::Kind::feature_piece ? "feature_piece"
+                                                                     : "wedge_stretch";
     out.push_back({{"kind", kind}, {"input_feature", d.source_feature}, {"width", d.width}, {"area", d.area},
                    {"distance", d.distance}, {"at", {d.at.x, d.at.y}}});
   }
@@ -522,6 +524,8 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
     // Islands and faces between curves narrower than the size hold no quad of that size: their curves go first.
     dropped_curves = drop_narrow_islands(simplified, options.min_island_width * options.size);
     for (DroppedCurve& d : collapse_narrow_faces(simplified, options.min_island_width * options.size))
+      dropped_curves.push_back(d);
+    for (DroppedCurve& d : open_narrow_wedges(simplified, options.min_island_width * options.size))
       dropped_curves.push_back(d);
     // Feature curves that end a small fraction of the size short of the boundary or of another curve (crossing
     // points computed in another projection) are joined to it first: a gap far below h cannot be meshed, and a

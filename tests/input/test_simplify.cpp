@@ -180,3 +180,32 @@ TEST(NarrowIslands, DeltaBoxIslandLoopsNarrowerThanTheSizeGo) {
   EXPECT_NO_THROW(validate_region(r));
   EXPECT_TRUE(drop_narrow_islands(r, 200.0).empty());
 }
+
+TEST(NarrowWedges, ARiverLeavingAShorelineAtFiveDegreesLeavesItWhereTheyAreTheSizeApart) {
+  // A shoreline along y = 50 and a river leaving it at (50, 50) at about 5 degrees, 1.8 above it at x = 70,
+  // then turning north at x = 75 to the boundary: at size 5 the wedge between them holds no quad.
+  Region r;
+  r.source = "test";
+  r.num_parts = 1;
+  r.rings.push_back({{{0, 0}, {100, 0}, {100, 50}, {100, 100}, {75, 100}, {0, 100}, {0, 50}}, 0, false, 0});
+  r.features.push_back({{{0, 50}, {50, 50}}, false, 1});
+  r.features.push_back({{{50, 50}, {100, 50}}, false, 1});
+  r.features.push_back({{{50, 50}, {60, 50.9}, {70, 51.8}, {75, 60}, {75, 100}}, false, 2});
+  ASSERT_NO_THROW(validate_region(r));
+  Region wide = r;
+  EXPECT_TRUE(open_narrow_wedges(wide, 5.0, 3.0).empty());  // 5 degrees is not below 3
+  const std::vector<DroppedCurve> d = open_narrow_wedges(r, 5.0);
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_EQ(d[0].kind, DroppedCurve::Kind::wedge_stretch);
+  EXPECT_EQ(d[0].source_feature, 2);
+  EXPECT_NEAR(d[0].distance, 1.8, 1e-9);  // the farthest removed vertex from the shoreline
+  // The river now leaves the shoreline at the foot of (75, 60), straight north; the shoreline is cut there.
+  ASSERT_EQ(r.features.size(), 4u);
+  EXPECT_EQ(r.features[2].points.front(), (Vec2{75, 50}));
+  EXPECT_EQ(r.features[2].points[1], (Vec2{75, 60}));
+  EXPECT_EQ(r.features[1].points.back(), (Vec2{75, 50}));
+  EXPECT_EQ(r.features[3].points.front(), (Vec2{75, 50}));
+  EXPECT_EQ(r.features[3].points.back(), (Vec2{100, 50}));
+  EXPECT_NO_THROW(validate_region(r));
+  EXPECT_TRUE(open_narrow_wedges(r, 5.0).empty());
+}

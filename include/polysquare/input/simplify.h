@@ -35,6 +35,8 @@ struct DroppedCurve {
     feature_loop,   ///< a closed feature curve (an island drawn as a feature)
     feature_piece,  ///< a piece of a feature curve between two crossings that closed a narrow face with other
                     ///< curves (two shorelines crossing twice within the size); the face joins its neighbour
+    wedge_stretch,  ///< the start of a feature piece that left a meeting point at a small angle to another curve
+                    ///< and ran within the size of it; the piece now leaves that curve where they are the size apart
   };
   Kind kind = Kind::hole;
   int source_feature = -1;  ///< input feature it came from (for messages)
@@ -56,6 +58,15 @@ std::vector<DroppedCurve> drop_narrow_islands(Region& region, double min_width);
 /// boundary goes, and only if all of it lies within `min_width` of it. Faces holding other curves or feature
 /// points, and faces outside the domain, are left alone. Returns what was removed.
 std::vector<DroppedCurve> collapse_narrow_faces(Region& region, double min_width);
+
+/// Opens wedges narrower than the size: where a feature piece leaves a meeting point (a crossing, or its end on a
+/// ring) at less than `max_angle_deg` to another curve leaving the same point, its start runs within `min_width`
+/// of that curve and no quad of that size fits between them. The piece's stretch up to its first vertex at least
+/// `min_width` from the other curve is replaced by a straight link from the foot of that vertex on the other curve
+/// (a new vertex there, the other curve split if it is a feature), unless the link would cross a curve. The
+/// removed stretch lies within `min_width` of the other curve. Returns what was replaced (width = the angle's
+/// opening at `min_width`, distance = the largest distance of the removed stretch from the other curve).
+std::vector<DroppedCurve> open_narrow_wedges(Region& region, double min_width, double max_angle_deg = 20.0);
 
 /// Diameter of the largest disk inside the simple polygon `ring` (either orientation), found to within
 /// `tolerance`; the search stops as soon as a disk of diameter `enough` is found (0: no early stop).
