@@ -17,6 +17,7 @@
 #include "polysquare/core/version.h"
 #include "polysquare/fallback/split_triangles.h"
 #include "polysquare/input/simplify.h"
+#include "polysquare/pipeline/check_options.h"
 #include "polysquare/input/snap_points.h"
 #include "polysquare/pipeline/invariants.h"
 #include "polysquare/quality/quality.h"
@@ -29,7 +30,9 @@ double region_area(const Region& region) {
   double a = 0.0;
   for (const Ring& r : region.rings) {
     double s = 0.0;
-    for (std::size_t i = 0; i < r.points.size(); ++i) s += cross(r.points[i], r.points[(i + 1) % r.points.size()]);
+    // Relative to a point of the ring: far from the origin the products of absolute coordinates lose the area.
+    const Vec2 o = r.points.front();
+    for (std::size_t i = 0; i < r.points.size(); ++i) s += cross(r.points[i] - o, r.points[(i + 1) % r.points.size()] - o);
     a += 0.5 * s;  // outer rings counter-clockwise (+), holes clockwise (-)
   }
   return a;
@@ -496,18 +499,10 @@ Candidate try_split_fallback(const Region& region, const RegionPart& part, const
 
 MeshResult mesh_region(const Region& region, const MeshOptions& options) {
   const std::string src = region.source.empty() ? std::string("region") : region.source;
-  if (!(options.size > 0.0) || !std::isfinite(options.size))
-    throw InputError(src + ": size must be a positive number, got " + std::to_string(options.size));
+  check_mesh_options(options);      // NaN gates and out-of-range values, named by their flag
+  check_mesh_size(region, options);  // size against the region's extent and the quad budget
   const Box2 box = region.bounding_box();
   const double area = region_area(region);
-  if (options.size > 0.5 * std::min(box.hi.x - box.lo.x, box.hi.y - box.lo.y))
-    throw InputError(src + ": size " + std::to_string(options.size) + " is larger than half the region's extent (" +
-                     std::to_string(box.hi.x - box.lo.x) + " x " + std::to_string(box.hi.y - box.lo.y) + ")");
-  const double estimate = area / (options.size * options.size);
-  if (estimate > static_cast<double>(options.max_quads))
-    throw InputError(src + ": size " + std::to_string(options.size) + " would need about " +
-                     std::to_string(static_cast<long long>(estimate)) + " quads, more than the limit of " +
-                     std::to_string(options.max_quads) + " (raise --max-quads)");
 
   const auto t_start = std::chrono::steady_clock::now();
   ProgressReporter progress(options.progress);
@@ -611,9 +606,12 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
     if (best < 0) {
       std::string all;
       for (std::size_t c = 0; c < cands.size(); ++c)
-        all += (c ? "; " : "") + (cands.size() > 1 ? "with " + std::to_string(ks[c].subregions) + " subregions" +
-                                                (ks[c].bend_interfaces ? " (bent interfaces): " : ": ")
-                                              : std::string()) +
+        all += (c ? "; " : "") +
+               (cands.size() <= 1          ? std::string()
+                : ks[c].subregions == 0    ? std::string("the split-triangle fallback: ")
+                : ks[c].subregions == 1    ? std::string("one poly-square: ")
+                                           : "with " + std::to_string(ks[c].subregions) + " subregions" +
+                                              (ks[c].bend_interfaces ? " (bent interfaces): " : ": ")) +
                cands[c].error;
       errors[k] = all;
       return;
