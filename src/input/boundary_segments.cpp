@@ -9,13 +9,6 @@
 namespace polysquare {
 namespace {
 
-std::string pt(Vec2 p) {
-  std::ostringstream os;
-  os.precision(12);
-  os << "(" << p.x << ", " << p.y << ")";
-  return os.str();
-}
-
 double distance_to_ring(Vec2 p, const std::vector<Vec2>& ring) {
   double d = INFINITY;
   for (std::size_t i = 0; i < ring.size(); ++i) d = std::min(d, point_segment_distance(p, ring[i], ring[(i + 1) % ring.size()]));
@@ -75,8 +68,8 @@ void place_boundary_segments(Region& region, double tolerance) {
     std::vector<Vec2> line = b.line;
     line.erase(std::unique(line.begin(), line.end()), line.end());
     for (Vec2 p : line)
-      if (!std::isfinite(p.x) || !std::isfinite(p.y)) throw InputError(what + " has a non-finite coordinate " + pt(p));
-    if (line.size() < 2) throw InputError(what + " has fewer than 2 distinct points" + (line.empty() ? std::string() : ", at " + pt(line.front())));
+      if (!std::isfinite(p.x) || !std::isfinite(p.y)) throw InputError(what + " has a non-finite coordinate " + point_text(p));
+    if (line.size() < 2) throw InputError(what + " has fewer than 2 distinct points" + (line.empty() ? std::string() : ", at " + point_text(line.front())));
     const bool closed = line.size() >= 3 && line.front() == line.back();
     // Probe points: every vertex and the middle of every segment of the line.
     std::vector<Vec2> probes;
@@ -109,7 +102,7 @@ void place_boundary_segments(Region& region, double tolerance) {
       std::ostringstream far;
       far.precision(6);
       far << best_far;
-      throw InputError(what + " is not on the domain boundary: its point " + pt(best_at) + " is " + far.str() +
+      throw InputError(what + " is not on the domain boundary: its point " + point_text(best_at) + " is " + far.str() +
                        " from ring " + std::to_string(best_ring) +
                        (inside ? " (it lies inside the domain: give it the role \"feature\" to make it a feature curve)"
                                : " (a boundary segment must lie along one ring)"));
@@ -118,7 +111,7 @@ void place_boundary_segments(Region& region, double tolerance) {
     b.ring = ring;
     b.start = put_on_ring(line.front(), pts, tolerance);
     b.end = closed ? b.start : put_on_ring(line.back(), pts, tolerance);
-    if (!closed && b.start == b.end) throw InputError(what + " is shorter than the tolerance, at " + pt(line.front()));
+    if (!closed && b.start == b.end) throw InputError(what + " is shorter than the tolerance, at " + point_text(line.front()));
     if (!closed) {
       // The covered arc is the one holding the line's first middle point.
       const double length = ring_length(pts);
@@ -144,7 +137,7 @@ void place_boundary_segments(Region& region, double tolerance) {
         throw InputError(src + ": feature " + std::to_string(b.source_feature) + " (boundary line " + std::to_string(s) +
                          ") overlaps boundary line " + std::to_string(o) + " (feature " +
                          std::to_string(region.boundary_segments[static_cast<std::size_t>(o)].source_feature) + ") along ring " +
-                         std::to_string(b.ring) + " at " + pt(lerp(pts[verts[k]], pts[verts[k + 1]], 0.5)));
+                         std::to_string(b.ring) + " at " + point_text(lerp(pts[verts[k]], pts[verts[k + 1]], 0.5)));
       o = static_cast<int>(s);
     }
   }

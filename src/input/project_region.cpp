@@ -13,13 +13,6 @@
 namespace polysquare {
 namespace {
 
-std::string pt(Vec2 p) {
-  std::ostringstream os;
-  os.precision(12);
-  os << "(" << p.x << ", " << p.y << ")";
-  return os.str();
-}
-
 std::string units_of(const OGRSpatialReference& srs) {
   const char* name = nullptr;
   const double to_metre = srs.GetLinearUnits(&name);
@@ -60,7 +53,7 @@ void project_region(Region& region, const std::string& target_crs, InputNotes& n
                        " needs input that names its CRS; this input names none (ogr2ogr -a_srs sets one)");
     if (looks_like_degrees(region, box))
       notes.warnings.push_back(region.source + ": the input names no CRS but its coordinates look like longitude/latitude "
-                               "degrees (from " + pt(box.lo) + " to " + pt(box.hi) +
+                               "degrees (from " + point_text(box.lo) + " to " + point_text(box.hi) +
                                "); they are meshed as planar units, so --size is in degrees too. Give the file a CRS "
                                "(a GeoJSON \"crs\" member, a .prj, or ogr2ogr -a_srs EPSG:4326) to mesh in metres");
     return;
@@ -101,7 +94,7 @@ void project_region(Region& region, const std::string& target_crs, InputNotes& n
     if (!pts.empty()) transform->Transform(pts.size(), x.data(), y.data(), nullptr, nullptr, ok.data());
     for (std::size_t i = 0; i < pts.size(); ++i) {
       if (!ok[i] || !std::isfinite(x[i]) || !std::isfinite(y[i]))
-        throw InputError(region.source + ": " + what + ": the point " + pt(pts[i]) + " cannot be projected to " + target_name);
+        throw InputError(region.source + ": " + what + ": the point " + point_text(pts[i]) + " cannot be projected to " + target_name);
       pts[i] = {x[i], y[i]};
     }
   };

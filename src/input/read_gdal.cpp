@@ -33,13 +33,6 @@ std::string gdal_message() {
   return m && *m ? std::string(": ") + m : std::string();
 }
 
-std::string pt(Vec2 p) {
-  std::ostringstream os;
-  os.precision(12);
-  os << "(" << p.x << ", " << p.y << ")";
-  return os.str();
-}
-
 Dataset open_vector(const std::filesystem::path& path) {
   static std::once_flag once;
   std::call_once(once, [] { GDALAllRegister(); });
@@ -107,7 +100,7 @@ struct Reader {
     std::vector<int> ok(x.size(), 0);
     const_cast<OGRCoordinateTransformation*>(transform)->Transform(x.size(), x.data(), y.data(), nullptr, ok.data());
     for (std::size_t i = 0; i < x.size(); ++i)
-      if (!ok[i]) fail("cannot transform the point " + pt({x[i], y[i]}) + " into the region's CRS");
+      if (!ok[i]) fail("cannot transform the point " + point_text({x[i], y[i]}) + " into the region's CRS");
   }
 
   // As for GeoJSON: a ring repeats its first point at the end; the repeat is dropped here.
@@ -117,8 +110,8 @@ struct Reader {
       fail("ring " + std::to_string(index) + " has " + std::to_string(pts.size()) +
            " positions; a closed ring needs at least 4");
     if (!(pts.front() == pts.back()))
-      fail("ring " + std::to_string(index) + " is not closed: first point " + pt(pts.front()) + " differs from last point " +
-           pt(pts.back()));
+      fail("ring " + std::to_string(index) + " is not closed: first point " + point_text(pts.front()) + " differs from last point " +
+           point_text(pts.back()));
     pts.pop_back();
     return pts;
   }

@@ -20,13 +20,6 @@
 namespace polysquare {
 namespace {
 
-std::string pt(Vec2 p) {
-  std::ostringstream os;
-  os.precision(12);
-  os << "(" << p.x << ", " << p.y << ")";
-  return os.str();
-}
-
 // Relative to the first point: far from the origin (1e11) products of absolute coordinates cancel to zero.
 double signed_area(const std::vector<Vec2>& r) {
   double s = 0.0;
@@ -120,9 +113,9 @@ void for_each_meeting(std::vector<Segment>& segs, F report) {
 
 void check_points(const std::vector<Vec2>& pts, const std::string& where, const InputOptions& o) {
   for (Vec2 p : pts) {
-    if (!std::isfinite(p.x) || !std::isfinite(p.y)) throw InputError(where + " has a non-finite coordinate " + pt(p));
+    if (!std::isfinite(p.x) || !std::isfinite(p.y)) throw InputError(where + " has a non-finite coordinate " + point_text(p));
     if (std::abs(p.x) > o.max_abs_coordinate || std::abs(p.y) > o.max_abs_coordinate)
-      throw InputError(where + " has a coordinate beyond the limit of " + pt_number(o.max_abs_coordinate) + ": " + pt(p));
+      throw InputError(where + " has a coordinate beyond the limit of " + pt_number(o.max_abs_coordinate) + ": " + point_text(p));
   }
 }
 
@@ -135,8 +128,8 @@ void dedupe(std::vector<Vec2>& pts, bool closed, const std::string& where, bool 
   pts.erase(std::unique(pts.begin(), pts.end()), pts.end());
   while (closed && pts.size() > 1 && pts.front() == pts.back()) pts.pop_back();
   if (pts.size() == before) return;
-  if (!repair) throw InputError(where + " repeats the point " + pt(first_repeat) + " (--repair drops repeated points)");
-  if (repairs) repairs->push_back(where + ": dropped " + std::to_string(before - pts.size()) + " repeated point(s), first at " + pt(first_repeat));
+  if (!repair) throw InputError(where + " repeats the point " + point_text(first_repeat) + " (--repair drops repeated points)");
+  if (repairs) repairs->push_back(where + ": dropped " + std::to_string(before - pts.size()) + " repeated point(s), first at " + point_text(first_repeat));
 }
 
 }  // namespace
@@ -161,7 +154,7 @@ void validate_region(Region& region, const InputOptions& options, std::vector<st
     check_points(ring.points, ring_name(r), options);
     dedupe(ring.points, true, ring_name(r), options.repair, repairs);
     if (ring.points.size() < 3)
-      throw InputError(ring_name(r) + " has fewer than 3 distinct points, at " + pt(ring.points.front()));
+      throw InputError(ring_name(r) + " has fewer than 3 distinct points, at " + point_text(ring.points.front()));
   }
   for (std::size_t f = 0; f < region.features.size(); ++f) {
     FeatureCurve& c = region.features[f];
@@ -174,7 +167,7 @@ void validate_region(Region& region, const InputOptions& options, std::vector<st
     dedupe(c.points, c.closed, feature_name(f), options.repair, repairs);
     if (c.points.size() < 2 || (c.closed && c.points.size() < 3))
       throw InputError(feature_name(f) + " has too few distinct points" +
-                       (c.points.empty() ? std::string() : ", at " + pt(c.points.front())));
+                       (c.points.empty() ? std::string() : ", at " + point_text(c.points.front())));
   }
   check_points(region.feature_points, src + ": feature points", options);
 
@@ -186,8 +179,8 @@ void validate_region(Region& region, const InputOptions& options, std::vector<st
       segs.push_back({p[i], p[(i + 1) % p.size()], static_cast<int>(r), static_cast<int>(i), static_cast<int>(p.size()), true});
   }
   for_each_meeting(segs, [&](const Segment& s, const Segment& t, Vec2 at) -> bool {
-    if (s.owner == t.owner) throw InputError(ring_name(static_cast<std::size_t>(s.owner)) + " intersects itself at " + pt(at));
-    throw InputError(ring_name(static_cast<std::size_t>(s.owner)) + " meets ring " + std::to_string(t.owner) + " at " + pt(at));
+    if (s.owner == t.owner) throw InputError(ring_name(static_cast<std::size_t>(s.owner)) + " intersects itself at " + point_text(at));
+    throw InputError(ring_name(static_cast<std::size_t>(s.owner)) + " meets ring " + std::to_string(t.owner) + " at " + point_text(at));
   });
   // A hole inside another hole of its polygon (a third ring of a GeoJSON Polygon) is an island in a lake: it
   // becomes a part of its own, said in a warning; a ring inside that island too is refused (rings no longer
@@ -203,14 +196,14 @@ void validate_region(Region& region, const InputOptions& options, std::vector<st
       if (depth[r] > 1)
         throw InputError(ring_name(r) + " lies inside ring " + std::to_string(container[r]) +
                          ", which lies inside another hole of the same polygon: give islands in lakes as polygons of "
-                         "their own, at " + pt(region.rings[r].points.front()));
+                         "their own, at " + point_text(region.rings[r].points.front()));
       if (depth[r] == 1) {
         region.rings[r].hole = false;
         region.rings[r].part = region.num_parts++;
         if (warnings)
           warnings->push_back(ring_name(r) + " lies inside hole ring " + std::to_string(container[r]) +
                               " of the same polygon: meshed as an island (polygon part " +
-                              std::to_string(region.rings[r].part) + "), at " + pt(region.rings[r].points.front()));
+                              std::to_string(region.rings[r].part) + "), at " + point_text(region.rings[r].points.front()));
       }
     }
   }
@@ -218,7 +211,7 @@ void validate_region(Region& region, const InputOptions& options, std::vector<st
   for (std::size_t r = 0; r < region.rings.size(); ++r) {
     Ring& ring = region.rings[r];
     const double a = signed_area(ring.points);
-    if (a == 0.0) throw InputError(ring_name(r) + " has zero area, at " + pt(ring.points.front()));
+    if (a == 0.0) throw InputError(ring_name(r) + " has zero area, at " + point_text(ring.points.front()));
     if ((a > 0) == ring.hole) std::reverse(ring.points.begin(), ring.points.end());
   }
   // Nesting: holes inside their own outer ring, parts not inside each other (outside their holes).
@@ -235,11 +228,11 @@ void validate_region(Region& region, const InputOptions& options, std::vector<st
     const Ring& ring = region.rings[r];
     const Vec2 p = ring.points.front();
     if (ring.hole && !point_in_ring(p, region.rings[static_cast<std::size_t>(outer[static_cast<std::size_t>(ring.part)])].points))
-      throw InputError(ring_name(r) + " is a hole outside its polygon, at " + pt(p));
+      throw InputError(ring_name(r) + " is a hole outside its polygon, at " + point_text(p));
     if (!ring.hole)
       for (int k = 0; k < region.num_parts; ++k)
         if (k != ring.part && in_domain_of_part(p, k))
-          throw InputError(ring_name(r) + " lies inside polygon part " + std::to_string(k) + " (overlapping parts), at " + pt(p));
+          throw InputError(ring_name(r) + " lies inside polygon part " + std::to_string(k) + " (overlapping parts), at " + point_text(p));
   }
   // Boundary segments: on a ring, their end points ring vertices (and feature points, so they become nodes).
   place_boundary_segments(region, options.boundary_snap_relative * region.bounding_box().diagonal());
@@ -263,7 +256,7 @@ void validate_region(Region& region, const InputOptions& options, std::vector<st
       bool in_hole = false;
       for (int k = 0; k < region.num_parts; ++k)
         in_hole |= point_in_ring(p, region.rings[static_cast<std::size_t>(outer[static_cast<std::size_t>(k)])].points);
-      const std::string what = src + ": feature point " + pt(p) + (in_hole ? " lies in a hole" : " lies outside the domain");
+      const std::string what = src + ": feature point " + point_text(p) + (in_hole ? " lies in a hole" : " lies outside the domain");
       if (!options.repair) throw InputError(what + " (--repair drops it)");
       if (repairs) repairs->push_back(what + ": dropped");
     }
@@ -300,14 +293,14 @@ void validate_region(Region& region, const InputOptions& options, std::vector<st
     if (other.owner >= 0) {
       // A feature may end on the boundary; it may not cross it.
       if (at_end) return false;
-      throw InputError(feature_name(f) + " crosses the boundary (ring " + std::to_string(other.owner) + ") at " + pt(at));
+      throw InputError(feature_name(f) + " crosses the boundary (ring " + std::to_string(other.owner) + ") at " + point_text(at));
     }
     const std::size_t g = static_cast<std::size_t>(-1 - other.owner);
     const auto& q = region.features[g].points;
     const bool other_end = !region.features[g].closed && (at == q.front() || at == q.back());
     if (at_end && other_end) return false;  // curves meeting at their end points
     throw InputError(feature_name(f) + (f == g ? " crosses itself" : " crosses feature curve " + std::to_string(g)) +
-                     " at " + pt(at));
+                     " at " + point_text(at));
   });
 }
 

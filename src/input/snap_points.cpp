@@ -10,13 +10,6 @@ namespace {
 
 constexpr int kPoint = 1 << 30;  // owner of an isolated feature point (no ring or curve)
 
-std::string pt(Vec2 p) {
-  std::ostringstream os;
-  os.precision(12);
-  os << "(" << p.x << ", " << p.y << ")";
-  return os.str();
-}
-
 // A straight piece of a ring (owner >= 0) or of a feature curve (owner = -1 - feature index).
 struct Seg {
   Vec2 a, b;
@@ -131,8 +124,8 @@ std::size_t snap_pass(Region& region, double tol, SnapStats& stats, std::vector<
       std::ostringstream d;
       d.precision(3);
       d << moved;
-      notes->push_back(region.source + ": " + what + " " + pt(q.p) + " snapped " + d.str() + " onto " +
-                       (onto_vertex ? "a vertex of " : "") + onto + " at " + pt(to));
+      notes->push_back(region.source + ": " + what + " " + point_text(q.p) + " snapped " + d.str() + " onto " +
+                       (onto_vertex ? "a vertex of " : "") + onto + " at " + point_text(to));
     }
   }
   // Inserted points go into their ring or curve in order along each segment.

@@ -60,13 +60,6 @@ bool inside_an_outer_ring(const Region& region, Vec2 p) {
   return false;
 }
 
-std::string pt(Vec2 p) {
-  std::ostringstream os;
-  os.precision(12);
-  os << "(" << p.x << ", " << p.y << ")";
-  return os.str();
-}
-
 std::string pt_len(double v) {
   std::ostringstream os;
   os.precision(3);
@@ -278,8 +271,8 @@ FeatureSplitStats split_features(Region& region, const FeatureSplitOptions& opti
         ++stats.pieces_dropped;
         ++stats.stretches_along_boundary;
         if (stats.warnings.size() < 20)
-          stats.warnings.push_back(name + ": the stretch from " + pt(piece.points.front()) + " to " +
-                                   pt(piece.points.back()) + " runs along the boundary (within " + pt_len(tol) +
+          stats.warnings.push_back(name + ": the stretch from " + point_text(piece.points.front()) + " to " +
+                                   point_text(piece.points.back()) + " runs along the boundary (within " + pt_len(tol) +
                                    ") and is left to it");
         continue;
       }
@@ -289,10 +282,10 @@ FeatureSplitStats split_features(Region& region, const FeatureSplitOptions& opti
         const bool in_hole = inside_an_outer_ring(region, probe);
         if (in_hole) {
           if (!options.clip_holes)
-            throw InputError(name + " crosses a hole at " + pt(piece.points.front()) + " (--repair clips it)");
+            throw InputError(name + " crosses a hole at " + point_text(piece.points.front()) + " (--repair clips it)");
           ++stats.pieces_in_holes;
         }
-        stats.warnings.push_back(name + ": a piece from " + pt(piece.points.front()) + " to " + pt(piece.points.back()) +
+        stats.warnings.push_back(name + ": a piece from " + point_text(piece.points.front()) + " to " + point_text(piece.points.back()) +
                                  (in_hole ? " lies in a hole and is left out" : " lies outside the domain and is left out"));
         continue;
       }
@@ -303,7 +296,7 @@ FeatureSplitStats split_features(Region& region, const FeatureSplitOptions& opti
       kept = true;
     }
     if (!kept && !on_boundary)  // a curve lying along the boundary is already in the mesh
-      throw InputError(name + " lies outside the domain, at " + pt(lerp(c.points[0], c.points[1], 0.5)));
+      throw InputError(name + " lies outside the domain, at " + point_text(lerp(c.points[0], c.points[1], 0.5)));
   }
   if (!ring_inserts.empty()) {
     inserts = std::move(ring_inserts);

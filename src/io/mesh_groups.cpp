@@ -12,13 +12,6 @@
 namespace polysquare {
 namespace {
 
-std::string pt(Vec2 p) {
-  std::ostringstream os;
-  os.precision(12);
-  os << "(" << p.x << ", " << p.y << ")";
-  return os.str();
-}
-
 // Position in `loop` of the node at p: exact if there is one, else the nearest (distance returned).
 std::size_t node_in_loop(const QuadMesh& mesh, const BoundaryLoop& loop, Vec2 p, double& moved) {
   std::size_t best = 0;
@@ -127,7 +120,7 @@ MeshGroups mesh_groups(const QuadMesh& mesh, const Region* region) {
       for (auto [d, p] : {std::pair{d0, b.start}, std::pair{d1, b.end}})
         if (d > 0)
           g.warnings.push_back("boundary segment " + std::to_string(s) + (b.name.empty() ? "" : " (" + b.name + ")") +
-                               ": its end point " + pt(p) + " is not a mesh node; the nearest boundary node, " +
+                               ": its end point " + point_text(p) + " is not a mesh node; the nearest boundary node, " +
                                std::to_string(d) + " away, is used");
       const std::size_t n = loop->nodes.size();
       const std::size_t count = b.start == b.end ? n : (i1 + n - i0) % n;

@@ -10,12 +10,15 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <set>
+#include <utility>
 #include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "polysquare/core/geometry.h"
+#include "polysquare/core/quad_mesh.h"
 
 namespace polysquare::test {
 
@@ -130,6 +133,21 @@ inline Sms parse_2dm(const std::filesystem::path& p) {
   }
   if (!current.empty()) throw std::runtime_error("2dm: a nodestring without its negative last node");
   return s;
+}
+
+// ---- mesh edges, for comparing the files' boundaries with the mesh ----
+using Edge = std::pair<std::int32_t, std::int32_t>;  // 0-based, sorted
+inline Edge sorted(std::int32_t a, std::int32_t b) { return {std::min(a, b), std::max(a, b)}; }
+
+// Edges of one quad, computed here from the quads alone.
+inline std::set<Edge> one_quad_edges(const QuadMesh& m) {
+  std::map<Edge, int> count;
+  for (const auto& q : m.quads)
+    for (int k = 0; k < 4; ++k) count[sorted(q[k], q[(k + 1) % 4])]++;
+  std::set<Edge> out;
+  for (const auto& [e, c] : count)
+    if (c == 1) out.insert(e);
+  return out;
 }
 
 }  // namespace polysquare::test

@@ -48,18 +48,6 @@ std::string output_of(const std::string& cmd, int* code = nullptr, bool with_std
   return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
 }
 
-using Edge = std::pair<std::int32_t, std::int32_t>;  // 0-based, sorted
-Edge sorted(std::int32_t a, std::int32_t b) { return {std::min(a, b), std::max(a, b)}; }
-
-std::set<Edge> one_quad_edges(const QuadMesh& m) {
-  std::map<Edge, int> count;
-  for (const auto& q : m.quads)
-    for (int k = 0; k < 4; ++k) count[sorted(q[k], q[(k + 1) % 4])]++;
-  std::set<Edge> out;
-  for (const auto& [e, c] : count)
-    if (c == 1) out.insert(e);
-  return out;
-}
 
 struct Meshed {
   MeshResult result;

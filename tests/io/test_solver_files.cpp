@@ -72,19 +72,6 @@ fs::path write_with_depth(const std::string& name, const QuadMesh& mesh, double 
   return p;
 }
 
-using Edge = std::pair<std::int32_t, std::int32_t>;  // 0-based, sorted
-Edge sorted(std::int32_t a, std::int32_t b) { return {std::min(a, b), std::max(a, b)}; }
-
-// Edges of one quad, computed here from the quads alone.
-std::set<Edge> one_quad_edges(const QuadMesh& m) {
-  std::map<Edge, int> count;
-  for (const auto& q : m.quads)
-    for (int k = 0; k < 4; ++k) count[sorted(q[k], q[(k + 1) % 4])]++;
-  std::set<Edge> out;
-  for (const auto& [e, c] : count)
-    if (c == 1) out.insert(e);
-  return out;
-}
 std::set<Edge> all_edges(const QuadMesh& m) {
   std::set<Edge> out;
   for (const auto& q : m.quads)

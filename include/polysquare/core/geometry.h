@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <sstream>
 #include <string>
 #include <utility>
 #include <vector>
@@ -51,6 +52,14 @@ inline double quad_min_sj(Vec2 a, Vec2 b, Vec2 c, Vec2 d) {
 }
 
 /// "(x, y)" for messages that say where something is.
+/// "(x, y)" with 12 significant digits: input places in messages, exact enough to find a vertex again.
+inline std::string point_text(Vec2 p) {
+  std::ostringstream os;
+  os.precision(12);
+  os << "(" << p.x << ", " << p.y << ")";
+  return os.str();
+}
+
 inline std::string at_text(Vec2 p) { return "(" + std::to_string(p.x) + ", " + std::to_string(p.y) + ")"; }
 
 inline Vec2 lerp(Vec2 a, Vec2 b, double t) { return {a.x + t * (b.x - a.x), a.y + t * (b.y - a.y)}; }
