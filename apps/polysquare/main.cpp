@@ -387,8 +387,7 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   cmd_mesh->add_option("--min-island-width", mesh.options.min_island_width,
                        "with --simplify: leave out (and report) holes, closed feature curves and feature pieces around regions narrower than F*size (0 keeps them)")
-      ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->capture_default_str();
   cmd_mesh->add_option("--max-quads", mesh.options.max_quads, "refuse sizes that need more quads than this")
       ->check(CLI::PositiveNumber)->capture_default_str();  // "-5" would otherwise wrap around to 2^64 - 5
   cmd_mesh->add_option("--min-sj", mesh.options.min_scaled_jacobian,

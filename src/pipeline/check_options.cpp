@@ -38,12 +38,14 @@ void check_mesh_options(const MeshOptions& o) {
           o.refine.flat_corner_deg, "in [0, 180] degrees (180 = off)");
   require(std::isfinite(o.simplify) && o.simplify >= 0, "--simplify", "simplify", o.simplify,
           "a finite number >= 0 (0 = off)");
+  require(std::isfinite(o.min_island_width) && o.min_island_width >= 0, "--min-island-width", "min_island_width",
+          o.min_island_width, "a finite fraction of the size, at least 0");
   require(std::isfinite(o.map.deform.boundary_weight) && o.map.deform.boundary_weight >= 0, "--boundary-weight",
           "map.deform.boundary_weight", o.map.deform.boundary_weight, "a finite number >= 0");
   require(std::isfinite(o.map.deform.feature_weight) && o.map.deform.feature_weight >= 0, "--feature-weight",
           "map.deform.feature_weight", o.map.deform.feature_weight, "a finite number >= 0");
-  require(std::isfinite(o.feature_tolerance) && o.feature_tolerance > 0, "--feature-tolerance", "feature_tolerance",
-          o.feature_tolerance, "a positive finite fraction of the size");
+  require(std::isfinite(o.feature_tolerance) && o.feature_tolerance >= 0, "--feature-tolerance", "feature_tolerance",
+          o.feature_tolerance, "a finite fraction of the size, at least 0 (0: unbounded)");
   require(o.max_quads >= 1, "--max-quads", "max_quads", static_cast<double>(o.max_quads), "at least 1");
   require(o.threads >= 0 && o.threads <= kMaxThreads, "--threads", "threads", o.threads,
           "in [0, 4096] (0 = all cores)");

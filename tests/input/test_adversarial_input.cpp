@@ -145,6 +145,7 @@ TEST(MeshOptionsCheck, DefaultsPassAndEveryNaNIsRefusedByName) {
       {"--max-edge-ratio", [](MeshOptions& o, double v) { o.max_edge_ratio = v; }},
       {"--corner-angle", [](MeshOptions& o, double v) { o.corner_threshold_deg = v; }},
       {"--simplify", [](MeshOptions& o, double v) { o.simplify = v; }},
+      {"--min-island-width", [](MeshOptions& o, double v) { o.min_island_width = v; }},
       {"--boundary-weight", [](MeshOptions& o, double v) { o.map.deform.boundary_weight = v; }},
       {"--feature-weight", [](MeshOptions& o, double v) { o.map.deform.feature_weight = v; }},
       {"--flat-corner-angle", [](MeshOptions& o, double v) { o.refine.flat_corner_deg = v; }},

@@ -57,7 +57,8 @@ struct MeshOptions {
   double min_scaled_jacobian = 0.2;    ///< a candidate whose worst quad is below this is refused; 0 = accept any valid mesh
   double max_edge_ratio = 20.0;        ///< refuse a mesh with a quad whose longest / shortest edge exceeds this
   double feature_tolerance = 0.1;      ///< largest distance, as a fraction of size, between a feature curve and the
-                                       ///< mesh edges along it that smoothing allows (SmoothOptions::feature_tolerance)
+                                       ///< mesh edges along it that smoothing allows (SmoothOptions::feature_tolerance);
+                                       ///< 0 = unbounded
   PolysquareMapOptions map;      ///< stages 2 and 4-6 (map.size and map.layout.corner_threshold_deg are set from above)
   RefineOptions refine;          ///< stage 8 templates at flattened boundary corners (before smoothing)
   LocalPatchOptions local_patch; ///< after smoothing, poor or folded quads are meshed again with a few rings
