@@ -108,6 +108,9 @@ std::size_t snap_pass(Region& region, double tol, SnapStats& stats, std::vector<
     } else {
       auto& pts = region.features[q.which].points;
       (q.front ? pts.front() : pts.back()) = to;
+      // Snapped onto the point next to it along its own curve (a shared vertex there): the end is that point, once.
+      if (pts.size() > 2 && q.front && pts[0] == pts[1]) pts.erase(pts.begin());
+      if (pts.size() > 2 && !q.front && pts[pts.size() - 1] == pts[pts.size() - 2]) pts.pop_back();
     }
     ++moves;
     ++(onto_vertex ? stats.to_vertex : stats.to_segment);
@@ -147,6 +150,17 @@ std::size_t snap_pass(Region& region, double tol, SnapStats& stats, std::vector<
     for (std::size_t f = 0; f < region.features.size(); ++f)
       if (region.features[f].points.size() >= 2)
         rebuild(-1 - static_cast<int>(f), region.features[f].points, region.features[f].closed);
+  }
+  // A two-point curve whose end snapped onto its other end (a stub shorter than the tolerance) is no curve: it
+  // goes, and is said (a zero-length constraint crashed the triangulation).
+  for (std::size_t f = region.features.size(); f-- > 0;) {
+    const auto& pts = region.features[f].points;
+    if (region.features[f].closed || pts.size() != 2 || !(pts[0] == pts[1])) continue;
+    if (notes)
+      notes->push_back(region.source + ": feature " + std::to_string(region.features[f].source_feature) + " (curve " +
+                       std::to_string(f) + "): a piece shorter than the snap distance at " + point_text(pts[0]) +
+                       " collapsed onto a point and is left out");
+    region.features.erase(region.features.begin() + static_cast<std::ptrdiff_t>(f));
   }
   return moves;
 }

@@ -6,6 +6,7 @@
 #include "polysquare/core/error.h"
 #include "polysquare/input/read_region.h"
 #include "polysquare/input/simplify.h"
+#include "polysquare/input/snap_points.h"
 
 using namespace polysquare;
 
@@ -208,4 +209,26 @@ TEST(NarrowWedges, ARiverLeavingAShorelineAtFiveDegreesLeavesItWhereTheyAreTheSi
   EXPECT_EQ(r.features[3].points.back(), (Vec2{100, 50}));
   EXPECT_NO_THROW(validate_region(r));
   EXPECT_TRUE(open_narrow_wedges(r, 5.0).empty());
+}
+
+TEST(SnapNearCoincident, AStubThatSnapsOntoItsOtherEndGoesAndIsSaid) {
+  // A curve along y = 60 in two pieces meeting at (30, 60), and a 0.5-long stub from (30.4, 60.3) to that node: with
+  // a snap distance of 1 its free end snaps onto the node, the stub has no length left and is left out, said in a
+  // note (a zero-length constraint crashed the triangulation of delta_box at 2000 m).
+  Region r;
+  r.source = "test";
+  r.num_parts = 1;
+  r.rings.push_back({{{0, 0}, {100, 0}, {100, 60}, {100, 100}, {0, 100}, {0, 60}}, 0, false, 0});
+  r.features.push_back({{{0, 60}, {30, 60}}, false, 1});
+  r.features.push_back({{{30, 60}, {100, 60}}, false, 1});
+  r.features.push_back({{{30.4, 60.3}, {30, 60}}, false, 2});
+  std::vector<std::string> notes;
+  snap_near_coincident(r, 1.0 / r.bounding_box().diagonal(), &notes);
+  ASSERT_EQ(r.features.size(), 2u);
+  for (const FeatureCurve& c : r.features)
+    for (std::size_t i = 0; i + 1 < c.points.size(); ++i) EXPECT_FALSE(c.points[i] == c.points[i + 1]);
+  bool said = false;
+  for (const std::string& n : notes) said = said || n.find("feature 2") != std::string::npos && n.find("left out") != std::string::npos;
+  EXPECT_TRUE(said);
+  EXPECT_NO_THROW(validate_region(r));
 }
