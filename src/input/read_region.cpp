@@ -20,13 +20,6 @@
 namespace polysquare {
 namespace {
 
-// Relative to the first point: far from the origin (1e11) products of absolute coordinates cancel to zero.
-double signed_area(const std::vector<Vec2>& r) {
-  double s = 0.0;
-  for (std::size_t i = 0; i < r.size(); ++i) s += cross(r[i] - r[0], r[(i + 1) % r.size()] - r[0]);
-  return 0.5 * s;
-}
-
 struct Segment {
   Vec2 a, b;
   int owner;     // ring index, or -1 - feature index for features
@@ -210,7 +203,7 @@ void validate_region(Region& region, const InputOptions& options, std::vector<st
   // Orientation after the crossing check, so a bow-tie is reported as what it is rather than as zero area.
   for (std::size_t r = 0; r < region.rings.size(); ++r) {
     Ring& ring = region.rings[r];
-    const double a = signed_area(ring.points);
+    const double a = ring_signed_area(ring.points);
     if (a == 0.0) throw InputError(ring_name(r) + " has zero area, at " + point_text(ring.points.front()));
     if ((a > 0) == ring.hole) std::reverse(ring.points.begin(), ring.points.end());
   }

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <map>
 #include <queue>
+#include <set>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -215,12 +216,6 @@ SimplifyStats simplify_region(Region& region, const SimplifyOptions& options) {
 namespace polysquare {
 namespace {
 
-double signed_area(const std::vector<Vec2>& pts) {
-  double a = 0.0;
-  for (std::size_t i = 0; i < pts.size(); ++i) a += cross(pts[i], pts[(i + 1) % pts.size()]);
-  return 0.5 * a;
-}
-
 // The arrangement of the region's curves as a planar graph: nodes where feature pieces end (on rings, on each
 // other or free), edges the open feature pieces and the ring arcs between such nodes. Faces are traced with
 // each face on the left of its half-edges.
@@ -329,7 +324,7 @@ std::vector<DroppedCurve> collapse_narrow_faces(Region& region, double min_width
       }
       std::vector<Vec2> poly;
       for (int h : cycle) g.append(h, poly);
-      const double area = signed_area(poly);
+      const double area = ring_signed_area(poly);
       // Bounded faces only (the face on the left of a counter-clockwise cycle); faces with a ring arc must have
       // the domain on their side; faces of features alone lie inside the domain already.
       if (!feature || !(area > 0.0) || (!inside && std::any_of(cycle.begin(), cycle.end(), [&](int h) {
@@ -596,15 +591,12 @@ std::vector<DroppedCurve> drop_narrow_islands(Region& region, double min_width) 
   if (!(min_width > 0.0)) return dropped;
   // Points used by more than one polyline (a feature ending on a hole, two loops touching) and feature points
   // keep their rings and loops: removing one would cut a curve loose.
-  std::unordered_map<long long, int> uses;  // hashed point -> polylines through it
-  auto key = [](Vec2 p) {
-    const auto h1 = std::hash<double>{}(p.x), h2 = std::hash<double>{}(p.y);
-    return static_cast<long long>(h1 ^ (h2 * 0x9e3779b97f4a7c15ULL));
-  };
+  std::map<std::pair<double, double>, int> uses;  // exact point -> polylines through it
+  auto key = [](Vec2 p) { return std::pair<double, double>{p.x, p.y}; };
   auto count_line = [&](const std::vector<Vec2>& pts) {
-    std::unordered_set<long long> mine;
+    std::set<std::pair<double, double>> mine;
     for (Vec2 p : pts) mine.insert(key(p));
-    for (long long k : mine) uses[k]++;
+    for (const auto& k : mine) uses[k]++;
   };
   for (const Ring& r : region.rings) count_line(r.points);
   for (const FeatureCurve& f : region.features) count_line(f.points);
@@ -621,7 +613,7 @@ std::vector<DroppedCurve> drop_narrow_islands(Region& region, double min_width) 
     const double width = inscribed_width(pts, 0.01 * min_width, min_width);
     if (width >= min_width) return false;
     dropped.push_back({feature ? DroppedCurve::Kind::feature_loop : DroppedCurve::Kind::hole, source, width,
-                       std::abs(signed_area(pts)), 0.0, pts.front()});
+                       std::abs(ring_signed_area(pts)), 0.0, pts.front()});
     return true;
   };
   std::vector<Ring> rings;

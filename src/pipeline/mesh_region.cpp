@@ -28,13 +28,7 @@ namespace {
 
 double region_area(const Region& region) {
   double a = 0.0;
-  for (const Ring& r : region.rings) {
-    double s = 0.0;
-    // Relative to a point of the ring: far from the origin the products of absolute coordinates lose the area.
-    const Vec2 o = r.points.front();
-    for (std::size_t i = 0; i < r.points.size(); ++i) s += cross(r.points[i] - o, r.points[(i + 1) % r.points.size()] - o);
-    a += 0.5 * s;  // outer rings counter-clockwise (+), holes clockwise (-)
-  }
+  for (const Ring& r : region.rings) a += ring_signed_area(r.points);  // outer rings counter-clockwise (+), holes (-)
   return a;
 }
 

@@ -131,10 +131,8 @@ double domain_area(const Region& region, const std::vector<int>& skip_parts) {
   double a = 0.0;
   for (const Ring& r : region.rings) {
     if (std::find(skip_parts.begin(), skip_parts.end(), r.part) != skip_parts.end() || r.points.empty()) continue;
-    const Vec2 o = r.points.front();
-    double s = 0.0;
-    for (std::size_t i = 0; i < r.points.size(); ++i) s += cross(r.points[i] - o, r.points[(i + 1) % r.points.size()] - o);
-    a += r.hole ? -std::abs(0.5 * s) : std::abs(0.5 * s);
+    const double s = std::abs(ring_signed_area(r.points));
+    a += r.hole ? -s : s;
   }
   return a;
 }
@@ -205,12 +203,9 @@ DomainDistance domain_distance(const QuadMesh& mesh, const Region& region, const
   };
   for (const Ring& r : region.rings) {
     if (skipped(r)) continue;
-    double s = 0;
-    for (std::size_t i = 0; i < r.points.size(); ++i) {
-      ring_segs.push_back({r.points[i], r.points[(i + 1) % r.points.size()]});
-      s += cross(r.points[i] - r.points[0], r.points[(i + 1) % r.points.size()] - r.points[0]);
-    }
-    region_area += r.hole ? -std::abs(0.5 * s) : std::abs(0.5 * s);
+    for (std::size_t i = 0; i < r.points.size(); ++i) ring_segs.push_back({r.points[i], r.points[(i + 1) % r.points.size()]});
+    const double s = std::abs(ring_signed_area(r.points));
+    region_area += r.hole ? -s : s;
   }
   for (const FeatureCurve& f : region.features) {
     const std::size_t m = f.closed ? f.points.size() : f.points.size() - 1;

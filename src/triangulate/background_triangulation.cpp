@@ -46,10 +46,7 @@ struct PairHash {
 
 double part_area(const Region& region, const RegionPart& part) {
   double a = 0.0;
-  for (int r : part.rings) {
-    const auto& pts = region.rings[static_cast<std::size_t>(r)].points;
-    for (std::size_t i = 0; i < pts.size(); ++i) a += 0.5 * cross(pts[i], pts[(i + 1) % pts.size()]);
-  }
+  for (int r : part.rings) a += ring_signed_area(region.rings[static_cast<std::size_t>(r)].points);
   return a;
 }
 

@@ -76,6 +76,14 @@ inline double point_segment_distance(Vec2 p, Vec2 a, Vec2 b) {
   return distance(p, a + t * d);
 }
 
+/// Signed area of a closed ring (closing point not repeated), positive when counter-clockwise. Summed relative to
+/// its first point: far from the origin (1e11) products of absolute coordinates cancel to zero.
+inline double ring_signed_area(const std::vector<Vec2>& ring) {
+  double s = 0.0;
+  for (std::size_t i = 0; i < ring.size(); ++i) s += cross(ring[i] - ring[0], ring[(i + 1) % ring.size()] - ring[0]);
+  return 0.5 * s;
+}
+
 /// Even-odd test of p against a closed ring (closing point not repeated). Points on the ring may go either way.
 inline bool point_in_ring(Vec2 p, const std::vector<Vec2>& ring) {
   bool inside = false;
