@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <map>
+#include <optional>
 #include <set>
 #include <tuple>
 #include <unordered_map>
@@ -355,7 +356,7 @@ PatchInput patch_input(const Subregion& sub, const std::vector<std::uint8_t>& is
         // Even out with the adjustable piece at k, or the one before the run.
         const std::size_t before = (run_begin + np - 1) % np;
         std::size_t fix = np;
-        if (step < np && pieces[k].adjustable) fix = k;
+        if (pieces[k].adjustable) fix = k;  // at step == np, k is the loop's start again
         else if (pieces[before].adjustable) fix = before;
         if (fix == np)
           throw MeshingError(where + ": an odd number of interface elements between " +
@@ -645,6 +646,61 @@ QuadMesh stitch_quad_meshes(const std::vector<QuadMesh>& meshes, const std::vect
   return out;
 }
 
+// The runs of a subregion's boundary loops that its patch cannot even out itself (patch_input's parity rule):
+// stretches of interfaces between two ends of inner feature pieces (anchors), or a whole loop without anchors,
+// with no ring piece at either end. Each run is given as the global edge keys of its interface edges; the
+// counts on them must add up to an even number.
+std::vector<std::vector<std::uint64_t>> patch_runs(const Subregion& sub) {
+  const TriMesh& m = sub.mesh;
+  std::vector<std::uint8_t> in_loop(m.chains.size(), 0);
+  for (const auto& loop : m.loops)
+    for (int c : loop) in_loop[static_cast<std::size_t>(c)] = 1;
+  std::set<std::int32_t> anchors;
+  for (std::size_t c = 0; c < m.chains.size(); ++c)
+    if (!in_loop[c] && m.chains[c].kind == TriChain::Kind::feature && !m.chains[c].closed) {
+      anchors.insert(m.chains[c].vertices.front());
+      anchors.insert(m.chains[c].vertices.back());
+    }
+  auto gv = [&](std::int32_t v) { return sub.global_vertex[static_cast<std::size_t>(v)]; };
+  std::vector<std::vector<std::uint64_t>> runs;
+  for (const auto& loop : m.loops) {
+    const std::size_t k = loop.size();
+    auto chain = [&](std::size_t i) -> const TriChain& { return m.chains[static_cast<std::size_t>(loop[i % k])]; };
+    auto is_ring = [&](std::size_t i) { return chain(i).kind == TriChain::Kind::ring; };
+    // A run starts after a ring piece or at an anchor; start the walk at such a place when there is one.
+    std::size_t start = k;
+    for (std::size_t i = 0; i < k && start == k; ++i)
+      if (is_ring(i) || anchors.count(chain(i).vertices.front())) start = i;
+    const bool whole = start == k;  // neither: the whole loop is one run
+    if (whole) start = 0;
+    std::vector<std::uint64_t> run;
+    bool fixable = false;  // a ring piece opens the run
+    auto close = [&](bool ring_after) {
+      if (!run.empty() && !fixable && !ring_after) runs.push_back(run);
+      run.clear();
+    };
+    for (std::size_t step = 0; step < k; ++step) {
+      const std::size_t i = start + step;
+      if (is_ring(i)) {
+        close(true);
+        fixable = true;
+        continue;
+      }
+      if (step > 0 && anchors.count(chain(i).vertices.front())) {
+        close(false);
+        fixable = is_ring(i + k - 1);
+      } else if (step == 0) {
+        fixable = !whole && is_ring(i + k - 1);
+      }
+      if (chain(i).interface >= 0)
+        for (std::size_t v = 0; v + 1 < chain(i).vertices.size(); ++v)
+          run.push_back(edge_key(gv(chain(i).vertices[v]), gv(chain(i).vertices[v + 1])));
+    }
+    close(!whole && is_ring(start));
+  }
+  return runs;
+}
+
 QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& triangle_part, int parts,
                        const PolysquareMapOptions& options, const std::string& name, PartMapStats& st) {
   auto t0 = std::chrono::steady_clock::now();
@@ -658,6 +714,43 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
   auto sub_name = [&](std::size_t p) { return name + ": subregion " + std::to_string(p); };
   for (int p : options.patch_subregions)
     if (p >= 0 && static_cast<std::size_t>(p) < n) failure[static_cast<std::size_t>(p)] = sub_name(static_cast<std::size_t>(p)) + ": a patch was requested";
+  // Unions patched from the start (PolysquareMapOptions::patch_unions), each numbered by its smallest member.
+  std::vector<std::int32_t> group(n);  // the subregion whose patch holds p (p itself unless p joined a union)
+  for (std::size_t p = 0; p < n; ++p) group[p] = static_cast<std::int32_t>(p);
+  std::vector<std::optional<Subregion>> union_sub(n);
+  if (!options.patch_unions.empty()) {
+    for (const std::vector<int>& u : options.patch_unions) {
+      std::int32_t r = -1;
+      for (int p : u)
+        if (p >= 0 && static_cast<std::size_t>(p) < n && (r < 0 || p < r)) r = p;
+      for (int p : u)
+        if (p >= 0 && static_cast<std::size_t>(p) < n) group[static_cast<std::size_t>(p)] = r;
+    }
+    std::vector<std::int32_t> tp(triangle_part.size());
+    std::vector<std::vector<std::int32_t>> members_of(n);
+    for (std::size_t t = 0; t < tp.size(); ++t) {
+      tp[t] = group[static_cast<std::size_t>(triangle_part[t])];
+      members_of[static_cast<std::size_t>(tp[t])].push_back(static_cast<std::int32_t>(t));
+    }
+    const PartitionTopology g = topology(tri, tp);
+    for (std::size_t r = 0; r < n; ++r) {
+      bool is_union = false;
+      for (std::size_t p = 0; p < n && !is_union; ++p) is_union = p != r && group[p] == static_cast<std::int32_t>(r);
+      if (!is_union) continue;
+      try {
+        union_sub[r] = cut_subregion(tri, tp, g, static_cast<std::int32_t>(r), members_of[r], name);
+      } catch (const MeshingError&) {  // not one simple loop: its members are patched one by one
+        for (std::size_t p = 0; p < n; ++p)
+          if (group[p] == static_cast<std::int32_t>(r)) group[p] = static_cast<std::int32_t>(p);
+        continue;
+      }
+      for (std::size_t p = 0; p < n; ++p)
+        if (group[p] == static_cast<std::int32_t>(r))
+          failure[p] = sub_name(p) + ": a patch of its own could not be built (a union patch was needed)";
+    }
+  }
+  // The subregion a patch root meshes: the union's, or its own.
+  auto patch_area = [&](std::size_t p) -> const Subregion& { return union_sub[p] ? *union_sub[p] : subs[p]; };
   auto each_mapped = [&](auto&& f) {
     for_each_subregion(n, [&](std::size_t p) {
       if (!failure[p].empty()) return;
@@ -752,25 +845,32 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
       if (index[c.layout_a] >= 0 && index[c.layout_b] >= 0)
         local.push_back({static_cast<std::size_t>(index[c.layout_a]), c.segment_a,
                          static_cast<std::size_t>(index[c.layout_b]), c.segment_b});
-    // A subregion to be patched whose loop is all interfaces with mapped subregions cannot even out its own
-    // count: the quantization must give it an even one.
+    // A subregion to be patched cannot even out the counts its mapped neighbours give it where no ring piece of
+    // its own is next to them: the quantization must make those counts even (see patch_runs).
     std::vector<EvenGroup> even;
     for (std::size_t p = 0; p < n; ++p) {
-      if (failure[p].empty() || subs[p].mesh.loops.size() != 1) continue;
-      bool fixed = true;  // interfaces all round (those with other patches get even counts)
-      for (const TriChain& ch : subs[p].mesh.chains) fixed = fixed && ch.interface >= 0;
-      if (!fixed) continue;
-      EvenGroup g;
-      for (const TriChain& ch : subs[p].mesh.chains) {
-        const auto q = static_cast<std::size_t>(ch.interface);
-        if (index[q] < 0) continue;
-        for (std::size_t k = 0; k < layouts[q].segments.size(); ++k)
-          if (subs[q].mesh.chains[static_cast<std::size_t>(layouts[q].segments[k].chain)].interface == static_cast<int>(p))
-            g.push_back({static_cast<std::size_t>(index[q]), static_cast<int>(k)});
+      if (failure[p].empty() || group[p] != static_cast<std::int32_t>(p)) continue;
+      for (const std::vector<std::uint64_t>& run : patch_runs(patch_area(p))) {
+        const std::set<std::uint64_t> edges(run.begin(), run.end());
+        EvenGroup g;
+        for (const TriChain& ch : patch_area(p).mesh.chains) {
+          if (ch.interface < 0) continue;
+          const auto q = static_cast<std::size_t>(ch.interface);
+          if (index[q] < 0) continue;
+          for (std::size_t k = 0; k < layouts[q].segments.size(); ++k) {
+            const LayoutSegment& s = layouts[q].segments[k];
+            const TriChain& qc = subs[q].mesh.chains[static_cast<std::size_t>(s.chain)];
+            if (qc.interface < 0 || group[static_cast<std::size_t>(qc.interface)] != static_cast<std::int32_t>(p)) continue;
+            const std::size_t cn = qc.vertices.size();
+            const std::int32_t a = subs[q].global_vertex[static_cast<std::size_t>(qc.vertices[static_cast<std::size_t>(s.first) % cn])];
+            const std::int32_t b = subs[q].global_vertex[static_cast<std::size_t>(qc.vertices[static_cast<std::size_t>(s.first + 1) % cn])];
+            if (edges.count(edge_key(a, b))) g.push_back({static_cast<std::size_t>(index[q]), static_cast<int>(k)});
+          }
+        }
+        std::sort(g.begin(), g.end());
+        g.erase(std::unique(g.begin(), g.end()), g.end());
+        if (!g.empty()) even.push_back(std::move(g));
       }
-      std::sort(g.begin(), g.end());
-      g.erase(std::unique(g.begin(), g.end()), g.end());
-      if (!g.empty()) even.push_back(std::move(g));
     }
     return quantize_layouts(lp, dp, local, options.quantize, name, even);
   };
@@ -780,69 +880,81 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
       if (failure[p].empty()) m.push_back(p);
     return m;
   };
-  try {
-    if (!members_now().empty()) st.quantize = solve(members_now());
-  } catch (const MeshingError& joint) {
-    for (std::size_t p : members_now()) {
-      Layout alone = layouts[p];
-      try {
-        quantize_layout(alone, mapped[p].x, options.quantize, sub_name(p));
-      } catch (const MeshingError& e) {
-        failure[p] = std::string(e.what()) + " [" + std::to_string(layouts[p].segments.size()) + " sides]";
-      }
-    }
-    try {
-      if (!members_now().empty()) st.quantize = solve(members_now());
-    } catch (const MeshingError&) {
-      // The first subregion (in order) that makes the program infeasible is found by bisection over the rest,
-      // so c culprits among n subregions cost about c log n solves, not n.
-      auto feasible = [&](const std::vector<std::size_t>& members) {
-        try {
-          st.quantize = solve(members);
-          return true;
-        } catch (const MeshingError&) {
-          return false;
-        }
-      };
-      std::vector<std::size_t> kept, rest = members_now();
-      while (!rest.empty()) {
-        std::vector<std::size_t> all = kept;
-        all.insert(all.end(), rest.begin(), rest.end());
-        if (feasible(all)) {
-          kept = std::move(all);
-          break;
-        }
-        std::size_t lo = 0, hi = rest.size() - 1;  // kept + rest[0..hi] is infeasible, kept alone is not
-        while (lo < hi) {
-          const std::size_t mid = (lo + hi) / 2;
-          std::vector<std::size_t> trial = kept;
-          trial.insert(trial.end(), rest.begin(), rest.begin() + static_cast<std::ptrdiff_t>(mid) + 1);
-          if (feasible(trial)) lo = mid + 1; else hi = mid;
-        }
-        const std::size_t p = rest[lo];
-        failure[p] = sub_name(p) + ": its sides cannot take the counts its neighbours need (" + joint.what() + ")";
-        kept.insert(kept.end(), rest.begin(), rest.begin() + static_cast<std::ptrdiff_t>(lo));
-        rest.erase(rest.begin(), rest.begin() + static_cast<std::ptrdiff_t>(lo) + 1);
-      }
-      if (!kept.empty()) st.quantize = solve(kept);  // the last solve may have been a failed one
-    }
-  }
+  // Quantization, then the snap of every mapped subregion to its counts. A subregion whose snap fails becomes a
+  // patch whose counts were quantized for a map: the part is quantized again with it among the patches (whose
+  // neighbours' counts are made even where it needs them), at most twice more.
   std::vector<std::uint8_t> quantized(n, 0);
-  for (std::size_t p = 0; p < n; ++p) quantized[p] = failure[p].empty();
-  for (std::size_t p = 0; p < n; ++p)
-    if (failure[p].empty())
-      if (const std::string problem = check_layout(layouts[p]); !problem.empty())
-        failure[p] = sub_name(p) + ": the quantized poly-square is not valid: " + problem;
-  st.seconds_quantize = seconds_since(t0);
-
-  t0 = std::chrono::steady_clock::now();
   std::vector<QuadMesh> meshes(n);
   std::vector<std::size_t> side_nodes(n, 0);
-  each_mapped([&](std::size_t p) {
-    snap_to_layout(subs[p].mesh, mapped[p], layouts[p], options, sub_name(p));
-    meshes[p] = extract_quads(subs[p].mesh, subs[p].mesh.vertices, mapped[p].x, layouts[p], sub_name(p), nullptr,
-                              &side_nodes[p]);
-  });
+  for (int pass = 0;; ++pass) {
+    try {
+      if (!members_now().empty()) st.quantize = solve(members_now());
+    } catch (const MeshingError& joint) {
+      for (std::size_t p : members_now()) {
+        Layout alone = layouts[p];
+        try {
+          quantize_layout(alone, mapped[p].x, options.quantize, sub_name(p));
+        } catch (const MeshingError& e) {
+          failure[p] = std::string(e.what()) + " [" + std::to_string(layouts[p].segments.size()) + " sides]";
+        }
+      }
+      try {
+        if (!members_now().empty()) st.quantize = solve(members_now());
+      } catch (const MeshingError&) {
+        // The first subregion (in order) that makes the program infeasible is found by bisection over the rest,
+        // so c culprits among n subregions cost about c log n solves, not n.
+        auto feasible = [&](const std::vector<std::size_t>& members) {
+          try {
+            st.quantize = solve(members);
+            return true;
+          } catch (const MeshingError&) {
+            return false;
+          }
+        };
+        std::vector<std::size_t> kept, rest = members_now();
+        while (!rest.empty()) {
+          std::vector<std::size_t> all = kept;
+          all.insert(all.end(), rest.begin(), rest.end());
+          if (feasible(all)) {
+            kept = std::move(all);
+            break;
+          }
+          std::size_t lo = 0, hi = rest.size() - 1;  // kept + rest[0..hi] is infeasible, kept alone is not
+          while (lo < hi) {
+            const std::size_t mid = (lo + hi) / 2;
+            std::vector<std::size_t> trial = kept;
+            trial.insert(trial.end(), rest.begin(), rest.begin() + static_cast<std::ptrdiff_t>(mid) + 1);
+            if (feasible(trial)) lo = mid + 1; else hi = mid;
+          }
+          const std::size_t p = rest[lo];
+          failure[p] = sub_name(p) + ": its sides cannot take the counts its neighbours need (" + joint.what() + ")";
+          kept.insert(kept.end(), rest.begin(), rest.begin() + static_cast<std::ptrdiff_t>(lo));
+          rest.erase(rest.begin(), rest.begin() + static_cast<std::ptrdiff_t>(lo) + 1);
+        }
+        if (!kept.empty()) st.quantize = solve(kept);  // the last solve may have been a failed one
+      }
+    }
+    for (std::size_t p = 0; p < n; ++p) quantized[p] = failure[p].empty();
+    for (std::size_t p = 0; p < n; ++p)
+      if (failure[p].empty())
+        if (const std::string problem = check_layout(layouts[p]); !problem.empty())
+          failure[p] = sub_name(p) + ": the quantized poly-square is not valid: " + problem;
+    st.seconds_quantize = seconds_since(t0);
+
+    t0 = std::chrono::steady_clock::now();
+    const std::vector<MappedMesh> unsnapped = mapped;
+    each_mapped([&](std::size_t p) {
+      snap_to_layout(subs[p].mesh, mapped[p], layouts[p], options, sub_name(p));
+      meshes[p] = extract_quads(subs[p].mesh, subs[p].mesh.vertices, mapped[p].x, layouts[p], sub_name(p), nullptr,
+                                &side_nodes[p]);
+    });
+  std::size_t late = 0;  // quantized, then failed
+    for (std::size_t p = 0; p < n; ++p) late += quantized[p] && !failure[p].empty();
+    if (late == 0 || pass >= 2) break;
+    mapped = unsnapped;
+    meshes.assign(n, {});
+    side_nodes.assign(n, 0);
+  }
   st.seconds_snap = seconds_since(t0);
 
   // Repairs: every failed subregion becomes an unstructured patch on the nodes its mapped neighbours made.
@@ -872,11 +984,11 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
     side_nodes[p] = in.nodes.size();
   };
   for_each_subregion(n, [&](std::size_t p) {
-    if (!is_patch[p]) return;
+    if (!is_patch[p] || group[p] != static_cast<std::int32_t>(p)) return;  // a union's members are in its root's
     try {
       const bool matched = std::find(options.matched_patches.begin(), options.matched_patches.end(),
                                      static_cast<int>(p)) != options.matched_patches.end();
-      build_patch(p, subs[p], is_patch, matched ? PatchMethod::matching : PatchMethod::automatic);
+      build_patch(p, patch_area(p), is_patch, matched ? PatchMethod::matching : PatchMethod::automatic);
     } catch (const MeshingError& e) {
       patch_error[p] = sub_name(p) + ": its map failed (" + failure[p] + ") and so did its repair: " + e.what();
     }
@@ -888,8 +1000,6 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
     if (p >= 0 && static_cast<std::size_t>(p) < n && is_patch[static_cast<std::size_t>(p)] &&
         patch_error[static_cast<std::size_t>(p)].empty())
       patch_error[static_cast<std::size_t>(p)] = sub_name(static_cast<std::size_t>(p)) + ": its patch left a folded or poor quad";
-  std::vector<std::int32_t> group(n);  // the subregion whose patch holds p (p itself unless p joined a union)
-  for (std::size_t p = 0; p < n; ++p) group[p] = static_cast<std::int32_t>(p);
   for (int grow = 0; grow < options.patch_growth; ++grow) {
     std::set<std::int32_t> failed;
     for (std::size_t p = 0; p < n; ++p)
@@ -950,6 +1060,16 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
     failed_maps += is_patch[p];
     failed_repairs += !patch_error[p].empty();
   }
+  if (failed_repairs > 0 && options.patch_unions.empty()) {
+    // The grown patches' counts were quantized for the smaller patches: map the part again with the unions
+    // patched from the start, so that the quantization makes their counts add up.
+    PolysquareMapOptions again = options;
+    std::map<std::int32_t, std::vector<int>> unions;
+    for (std::size_t p = 0; p < n; ++p) unions[group[p]].push_back(static_cast<int>(p));
+    for (auto& [r, members] : unions)
+      if (members.size() > 1) again.patch_unions.push_back(std::move(members));
+    if (!again.patch_unions.empty()) return map_piecewise(tri, triangle_part, parts, again, name, st);
+  }
   for (const std::string& e : patch_error)
     if (!e.empty())
       throw MeshingError(e + " [" + std::to_string(failed_repairs) + " of " + std::to_string(failed_maps) +
@@ -961,8 +1081,9 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
   st.subregions.assign(n, {});
   st.failed_maps.clear();
   for (std::size_t p = 0; p < n; ++p)
-    if (!failure[p].empty() && std::find(options.patch_subregions.begin(), options.patch_subregions.end(),
-                                         static_cast<int>(p)) == options.patch_subregions.end())
+    if (!failure[p].empty() && group[p] == static_cast<std::int32_t>(p) &&
+        std::find(options.patch_subregions.begin(), options.patch_subregions.end(),
+                  static_cast<int>(p)) == options.patch_subregions.end())
       st.failed_maps.push_back({static_cast<int>(p), static_cast<int>(layouts[p].segments.size())});
   for (std::size_t p = 0; p < n; ++p) {
     SubregionStats& s = st.subregions[p];

@@ -141,3 +141,38 @@ TEST(LocalRepair, NewCoastsHoldTheInvariantsAndTheSummaryAccountsForEveryQuad) {
     EXPECT_EQ(summary["unstructured_subregions"].get<std::size_t>(), r.report["unstructured"].size()) << name;
   }
 }
+
+TEST(LocalRepair, APatchCrossedByFeaturesGetsEvenCountsFromItsMappedNeighbours) {
+  // A square with three wavy feature curves from its left side to 95 % of its width, in 9 subregions; each
+  // subregion in turn is forced to a patch. The features end on the patches' loops and cut them into runs
+  // between anchors, each of which must get an even count: the joint quantization gives the mapped neighbours
+  // such counts, so the patch is built on its own (before, subregion 6's patch had to take in 3 neighbours).
+  Region region;
+  region.rings.push_back({{{0, 0}, {120, 0}, {120, 120}, {0, 120}}, 0, false, 0, ""});
+  region.num_parts = 1;
+  for (double y0 : {23.0, 52.0, 91.0}) {
+    FeatureCurve f;
+    for (int i = 0; i <= 19; ++i) f.points.push_back({5.0 * i, y0 + 3.0 * std::sin(0.37 * i + y0)});
+    f.source_feature = 1;
+    region.features.push_back(f);
+  }
+  region.source = "three_features";
+  for (int s = 0; s < 9; ++s) {
+    MeshOptions o;
+    o.size = 3.0;
+    o.parts = 9;
+    o.map.patch_subregions = {s};
+    const MeshResult r = mesh_region(region, o);
+    ASSERT_EQ(r.parts.size(), 1u);
+    const InvariantReport inv = check_invariants(r.mesh);
+    EXPECT_TRUE(inv.ok()) << s << ": " << inv.first_problem;
+    EXPECT_GT(r.report["summary"]["structured_fraction"].get<double>(), 0.5) << s;
+    const auto& subs = r.parts[0].subregions;
+    ASSERT_FALSE(subs.empty()) << s << ": the part fell back as a whole";
+    std::size_t unmapped = 0;
+    for (const SubregionStats& sr : subs) unmapped += !sr.mapped;
+    EXPECT_EQ(unmapped, 1u) << s << ": the patch took in its neighbours";
+    const DomainDistance d = domain_distance(r.mesh, r.region);
+    EXPECT_LT(d.feature_max_distance, 0.1 * o.size) << s;
+  }
+}
