@@ -646,6 +646,27 @@ QuadMesh stitch_quad_meshes(const std::vector<QuadMesh>& meshes, const std::vect
   return out;
 }
 
+// The triangle partition with every subregion replaced by its group (the union of patches it joined), the
+// triangles of each group in `roots`, and the topology of that partition.
+struct GroupedPartition {
+  std::vector<std::int32_t> tp;
+  std::vector<std::vector<std::int32_t>> members;  // by group, for the groups in roots only
+  PartitionTopology topology;
+};
+
+GroupedPartition group_partition(const TriMesh& tri, const std::vector<std::int32_t>& triangle_part,
+                                 const std::vector<std::int32_t>& group, const std::set<std::int32_t>& roots) {
+  GroupedPartition gp;
+  gp.tp.resize(triangle_part.size());
+  gp.members.resize(group.size());
+  for (std::size_t t = 0; t < gp.tp.size(); ++t) {
+    gp.tp[t] = group[static_cast<std::size_t>(triangle_part[t])];
+    if (roots.count(gp.tp[t])) gp.members[static_cast<std::size_t>(gp.tp[t])].push_back(static_cast<std::int32_t>(t));
+  }
+  gp.topology = topology(tri, gp.tp);
+  return gp;
+}
+
 // The runs of a subregion's boundary loops that its patch cannot even out itself (patch_input's parity rule):
 // stretches of interfaces between two ends of inner feature pieces (anchors), or a whole loop without anchors,
 // with no ring piece at either end. Each run is given as the global edge keys of its interface edges; the
@@ -714,41 +735,11 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
   auto sub_name = [&](std::size_t p) { return name + ": subregion " + std::to_string(p); };
   for (int p : options.patch_subregions)
     if (p >= 0 && static_cast<std::size_t>(p) < n) failure[static_cast<std::size_t>(p)] = sub_name(static_cast<std::size_t>(p)) + ": a patch was requested";
-  // Unions patched from the start (PolysquareMapOptions::patch_unions), each numbered by its smallest member.
-  std::vector<std::int32_t> group(n);  // the subregion whose patch holds p (p itself unless p joined a union)
+  // group[p]: the subregion whose patch holds p (p itself unless p joined a union of patches, see below);
+  // union_sub[r]: the area of the union numbered r, once the part is quantized again for it.
+  std::vector<std::int32_t> group(n);
   for (std::size_t p = 0; p < n; ++p) group[p] = static_cast<std::int32_t>(p);
   std::vector<std::optional<Subregion>> union_sub(n);
-  if (!options.patch_unions.empty()) {
-    for (const std::vector<int>& u : options.patch_unions) {
-      std::int32_t r = -1;
-      for (int p : u)
-        if (p >= 0 && static_cast<std::size_t>(p) < n && (r < 0 || p < r)) r = p;
-      for (int p : u)
-        if (p >= 0 && static_cast<std::size_t>(p) < n) group[static_cast<std::size_t>(p)] = r;
-    }
-    std::vector<std::int32_t> tp(triangle_part.size());
-    std::vector<std::vector<std::int32_t>> members_of(n);
-    for (std::size_t t = 0; t < tp.size(); ++t) {
-      tp[t] = group[static_cast<std::size_t>(triangle_part[t])];
-      members_of[static_cast<std::size_t>(tp[t])].push_back(static_cast<std::int32_t>(t));
-    }
-    const PartitionTopology g = topology(tri, tp);
-    for (std::size_t r = 0; r < n; ++r) {
-      bool is_union = false;
-      for (std::size_t p = 0; p < n && !is_union; ++p) is_union = p != r && group[p] == static_cast<std::int32_t>(r);
-      if (!is_union) continue;
-      try {
-        union_sub[r] = cut_subregion(tri, tp, g, static_cast<std::int32_t>(r), members_of[r], name);
-      } catch (const MeshingError&) {  // not one simple loop: its members are patched one by one
-        for (std::size_t p = 0; p < n; ++p)
-          if (group[p] == static_cast<std::int32_t>(r)) group[p] = static_cast<std::int32_t>(p);
-        continue;
-      }
-      for (std::size_t p = 0; p < n; ++p)
-        if (group[p] == static_cast<std::int32_t>(r))
-          failure[p] = sub_name(p) + ": a patch of its own could not be built (a union patch was needed)";
-    }
-  }
   // The subregion a patch root meshes: the union's, or its own.
   auto patch_area = [&](std::size_t p) -> const Subregion& { return union_sub[p] ? *union_sub[p] : subs[p]; };
   auto each_mapped = [&](auto&& f) {
@@ -850,27 +841,27 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
     std::vector<EvenGroup> even;
     for (std::size_t p = 0; p < n; ++p) {
       if (failure[p].empty() || group[p] != static_cast<std::int32_t>(p)) continue;
-      for (const std::vector<std::uint64_t>& run : patch_runs(patch_area(p))) {
-        const std::set<std::uint64_t> edges(run.begin(), run.end());
-        EvenGroup g;
-        for (const TriChain& ch : patch_area(p).mesh.chains) {
-          if (ch.interface < 0) continue;
-          const auto q = static_cast<std::size_t>(ch.interface);
-          if (index[q] < 0) continue;
-          for (std::size_t k = 0; k < layouts[q].segments.size(); ++k) {
-            const LayoutSegment& s = layouts[q].segments[k];
-            const TriChain& qc = subs[q].mesh.chains[static_cast<std::size_t>(s.chain)];
-            if (qc.interface < 0 || group[static_cast<std::size_t>(qc.interface)] != static_cast<std::int32_t>(p)) continue;
-            const std::size_t cn = qc.vertices.size();
-            const std::int32_t a = subs[q].global_vertex[static_cast<std::size_t>(qc.vertices[static_cast<std::size_t>(s.first) % cn])];
-            const std::int32_t b = subs[q].global_vertex[static_cast<std::size_t>(qc.vertices[static_cast<std::size_t>(s.first + 1) % cn])];
-            if (edges.count(edge_key(a, b))) g.push_back({static_cast<std::size_t>(index[q]), static_cast<int>(k)});
-          }
+      const Subregion& area = patch_area(p);
+      std::map<std::uint64_t, std::size_t> run_of;  // global interface edge -> its run
+      const std::vector<std::vector<std::uint64_t>> runs = patch_runs(area);
+      for (std::size_t r = 0; r < runs.size(); ++r)
+        for (std::uint64_t e : runs[r]) run_of[e] = r;
+      std::set<std::size_t> neighbours;  // mapped ones in this program
+      for (const TriChain& ch : area.mesh.chains)
+        if (ch.interface >= 0 && index[static_cast<std::size_t>(ch.interface)] >= 0) neighbours.insert(static_cast<std::size_t>(ch.interface));
+      std::vector<EvenGroup> groups(runs.size());
+      for (std::size_t q : neighbours)
+        for (std::size_t k = 0; k < layouts[q].segments.size(); ++k) {
+          const LayoutSegment& s = layouts[q].segments[k];
+          const TriChain& qc = subs[q].mesh.chains[static_cast<std::size_t>(s.chain)];
+          if (qc.interface < 0 || group[static_cast<std::size_t>(qc.interface)] != static_cast<std::int32_t>(p)) continue;
+          const std::size_t cn = qc.vertices.size();
+          auto gv = [&](int i) { return subs[q].global_vertex[static_cast<std::size_t>(qc.vertices[static_cast<std::size_t>(i) % cn])]; };
+          if (auto it = run_of.find(edge_key(gv(s.first), gv(s.first + 1))); it != run_of.end())
+            groups[it->second].push_back({static_cast<std::size_t>(index[q]), static_cast<int>(k)});
         }
-        std::sort(g.begin(), g.end());
-        g.erase(std::unique(g.begin(), g.end()), g.end());
+      for (EvenGroup& g : groups)
         if (!g.empty()) even.push_back(std::move(g));
-      }
     }
     return quantize_layouts(lp, dp, local, options.quantize, name, even);
   };
@@ -880,13 +871,20 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
       if (failure[p].empty()) m.push_back(p);
     return m;
   };
-  // Quantization, then the snap of every mapped subregion to its counts. A subregion whose snap fails becomes a
-  // patch whose counts were quantized for a map: the part is quantized again with it among the patches (whose
-  // neighbours' counts are made even where it needs them), at most twice more.
-  std::vector<std::uint8_t> quantized(n, 0);
+  // Quantization, snap and patches, repeated when a later stage shows the quantization was made for other
+  // patches: a subregion whose snap fails after quantization (at most twice), and once, patches that could only
+  // be built over their grown neighbours' area (their unions are then patched from the start). Either way the
+  // part is quantized again with them among the patches, whose neighbours' counts are then made even where the
+  // patch needs it (patch_runs); the subregions' maps are kept, only their snap is redone.
+  std::vector<std::uint8_t> quantized(n, 0), is_patch(n, 0);
+  std::vector<std::string> patch_error(n);
   std::vector<QuadMesh> meshes(n);
   std::vector<std::size_t> side_nodes(n, 0);
-  for (int pass = 0;; ++pass) {
+  std::vector<std::vector<Vec2>> unsnapped(n);  // deformed positions before the snap, to snap again
+  std::size_t failed_maps = 0, failed_repairs = 0;
+  double seconds_quantize = 0, seconds_snap = 0, seconds_patches = 0;
+  for (int requantized = 0, unions = 0;;) {
+    t0 = std::chrono::steady_clock::now();
     try {
       if (!members_now().empty()) st.quantize = solve(members_now());
     } catch (const MeshingError& joint) {
@@ -939,144 +937,160 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
       if (failure[p].empty())
         if (const std::string problem = check_layout(layouts[p]); !problem.empty())
           failure[p] = sub_name(p) + ": the quantized poly-square is not valid: " + problem;
-    st.seconds_quantize = seconds_since(t0);
+    seconds_quantize += seconds_since(t0);
 
     t0 = std::chrono::steady_clock::now();
-    const std::vector<MappedMesh> unsnapped = mapped;
+    meshes.assign(n, {});
+    side_nodes.assign(n, 0);
+    for (std::size_t p = 0; p < n; ++p)
+      if (failure[p].empty()) unsnapped[p] = mapped[p].x;
     each_mapped([&](std::size_t p) {
       snap_to_layout(subs[p].mesh, mapped[p], layouts[p], options, sub_name(p));
       meshes[p] = extract_quads(subs[p].mesh, subs[p].mesh.vertices, mapped[p].x, layouts[p], sub_name(p), nullptr,
                                 &side_nodes[p]);
     });
-  std::size_t late = 0;  // quantized, then failed
-    for (std::size_t p = 0; p < n; ++p) late += quantized[p] && !failure[p].empty();
-    if (late == 0 || pass >= 2) break;
-    mapped = unsnapped;
-    meshes.assign(n, {});
-    side_nodes.assign(n, 0);
-  }
-  st.seconds_snap = seconds_since(t0);
-
-  // Repairs: every failed subregion becomes an unstructured patch on the nodes its mapped neighbours made.
-  t0 = std::chrono::steady_clock::now();
-  std::map<SideKey, long long> side_count;  // element count of every quantized interface segment
-  for (std::size_t p = 0; p < n; ++p) {
-    if (!quantized[p]) continue;
-    for (const LayoutSegment& s : layouts[p].segments) {
-      const TriChain& ch = subs[p].mesh.chains[static_cast<std::size_t>(s.chain)];
-      if (ch.interface < 0) continue;
-      const auto la = layouts[p].lattice[s.break_a], lb = layouts[p].lattice[s.break_b];
-      side_count[side_key(p, ch, s.first, s.count)] = std::llabs(lb[0] - la[0]) + std::llabs(lb[1] - la[1]);
-    }
-  }
-  std::vector<std::uint8_t> is_patch(n, 0);
-  for (std::size_t p = 0; p < n; ++p) is_patch[p] = !failure[p].empty();
-  std::vector<std::string> patch_error(n);
-  // Builds the patch of subregion (or union) `sub`, numbered p, on the nodes of its quantized neighbours.
-  auto build_patch = [&](std::size_t p, const Subregion& sub, const std::vector<std::uint8_t>& patch_now,
-                         PatchMethod method) {
-    const PatchInput in = patch_input(sub, patch_now, side_count, options.size, options.layout.corner_threshold_deg,
-                                      sub_name(p));
-    PatchOptions po;
-    po.size = options.size;
-    po.method = method;
-    meshes[p] = mesh_patch(in, po);
-    side_nodes[p] = in.nodes.size();
-  };
-  for_each_subregion(n, [&](std::size_t p) {
-    if (!is_patch[p] || group[p] != static_cast<std::int32_t>(p)) return;  // a union's members are in its root's
-    try {
-      const bool matched = std::find(options.matched_patches.begin(), options.matched_patches.end(),
-                                     static_cast<int>(p)) != options.matched_patches.end();
-      build_patch(p, patch_area(p), is_patch, matched ? PatchMethod::matching : PatchMethod::automatic);
-    } catch (const MeshingError& e) {
-      patch_error[p] = sub_name(p) + ": its map failed (" + failure[p] + ") and so did its repair: " + e.what();
-    }
-  });
-  // A patch that cannot be built (no room for its construction near a narrow neck, an odd count all round)
-  // takes in its neighbours, mapped or not, and is built again over their union, which gains room and reaches
-  // ring pieces that can even out its count; the subregions beyond keep their maps and nodes.
-  for (int p : options.grown_patches)
-    if (p >= 0 && static_cast<std::size_t>(p) < n && is_patch[static_cast<std::size_t>(p)] &&
-        patch_error[static_cast<std::size_t>(p)].empty())
-      patch_error[static_cast<std::size_t>(p)] = sub_name(static_cast<std::size_t>(p)) + ": its patch left a folded or poor quad";
-  for (int grow = 0; grow < options.patch_growth; ++grow) {
-    std::set<std::int32_t> failed;
-    for (std::size_t p = 0; p < n; ++p)
-      if (!patch_error[p].empty()) failed.insert(group[p]);
-    if (failed.empty()) break;
-    // Every failed group absorbs the groups across its boundary (groups meeting through one merge).
-    std::vector<std::int32_t> into(n);
-    for (std::size_t p = 0; p < n; ++p) into[p] = static_cast<std::int32_t>(p);
-    auto root = [&](std::int32_t p) {
-      while (into[static_cast<std::size_t>(p)] != p) p = into[static_cast<std::size_t>(p)];
-      return p;
+    seconds_snap += seconds_since(t0);
+    auto quantize_again = [&] {
+      for (std::size_t p = 0; p < n; ++p)
+        if (failure[p].empty()) mapped[p].x = unsnapped[p];
     };
+    std::size_t late = 0;  // quantized, then failed
+    for (std::size_t p = 0; p < n; ++p) late += quantized[p] && !failure[p].empty();
+    if (late > 0 && requantized++ < 2) {
+      quantize_again();
+      continue;
+    }
+
+    // Repairs: every failed subregion becomes an unstructured patch on the nodes its mapped neighbours made.
+    t0 = std::chrono::steady_clock::now();
+    std::map<SideKey, long long> side_count;  // element count of every quantized interface segment
     for (std::size_t p = 0; p < n; ++p) {
-      if (!failed.count(group[p])) continue;
-      for (const TriChain& ch : subs[p].mesh.chains)
-        if (ch.interface >= 0) {
-          const std::int32_t a = root(group[p]), b = root(group[static_cast<std::size_t>(ch.interface)]);
-          if (a != b) into[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);
-        }
-    }
-    std::set<std::int32_t> rebuilt;
-    for (std::size_t p = 0; p < n; ++p) {
-      const std::int32_t r = root(group[p]);
-      if (r != group[p] || failed.count(r)) rebuilt.insert(r);
-      group[p] = r;
-    }
-    std::vector<std::int32_t> tp(triangle_part.size());
-    std::vector<std::vector<std::int32_t>> members_of(n);
-    for (std::size_t t = 0; t < tp.size(); ++t) {
-      tp[t] = group[static_cast<std::size_t>(triangle_part[t])];
-      if (rebuilt.count(tp[t])) members_of[static_cast<std::size_t>(tp[t])].push_back(static_cast<std::int32_t>(t));
-    }
-    const PartitionTopology g = topology(tri, tp);
-    std::vector<std::uint8_t> patch_now(n, 0);
-    for (std::size_t p = 0; p < n; ++p) patch_now[static_cast<std::size_t>(group[p])] |= is_patch[p] || rebuilt.count(group[p]);
-    for (std::size_t p = 0; p < n; ++p)
-      if (rebuilt.count(group[p])) {
-        is_patch[p] = 1;
-        patch_error[p].clear();
-        if (group[p] != static_cast<std::int32_t>(p)) {
-          meshes[p] = {};
-          side_nodes[p] = 0;
-        }
+      if (!quantized[p]) continue;
+      for (const LayoutSegment& s : layouts[p].segments) {
+        const TriChain& ch = subs[p].mesh.chains[static_cast<std::size_t>(s.chain)];
+        if (ch.interface < 0) continue;
+        const auto la = layouts[p].lattice[s.break_a], lb = layouts[p].lattice[s.break_b];
+        side_count[side_key(p, ch, s.first, s.count)] = std::llabs(lb[0] - la[0]) + std::llabs(lb[1] - la[1]);
       }
-    const std::vector<std::int32_t> roots(rebuilt.begin(), rebuilt.end());
-    for_each_subregion(roots.size(), [&](std::size_t k) {
-      const auto r = static_cast<std::size_t>(roots[k]);
+    }
+    for (std::size_t p = 0; p < n; ++p) is_patch[p] = !failure[p].empty();
+    patch_error.assign(n, {});
+    // Builds the patch of subregion (or union) `sub`, numbered p, on the nodes of its quantized neighbours.
+    auto build_patch = [&](std::size_t p, const Subregion& sub, const std::vector<std::uint8_t>& patch_now,
+                           PatchMethod method) {
+      const PatchInput in = patch_input(sub, patch_now, side_count, options.size, options.layout.corner_threshold_deg,
+                                        sub_name(p));
+      PatchOptions po;
+      po.size = options.size;
+      po.method = method;
+      meshes[p] = mesh_patch(in, po);
+      side_nodes[p] = in.nodes.size();
+    };
+    for_each_subregion(n, [&](std::size_t p) {
+      if (!is_patch[p] || group[p] != static_cast<std::int32_t>(p)) return;  // a union's members are in its root's
       try {
-        build_patch(r, cut_subregion(tri, tp, g, roots[k], members_of[r], name), patch_now, PatchMethod::automatic);
+        const bool matched = std::find(options.matched_patches.begin(), options.matched_patches.end(),
+                                       static_cast<int>(p)) != options.matched_patches.end();
+        build_patch(p, patch_area(p), is_patch, matched ? PatchMethod::matching : PatchMethod::automatic);
       } catch (const MeshingError& e) {
-        patch_error[r] = sub_name(r) + ": its repair failed even over its neighbours' area too (" +
-                         std::to_string(grow + 1) + " times): " + e.what();
+        patch_error[p] = sub_name(p) + ": its map failed (" + failure[p] + ") and so did its repair: " + e.what();
       }
     });
+    // A patch that cannot be built (no room for its construction near a narrow neck, an odd count all round)
+    // takes in its neighbours, mapped or not, and is built again over their union, which gains room and reaches
+    // ring pieces that can even out its count; the subregions beyond keep their maps and nodes.
+    for (int p : options.grown_patches)
+      if (p >= 0 && static_cast<std::size_t>(p) < n && is_patch[static_cast<std::size_t>(p)] &&
+          patch_error[static_cast<std::size_t>(p)].empty())
+        patch_error[static_cast<std::size_t>(p)] = sub_name(static_cast<std::size_t>(p)) + ": its patch left a folded or poor quad";
+    for (int grow = 0; grow < options.patch_growth; ++grow) {
+      std::set<std::int32_t> failed;
+      for (std::size_t p = 0; p < n; ++p)
+        if (!patch_error[p].empty()) failed.insert(group[p]);
+      if (failed.empty()) break;
+      // Every failed group absorbs the groups across its boundary (groups meeting through one merge).
+      std::vector<std::int32_t> into(n);
+      for (std::size_t p = 0; p < n; ++p) into[p] = static_cast<std::int32_t>(p);
+      auto root = [&](std::int32_t p) {
+        while (into[static_cast<std::size_t>(p)] != p) p = into[static_cast<std::size_t>(p)];
+        return p;
+      };
+      for (std::size_t p = 0; p < n; ++p) {
+        if (!failed.count(group[p])) continue;
+        for (const TriChain& ch : subs[p].mesh.chains)
+          if (ch.interface >= 0) {
+            const std::int32_t a = root(group[p]), b = root(group[static_cast<std::size_t>(ch.interface)]);
+            if (a != b) into[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);
+          }
+      }
+      std::set<std::int32_t> rebuilt;
+      for (std::size_t p = 0; p < n; ++p) {
+        const std::int32_t r = root(group[p]);
+        if (r != group[p] || failed.count(r)) rebuilt.insert(r);
+        group[p] = r;
+      }
+      const GroupedPartition gp = group_partition(tri, triangle_part, group, rebuilt);
+      std::vector<std::uint8_t> patch_now(n, 0);
+      for (std::size_t p = 0; p < n; ++p) patch_now[static_cast<std::size_t>(group[p])] |= is_patch[p] || rebuilt.count(group[p]);
+      for (std::size_t p = 0; p < n; ++p)
+        if (rebuilt.count(group[p])) {
+          is_patch[p] = 1;
+          patch_error[p].clear();
+          if (group[p] != static_cast<std::int32_t>(p)) {
+            meshes[p] = {};
+            side_nodes[p] = 0;
+          }
+        }
+      const std::vector<std::int32_t> roots(rebuilt.begin(), rebuilt.end());
+      for_each_subregion(roots.size(), [&](std::size_t k) {
+        const auto r = static_cast<std::size_t>(roots[k]);
+        try {
+          build_patch(r, cut_subregion(tri, gp.tp, gp.topology, roots[k], gp.members[r], name), patch_now,
+                      PatchMethod::automatic);
+        } catch (const MeshingError& e) {
+          patch_error[r] = sub_name(r) + ": its repair failed even over its neighbours' area too (" +
+                           std::to_string(grow + 1) + " times): " + e.what();
+        }
+      });
+    }
+    failed_maps = failed_repairs = 0;
+    for (std::size_t p = 0; p < n; ++p) {
+      failed_maps += is_patch[p];
+      failed_repairs += !patch_error[p].empty();
+    }
+    seconds_patches += seconds_since(t0);
+    if (failed_repairs == 0 || unions++ > 0) break;
+    // Patches grown over their neighbours whose counts, quantized for the smaller patches, did not add up: the
+    // unions of the last growth are patched from the start.
+    std::set<std::int32_t> roots;
+    for (std::size_t p = 0; p < n; ++p)
+      if (group[p] != static_cast<std::int32_t>(p)) roots.insert(group[p]);
+    if (roots.empty()) break;
+    const GroupedPartition gp = group_partition(tri, triangle_part, group, roots);
+    for (std::int32_t r : roots) {
+      try {
+        union_sub[static_cast<std::size_t>(r)] = cut_subregion(tri, gp.tp, gp.topology, r, gp.members[static_cast<std::size_t>(r)], name);
+      } catch (const MeshingError&) {  // not one simple loop: its members are patched one by one
+        for (std::size_t p = 0; p < n; ++p)
+          if (group[p] == r) group[p] = static_cast<std::int32_t>(p);
+        continue;
+      }
+      for (std::size_t p = 0; p < n; ++p)
+        if (group[p] == r && failure[p].empty())
+          failure[p] = sub_name(p) + ": meshed in a patch with its neighbours (their patch could not be built alone)";
+    }
+    quantize_again();
   }
-  std::size_t failed_maps = 0, failed_repairs = 0;
-  for (std::size_t p = 0; p < n; ++p) {
-    failed_maps += is_patch[p];
-    failed_repairs += !patch_error[p].empty();
-  }
-  if (failed_repairs > 0 && options.patch_unions.empty()) {
-    // The grown patches' counts were quantized for the smaller patches: map the part again with the unions
-    // patched from the start, so that the quantization makes their counts add up.
-    PolysquareMapOptions again = options;
-    std::map<std::int32_t, std::vector<int>> unions;
-    for (std::size_t p = 0; p < n; ++p) unions[group[p]].push_back(static_cast<int>(p));
-    for (auto& [r, members] : unions)
-      if (members.size() > 1) again.patch_unions.push_back(std::move(members));
-    if (!again.patch_unions.empty()) return map_piecewise(tri, triangle_part, parts, again, name, st);
-  }
+  st.seconds_quantize = seconds_quantize;
+  st.seconds_snap = seconds_snap;
+  t0 = std::chrono::steady_clock::now();
   for (const std::string& e : patch_error)
     if (!e.empty())
       throw MeshingError(e + " [" + std::to_string(failed_repairs) + " of " + std::to_string(failed_maps) +
                          " repairs failed; " + std::to_string(failed_maps) + " of " + std::to_string(n) +
                          " subregions did not map]");
   QuadMesh out = stitch_quad_meshes(meshes, side_nodes, 1e-6 * options.size);
-  st.seconds_extract = seconds_since(t0);
+  st.seconds_extract = seconds_patches + seconds_since(t0);
   st.separators = couplings.size();
   st.subregions.assign(n, {});
   st.failed_maps.clear();

@@ -58,11 +58,6 @@ struct PolysquareMapOptions {
   /// options (PartMapResult::partition), reused as it is (no partitioning, no splitting): repair rounds remesh
   /// the same subregions.
   std::shared_ptr<const std::vector<std::int32_t>> triangle_partition;
-  /// PPM: groups of subregions meshed by one unstructured patch from the start, before the quantization, which
-  /// then makes the counts around each group even where the patch cannot. map_piecewise fills it itself and maps
-  /// the part once more when a patch could only be built over its neighbours' area (patch_growth) and the grown
-  /// patch's counts, quantized for the smaller patch, did not add up.
-  std::vector<std::vector<int>> patch_unions;
   int patch_growth = 3;  ///< times a patch that cannot be built takes in its neighbouring subregions and is built
                          ///< again over their union (a narrow or odd-counted subregion gains room and a ring piece)
   DeformOptions deform;
