@@ -404,8 +404,8 @@ int main(int argc, char** argv) {
                        "leaving an interior valence-3 node; 180 = off")
       ->capture_default_str();
   cmd_mesh->add_option("--feature-tolerance", mesh.options.feature_tolerance,
-                       "largest distance between a feature curve and the mesh edges along it, as a fraction of the size")
-      ->check(CLI::PositiveNumber)->capture_default_str();
+                       "largest distance between a feature curve and the mesh edges along it, as a fraction of the size (0 = unbounded)")
+      ->capture_default_str();
   cmd_mesh->add_flag("--binary", mesh.binary, "write binary MSH");
   cmd_mesh->add_option("--msh-version", mesh.msh_version,
                        "MSH version: 2.2 (read by Gmsh, meshio, deal.II, MFEM, MOOSE, DUNE) or 4.1 (Gmsh's current; "

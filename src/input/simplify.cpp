@@ -330,20 +330,24 @@ std::vector<DroppedCurve> collapse_narrow_faces(Region& region, double min_width
       if (!feature || !(area > 0.0) || (!inside && std::any_of(cycle.begin(), cycle.end(), [&](int h) {
             return g.edges[static_cast<std::size_t>(h / 2)].feature < 0; })))
         continue;
-      // Another curve or a feature point inside: the face is not a simple sliver.
+      // Wide faces go first (most of them); then a face with another curve or a feature point inside is not a
+      // simple sliver. Points outside the face's box are not tested against its ring.
+      const double width = inscribed_width(poly, 0.01 * min_width, min_width);
+      if (width >= min_width) continue;
+      Box2 box;
+      for (Vec2 p : poly) box.add(p);
+      auto in_face = [&](Vec2 p) { return box.contains(p) && point_in_ring(p, poly); };
       bool holds = false;
-      for (Vec2 p : region.feature_points) holds = holds || point_in_ring(p, poly);
+      for (Vec2 p : region.feature_points) holds = holds || in_face(p);
       for (const FeatureCurve& c : region.features)
-        if (c.closed && !c.points.empty()) holds = holds || point_in_ring(c.points.front(), poly);
+        if (c.closed && !c.points.empty()) holds = holds || in_face(c.points.front());
       for (const Ring& r : region.rings)
-        if (r.hole) holds = holds || point_in_ring(r.points.front(), poly);
+        if (r.hole) holds = holds || in_face(r.points.front());
       std::vector<std::uint8_t> on_face(g.edges.size(), 0);
       for (int h : cycle) on_face[static_cast<std::size_t>(h / 2)] = 1;
       for (std::size_t e = 0; e < g.edges.size() && !holds; ++e)
-        if (!on_face[e]) holds = point_in_ring(0.5 * (g.edges[e].points[0] + g.edges[e].points[1]), poly);
+        if (!on_face[e]) holds = in_face(0.5 * (g.edges[e].points[0] + g.edges[e].points[1]));
       if (holds) continue;
-      const double width = inscribed_width(poly, 0.01 * min_width, min_width);
-      if (width >= min_width) continue;
       for (int h : cycle) {
         const auto& e = g.edges[static_cast<std::size_t>(h / 2)];
         if (e.feature < 0 || face_of[static_cast<std::size_t>(h ^ 1)] == static_cast<int>(f)) continue;

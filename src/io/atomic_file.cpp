@@ -17,6 +17,7 @@
 #include <string>
 
 #include "polysquare/core/error.h"
+#include "polysquare/io/mesh_io.h"
 
 namespace polysquare {
 namespace fs = std::filesystem;
@@ -103,11 +104,6 @@ void rename_onto(const fs::path& tmp, const fs::path& target) {
   if (ec) throw InputError(target.string() + ": cannot replace the file: " + ec.message());
 }
 
-std::string lower_ext(const fs::path& p) {
-  std::string ext = p.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return ext;
-}
 }  // namespace
 
 fs::path temporary_path(const fs::path& target) {
@@ -195,10 +191,10 @@ void check_output_file(const fs::path& path, const std::string& what, const std:
   const std::string file = path.filename().string();
   if (file.empty() || file == "." || file == ".." || fs::is_directory(path, ec))
     throw InputError(name + ": is a directory, not an output file (" + what + ")");
-  if (!extensions.empty() && std::find(extensions.begin(), extensions.end(), lower_ext(path)) == extensions.end()) {
+  if (!extensions.empty() && std::find(extensions.begin(), extensions.end(), lower_extension(path)) == extensions.end()) {
     std::string list;
     for (const auto& k : extensions) list += (list.empty() ? "" : ", ") + k;
-    throw InputError(name + ": unknown " + what + " format '" + lower_ext(path) + "' (known: " + list + ")");
+    throw InputError(name + ": unknown " + what + " format '" + lower_extension(path) + "' (known: " + list + ")");
   }
   const fs::path dir = directory_of(path);
   if (!fs::is_directory(dir, ec))

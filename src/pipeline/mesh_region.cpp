@@ -274,7 +274,6 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
       // pinned by an input corner sharper than the SJ gate are only counted (no conforming mesh does better).
       std::vector<std::uint8_t> poor;
       auto measure = [&] {
-        inv = check_invariants(r.mesh);
         metrics = quad_metrics(r.mesh);
         pinned = quads_pinned_by_sharp_input(r.mesh, options.min_scaled_jacobian, options.size);
         poor.assign(metrics.sj.size(), 0);
@@ -289,7 +288,7 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
       // First the neighbourhoods of the poor quads are meshed again (a few rings of quads, the rest of their
       // subregions keeps its map), then smoothed with the whole part.
       // Local patches around the flagged quads, `rings` and `max_quads` as far as they may grow; then the whole
-      // part is smoothed and measured again.
+      // part is smoothed and measured again. Returns whether poor quads remain.
       auto patch_locally = [&](const std::vector<std::uint8_t>& flagged, int rings, std::size_t max_quads) {
         LocalPatchOptions lp = options.local_patch;
         lp.size = options.size;
@@ -300,16 +299,13 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
         local_stats.patched += done.patched;
         local_stats.quads_added += done.quads_added;
         local_stats.quads_removed += done.quads_removed;
-        if (done.patched > 0) {
-          c.smooth = smooth_quads(r.mesh, smooth, &region);
-          measure();
-        }
+        if (done.patched == 0) return true;  // the flagged quads are as they were
+        c.smooth = smooth_quads(r.mesh, smooth, &region);
+        return measure();
       };
-      if (measure() && options.local_patch.enabled) {
-        patch_locally(poor, options.local_patch.max_rings, options.local_patch.max_quads);
-        if (std::find(poor.begin(), poor.end(), std::uint8_t{1}) != poor.end())
-          patch_locally(poor, options.local_patch.second_rings, options.local_patch.second_max_quads);
-      }
+      if (measure() && options.local_patch.enabled &&
+          patch_locally(poor, options.local_patch.max_rings, options.local_patch.max_quads))
+        patch_locally(poor, options.local_patch.second_rings, options.local_patch.second_max_quads);
       // Subregions still holding a poor quad are meshed again (a mapped one as a patch, a patch by the matching
       // construction); the rest of the part keeps its maps.
       std::set<int> bad;
@@ -320,12 +316,15 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
         if (poor[q] && subregion_of(q) >= 0) bad.insert(subregion_of(q));
       }
       if (round < options.repair_rounds && repairs.add(bad, r.stats)) continue;
+      // The invariants are checked once the repair rounds are over (a round that continues never reads them).
+      inv = check_invariants(r.mesh);
       if (!inv.ok() && first_folded < metrics.sj.size() && options.local_patch.enabled) {
         // Quads still folded after every repair round: wider local patches around them alone, so that a few
         // folded quads do not send the whole part to the unstructured fallback.
         std::vector<std::uint8_t> folded(metrics.sj.size(), 0);
         for (std::size_t q = 0; q < metrics.sj.size(); ++q) folded[q] = metrics.sj[q] <= 0.0;
         patch_locally(folded, options.local_patch.wide_rings, options.local_patch.wide_max_quads);
+        inv = check_invariants(r.mesh);
         first_folded = metrics.sj.size();
         for (std::size_t q = 0; q < metrics.sj.size() && first_folded == metrics.sj.size(); ++q)
           if (metrics.sj[q] <= 0.0) first_folded = q;
@@ -357,10 +356,7 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
     c.min_sj = q.sj.min;
     c.max_edge_ratio = q.edge_ratio.max;
     c.interior_singularities = q.interior_singularities;
-    double area = 0.0;
-    for (const auto& quad : r.mesh.quads)
-      area += 0.5 * cross(r.mesh.nodes[quad[2]] - r.mesh.nodes[quad[0]], r.mesh.nodes[quad[3]] - r.mesh.nodes[quad[1]]);
-    const double mean_area = area / static_cast<double>(r.mesh.quads.size()) / (options.size * options.size);
+    const double mean_area = mesh_area(r.mesh) / static_cast<double>(r.mesh.quads.size()) / (options.size * options.size);
     c.size_deviation = std::abs(std::log(mean_area));
     c.summary["quads"] = r.mesh.quads.size();
     if (local_stats.clusters > 0)

@@ -103,6 +103,7 @@ struct Box2 {
     hi = {std::fmax(hi.x, p.x), std::fmax(hi.y, p.y)};
   }
   double diagonal() const { return lo.x <= hi.x ? distance(lo, hi) : 0.0; }
+  bool contains(Vec2 p) const { return p.x >= lo.x && p.x <= hi.x && p.y >= lo.y && p.y <= hi.y; }
 };
 
 }  // namespace polysquare
