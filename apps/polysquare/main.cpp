@@ -155,11 +155,25 @@ int run_mesh(const MeshArgs& args) {
       !(std::abs(change) <= 0.01))
     std::cerr << "warning: the mesh's area differs from the domain's by " << short_number(100 * change)
               << " % (more than 1 %: chords of coarse curves, or a region read wrongly)\n";
-  const DomainDistance domain = domain_distance(result.mesh, local, measure);
+  DomainDistance domain = domain_distance(result.mesh, local, measure);
+  // Places in the input's frame, as every other place the CLI prints.
+  auto to_input_frame = [&](DomainDistance& d) {
+    d.feature_max_at = d.feature_max_at + origin;
+    d.feature_node_max_at = d.feature_node_max_at + origin;
+  };
+  to_input_frame(domain);
   FiniteVolumeQuality fv = finite_volume_quality(result.mesh);
   fv.orthogonality_worst_at = fv.orthogonality_worst_at + origin;
   fv.smoothness_worst_at = fv.smoothness_worst_at + origin;
-  add_quality_to_report(result.report, quality, fv, domain, args.options.size);
+  // Against the simplified curves too, which the mesh conforms to (the input distance includes the simplification).
+  std::optional<DomainDistance> simplified;
+  if (result.report["simplify"]["vertices_after"] != result.report["simplify"]["vertices_before"] ||
+      !result.report["dropped_curves"].empty())
+  {
+    simplified = domain_distance(result.mesh, result.region, measure);
+    to_input_frame(*simplified);
+  }
+  add_quality_to_report(result.report, quality, fv, domain, args.options.size, simplified ? &*simplified : nullptr);
   result.report["input"]["repairs"] = notes.repairs;
   result.report["input"]["snapped"] = notes.snaps;
   result.report["input"]["warnings"] = notes.warnings;
@@ -254,6 +268,14 @@ int run_mesh(const MeshArgs& args) {
                      "Jacobian min "
                   << c["pinned_min_scaled_jacobian"] << " at " << place(c["pinned_worst_at"])
                   << "; the others' min is " << c["unpinned_min_scaled_jacobian"] << ")\n";
+      if (c.contains("chosen") && c.contains("poor_quads")) {
+        const auto& first = c["poor_quads"]["first"][0];
+        std::cerr << "warning: part " << c["part"] << ": " << c["poor_quads"]["count"]
+                  << " quads stay outside --min-sj or --max-edge-ratio after local repair (within --max-poor-fraction); "
+                     "the first at "
+                  << place(first["at"]) << " (scaled Jacobian " << first["scaled_jacobian"] << ", edge ratio "
+                  << first["edge_ratio"] << "); the report's candidates list them\n";
+      }
       if (c.contains("chosen") && c.contains("fallback")) {
         std::cerr << "warning: part " << c["part"] << ": none of " << part.size() - 1
                   << " poly-square candidates meshed it; meshed unstructured by splitting triangles into quads ("
@@ -271,7 +293,13 @@ int run_mesh(const MeshArgs& args) {
   if (!args.quiet)
     std::cout << "polysquare: " << result.mesh.quads.size() << " quads, " << result.mesh.nodes.size() << " nodes -> "
             << args.output << "\n"
-            << group_summary << format_quality_text(quality, &domain) << format_finite_volume_text(fv);
+            << group_summary << format_quality_text(quality, &domain)
+            << (simplified ? "  against the simplified curves the mesh follows: boundary distance max " +
+                                 short_number(simplified->boundary_max_distance) + ", feature distance to mesh edges max " +
+                                 short_number(simplified->feature_max_distance) + ", feature nodes off curves max " +
+                                 short_number(simplified->feature_node_max_distance) + "\n"
+                           : std::string())
+            << format_finite_volume_text(fv);
   return 0;
 }
 
@@ -391,10 +419,13 @@ int main(int argc, char** argv) {
   cmd_mesh->add_option("--max-quads", mesh.options.max_quads, "refuse sizes that need more quads than this")
       ->check(CLI::PositiveNumber)->capture_default_str();  // "-5" would otherwise wrap around to 2^64 - 5
   cmd_mesh->add_option("--min-sj", mesh.options.min_scaled_jacobian,
-                       "refuse a mesh whose worst scaled Jacobian is below this (0 accepts any valid mesh)")
+                       "refuse a mesh with quads whose scaled Jacobian is below this (see --max-poor-fraction; 0 accepts any valid mesh)")
       ->capture_default_str();
   cmd_mesh->add_option("--max-edge-ratio", mesh.options.max_edge_ratio,
-                       "refuse a mesh with a quad whose longest / shortest edge exceeds this")->capture_default_str();
+                       "refuse a mesh with quads whose longest / shortest edge exceeds this (see --max-poor-fraction)")->capture_default_str();
+  cmd_mesh->add_option("--max-poor-fraction", mesh.options.max_poor_fraction,
+                       "accept (and report) a mesh whose quads outside --min-sj or --max-edge-ratio, after local repair, are at most this fraction of a part's quads (0 = every quad must pass)")
+      ->capture_default_str();
   cmd_mesh->add_option("--boundary-weight", mesh.options.map.deform.boundary_weight,
                        "lambda of the boundary alignment term (paper eq. 9)")->capture_default_str();
   cmd_mesh->add_option("--feature-weight", mesh.options.map.deform.feature_weight,

@@ -459,14 +459,17 @@ void write_partition_svg(const std::filesystem::path& path, const TriMesh& mesh,
   const Topology topo(mesh);
   Box2 box;
   for (Vec2 p : mesh.vertices) box.add(p);
-  const double scale = (width_px - 20) / std::max(box.hi.x - box.lo.x, 1e-300);
-  const int height = static_cast<int>((box.hi.y - box.lo.y) * scale) + 20;
+  // No triangles (every part was meshed without a partition): a picture that says so, not an unbounded box.
+  const bool empty = mesh.vertices.empty();
+  const double scale = empty ? 1.0 : (width_px - 20) / std::max(box.hi.x - box.lo.x, 1e-300);
+  const int height = empty ? 40 : static_cast<int>((box.hi.y - box.lo.y) * scale) + 20;
   auto X = [&](Vec2 p) { return 10 + (p.x - box.lo.x) * scale; };
   auto Y = [&](Vec2 p) { return 10 + (box.hi.y - p.y) * scale; };
   static const char* palette[] = {"#8dd3c7", "#ffffb3", "#bebada", "#fb8072", "#80b1d3", "#fdb462",
                                   "#b3de69", "#fccde5", "#d9d9d9", "#bc80bd", "#ccebc5", "#ffed6f"};
   write_file_atomically(path, [&](std::ostream& os) {
     os << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << width_px << "\" height=\"" << height << "\">\n";
+    if (empty) os << "<text x=\"10\" y=\"25\">no partition: no part was meshed by subregions</text>\n";
     for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
       os << "<polygon points=\"";
       for (auto v : mesh.triangles[t]) os << X(mesh.vertices[v]) << "," << Y(mesh.vertices[v]) << " ";

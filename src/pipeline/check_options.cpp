@@ -32,6 +32,8 @@ void check_mesh_options(const MeshOptions& o) {
           "in [0, 1]");
   require(std::isfinite(o.max_edge_ratio) && o.max_edge_ratio >= 1.0, "--max-edge-ratio", "max_edge_ratio",
           o.max_edge_ratio, "a finite number >= 1 (the longest edge of a quad over its shortest)");
+  require(within(o.max_poor_fraction, 0.0, 1.0), "--max-poor-fraction", "max_poor_fraction", o.max_poor_fraction,
+          "in [0, 1]");
   require(within(o.corner_threshold_deg, 0.0, 180.0), "--corner-angle", "corner_threshold_deg", o.corner_threshold_deg,
           "in [0, 180] degrees");
   require(within(o.refine.flat_corner_deg, 0.0, 180.0), "--flat-corner-angle", "refine.flat_corner_deg",

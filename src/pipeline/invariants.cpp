@@ -37,7 +37,12 @@ InvariantReport check_invariants(const QuadMesh& mesh) {
   for (const auto& e : mesh.boundary_edges) tagged[edge_key(e[0], e[1])]++;
   for (const auto& [key, count] : edge_count) {
     if (count > 2) { r.non_manifold_edges++; problem("an edge is shared by " + std::to_string(count) + " quads"); }
-    if (count == 1 && !tagged.count(key)) { r.untagged_boundary_edges++; problem("a boundary edge is not on the input boundary"); }
+    if (count == 1 && !tagged.count(key)) {
+      r.untagged_boundary_edges++;
+      // Where: a crack between pieces that do not share their nodes, or a boundary edge that lost its tag.
+      const Vec2 a = mesh.nodes[static_cast<std::size_t>(key >> 32)], b = mesh.nodes[static_cast<std::size_t>(key & 0xffffffffu)];
+      problem("a boundary edge from " + at_text(a) + " to " + at_text(b) + " is not on the input boundary");
+    }
   }
   for (const auto& [key, count] : tagged) {
     auto it = edge_count.find(key);

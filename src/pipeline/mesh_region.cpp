@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cctype>
 #include <map>
+#include <numeric>
 #include <chrono>
 #include <cmath>
 #include <optional>
@@ -191,8 +192,11 @@ struct Candidate {
 
   double size_deviation = 0.0;  // |log(mean quad area / h^2)|: how far the element size is from the request
   double structured = 0.0;      // fraction of its quads in poly-square-mapped subregions (0 for the fallback)
+  std::size_t poor_quads = 0;   // unpinned quads outside the gates, accepted within MeshOptions::max_poor_fraction
 
   bool better_than(const Candidate& o) const {
+    // A mesh every quad of which passes the gates first.
+    if ((poor_quads == 0) != (o.poor_quads == 0)) return poor_quads == 0;
     // Semi-structured first: a candidate with fewer quads in unstructured patches wins.
     if (std::abs(structured - o.structured) > 0.01) return structured > o.structured;
     if (std::abs(gated_sj - o.gated_sj) > 0.02) return gated_sj > o.gated_sj;  // quality first, within a margin
@@ -270,7 +274,7 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
       smooth.feature_tolerance = options.feature_tolerance * options.size;
       c.smooth = smooth_quads(r.mesh, smooth, &region);
       InvariantReport inv;
-      // Folded quads, and unpinned ones below the SJ gate. The gates judge the quads the mesher controls: quads
+      // Folded quads, and unpinned ones outside the SJ or edge-ratio gate. The gates judge the quads the mesher controls: quads
       // pinned by an input corner sharper than the SJ gate are only counted (no conforming mesh does better).
       std::vector<std::uint8_t> poor;
       auto measure = [&] {
@@ -279,7 +283,8 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
         poor.assign(metrics.sj.size(), 0);
         bool any = false;
         for (std::size_t q = 0; q < metrics.sj.size(); ++q) {
-          poor[q] = metrics.sj[q] <= 0.0 || (!pinned[q] && metrics.sj[q] < options.min_scaled_jacobian);
+          poor[q] = metrics.sj[q] <= 0.0 || (!pinned[q] && (metrics.sj[q] < options.min_scaled_jacobian ||
+                                                            metrics.edge_ratio[q] > options.max_edge_ratio));
           any = any || poor[q];
         }
         return any;
@@ -306,14 +311,49 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
       if (measure() && options.local_patch.enabled &&
           patch_locally(poor, options.local_patch.max_rings, options.local_patch.max_quads))
         patch_locally(poor, options.local_patch.second_rings, options.local_patch.second_max_quads);
-      // Subregions still holding a poor quad are meshed again (a mapped one as a patch, a patch by the matching
-      // construction); the rest of the part keeps its maps.
+      // Subregions still holding a folded quad are meshed again (a mapped one as a patch, a patch by the matching
+      // construction); the rest of the part keeps its maps. Valid quads outside the gates cost a subregion its map
+      // only beyond the max_poor_fraction budget, worst subregion first: a 400-quad map is not traded for a
+      // quad at SJ 0.18.
       std::set<int> bad;
       std::size_t first_folded = metrics.sj.size();
+      std::map<int, std::pair<double, std::size_t>> poor_in;  // subregion -> (worst gate ratio, poor valid quads)
+      std::size_t poor_valid = 0;
       for (std::size_t q = 0; q < metrics.sj.size(); ++q) {
         const bool folded = metrics.sj[q] <= 0.0;
         if (folded && first_folded == metrics.sj.size()) first_folded = q;
-        if (poor[q] && subregion_of(q) >= 0) bad.insert(subregion_of(q));
+        if (!poor[q]) continue;
+        const int s = subregion_of(q);
+        if (folded) {
+          if (s >= 0) bad.insert(s);
+          continue;
+        }
+        ++poor_valid;
+        if (s < 0) continue;
+        // Below 1 the quad fails a gate; the smaller, the further.
+        const double ratio = std::min(options.min_scaled_jacobian > 0 ? metrics.sj[q] / options.min_scaled_jacobian : 1.0,
+                                      options.max_edge_ratio / metrics.edge_ratio[q]);
+        auto [it, fresh] = poor_in.try_emplace(s, ratio, 0);
+        it->second.first = std::min(it->second.first, ratio);
+        it->second.second++;
+      }
+      std::vector<std::pair<double, int>> worst_first;
+      for (const auto& [s, e] : poor_in) {
+        if (bad.count(s)) poor_valid -= e.second;
+        else worst_first.push_back({e.first, s});
+      }
+      std::sort(worst_first.begin(), worst_first.end());
+      const double budget = options.max_poor_fraction * static_cast<double>(metrics.sj.size());
+      for (const auto& [ratio, s] : worst_first) {
+        if (static_cast<double>(poor_valid) <= budget) break;
+        bad.insert(s);
+        poor_valid -= poor_in[s].second;
+      }
+      {
+        std::size_t folded = 0;
+        for (double v : metrics.sj) folded += v <= 0.0;
+        c.summary["repair_rounds"].push_back({{"folded", folded}, {"poor_kept", poor_valid},
+                                              {"remeshed", std::vector<int>(bad.begin(), bad.end())}});
       }
       if (round < options.repair_rounds && repairs.add(bad, r.stats)) continue;
       // The invariants are checked once the repair rounds are over (a round that continues never reads them).
@@ -404,22 +444,45 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
       c.summary["pinned_worst_at"] = {p.x, p.y};
       c.summary["unpinned_min_scaled_jacobian"] = gated_sj;
     }
-    // Where the refused figure is.
+    // Unpinned quads outside the gates that every repair left as they are: accepted, each reported with its
+    // place, while they are few (max_poor_fraction); the mesh is refused with the worst of them otherwise.
+    std::vector<std::size_t> outside;
+    for (std::size_t q = 0; q < pinned.size(); ++q)
+      if (!pinned[q] && (metrics.sj[q] < options.min_scaled_jacobian || metrics.edge_ratio[q] > options.max_edge_ratio))
+        outside.push_back(q);
+    c.poor_quads = outside.size();
+    const bool refused = static_cast<double>(outside.size()) >
+                         options.max_poor_fraction * static_cast<double>(r.mesh.quads.size());
     auto at = [&](const std::vector<double>& per_quad, bool largest) {
-      std::size_t worst = pinned.size();
-      for (std::size_t q = 0; q < per_quad.size(); ++q)
-        if (!pinned[q] && (worst == pinned.size() || (largest ? per_quad[q] > per_quad[worst] : per_quad[q] < per_quad[worst])))
-          worst = q;
+      std::size_t worst = outside.front();
+      for (std::size_t q : outside)
+        if (largest ? per_quad[q] > per_quad[worst] : per_quad[q] < per_quad[worst]) worst = q;
       return at_text(r.mesh.nodes[r.mesh.quads[worst][0]]) + in_subregion(worst);
     };
-    if (gated_edge_ratio > options.max_edge_ratio)
+    const std::string how_many = " (" + std::to_string(outside.size()) + " of " + std::to_string(r.mesh.quads.size()) +
+                                 " quads outside the gates, above --max-poor-fraction " +
+                                 std::to_string(options.max_poor_fraction) + ")";
+    if (refused && gated_edge_ratio > options.max_edge_ratio)
       throw MeshingError(name + ": the best mesh has a quad with edge ratio " + std::to_string(gated_edge_ratio) +
                          " at " + at(metrics.edge_ratio, true) + ", above the maximum " +
-                         std::to_string(options.max_edge_ratio) + " (--max-edge-ratio)");
-    if (gated_sj < options.min_scaled_jacobian)
+                         std::to_string(options.max_edge_ratio) + " (--max-edge-ratio)" + how_many);
+    if (refused)
       throw MeshingError(name + ": the best mesh has a quad with scaled Jacobian " + std::to_string(gated_sj) + " at " +
                          at(metrics.sj, false) + ", below the minimum " +
-                         std::to_string(options.min_scaled_jacobian) + " (--min-sj)");
+                         std::to_string(options.min_scaled_jacobian) + " (--min-sj)" + how_many);
+    if (!outside.empty()) {
+      nlohmann::json places = nlohmann::json::array();
+      for (std::size_t q : outside) {
+        if (places.size() == 20) break;
+        const Vec2 p = r.mesh.nodes[r.mesh.quads[q][0]];
+        nlohmann::json j = {{"at", {p.x, p.y}}, {"scaled_jacobian", metrics.sj[q]}, {"edge_ratio", metrics.edge_ratio[q]}};
+        if (subregion_of(q) >= 0) j["subregion"] = subregion_of(q);
+        places.push_back(std::move(j));
+      }
+      c.summary["poor_quads"] = {{"count", outside.size()},
+                                 {"fraction", static_cast<double>(outside.size()) / static_cast<double>(r.mesh.quads.size())},
+                                 {"first", places}};
+    }
     c.result = std::move(r);
   } catch (const MeshingError& e) {
     c.error = e.what();
@@ -553,6 +616,7 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
   std::vector<nlohmann::json> tried(parts.size());
   std::vector<SmoothStats> smoothed(parts.size());
   std::vector<double> structured(parts.size(), 0.0);  // fraction of each part's quads from poly-square maps
+  std::vector<std::size_t> poor_quads(parts.size(), 0);  // quads accepted outside the gates (max_poor_fraction)
   // One thread limit for every parallel stage (parts, candidates, subregions, colours in smoothing).
   const int threads = options.threads > 0 ? options.threads : static_cast<int>(oneapi::tbb::info::default_concurrency());
   oneapi::tbb::global_control limit(oneapi::tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
@@ -584,7 +648,8 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
       }
       // A later round is meshed while the best mesh so far holds unstructured patches nobody asked for; the
       // best of all wins.
-      if (best >= 0 && (cands[static_cast<std::size_t>(best)].structured >= 1.0 || !options.map.patch_subregions.empty()))
+      const Candidate& b = cands[static_cast<std::size_t>(std::max(best, 0))];
+      if (best >= 0 && b.poor_quads == 0 && (b.structured >= 1.0 || !options.map.patch_subregions.empty()))
         break;
     }
     if (best < 0 && options.split_fallback) {
@@ -609,6 +674,7 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
     tried[k][static_cast<std::size_t>(best)]["chosen"] = true;
     smoothed[k] = cands[static_cast<std::size_t>(best)].smooth;
     structured[k] = cands[static_cast<std::size_t>(best)].structured;
+    poor_quads[k] = cands[static_cast<std::size_t>(best)].poor_quads;
     results[k] = std::move(cands[static_cast<std::size_t>(best)].result);
   });
   std::ostringstream failed;
@@ -708,6 +774,7 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
       {"subregions", subregion_count},
       {"unstructured_subregions", unstructured.size()},
       {"local_patch_quads", local_patch_quads},
+      {"poor_quads", std::accumulate(poor_quads.begin(), poor_quads.end(), std::size_t{0})},
       {"seconds", std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count()},
       {"version", library_version()}};
   out.report = {

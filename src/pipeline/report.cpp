@@ -6,12 +6,17 @@
 namespace polysquare {
 
 void add_quality_to_report(nlohmann::json& report, const QualityReport& quality, const FiniteVolumeQuality& fv,
-                           const DomainDistance& domain, double size) {
+                           const DomainDistance& domain, double size, const DomainDistance* simplified) {
   report["quality"] = to_json(quality);
   report["quality"]["finite_volume"] = to_json(fv);
   report["domain"] = to_json(domain);
   report["domain"]["feature_max_distance_over_size"] = size > 0.0 ? domain.feature_max_distance / size : 0.0;
   report["domain"]["feature_node_max_distance_over_size"] = size > 0.0 ? domain.feature_node_max_distance / size : 0.0;
+  if (simplified) {
+    nlohmann::json& j = report["domain"]["simplified"] = to_json(*simplified);
+    j["feature_max_distance_over_size"] = size > 0.0 ? simplified->feature_max_distance / size : 0.0;
+    j["feature_node_max_distance_over_size"] = size > 0.0 ? simplified->feature_node_max_distance / size : 0.0;
+  }
   nlohmann::json& summary = report["summary"];
   summary["sj_min"] = quality.sj.min;
   summary["singularities"] = quality.singularities;

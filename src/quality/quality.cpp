@@ -229,10 +229,17 @@ DomainDistance domain_distance(const QuadMesh& mesh, const Region& region, const
   if (!feature_segs.empty()) {
     const SegmentGrid edges(mesh_edges);
     for (const auto& s : feature_segs)
-      for (int k = 0; k <= 8; ++k) d.feature_max_distance = std::max(d.feature_max_distance, edges.nearest(lerp(s[0], s[1], k / 8.0)));
+      for (int k = 0; k <= 8; ++k) {
+        const Vec2 p = lerp(s[0], s[1], k / 8.0);
+        const double dist = edges.nearest(p);
+        if (dist > d.feature_max_distance) { d.feature_max_distance = dist; d.feature_max_at = p; }
+      }
     const SegmentGrid features(feature_segs);
     for (const auto& e : mesh.feature_edges)
-      for (auto v : e) d.feature_node_max_distance = std::max(d.feature_node_max_distance, features.nearest(mesh.nodes[v]));
+      for (auto v : e) {
+        const double dist = features.nearest(mesh.nodes[v]);
+        if (dist > d.feature_node_max_distance) { d.feature_node_max_distance = dist; d.feature_node_max_at = mesh.nodes[v]; }
+      }
   }
   // Areas relative to a cell's own nodes: products of absolute coordinates far from the origin cancel.
   double mesh_area = polysquare::mesh_area(mesh);
@@ -499,6 +506,8 @@ nlohmann::json to_json(const QualityReport& q) {
 nlohmann::json to_json(const DomainDistance& d) {
   return {{"boundary_max_distance", d.boundary_max_distance}, {"boundary_max_relative", d.boundary_max_relative},
           {"feature_max_distance", d.feature_max_distance}, {"feature_node_max_distance", d.feature_node_max_distance},
+          {"feature_max_at", {d.feature_max_at.x, d.feature_max_at.y}},
+          {"feature_node_max_at", {d.feature_node_max_at.x, d.feature_node_max_at.y}},
           {"area_relative_change", d.area_relative_change}, {"sharp_vertices_total", d.sharp_vertices_total},
           {"sharp_vertices_missing", d.sharp_vertices_missing}};
 }
@@ -521,8 +530,11 @@ std::string format_quality_text(const QualityReport& q, const DomainDistance* d)
     os << "  boundary distance max " << d->boundary_max_distance << " (relative " << d->boundary_max_relative
        << "), area change " << d->area_relative_change << ", sharp vertices missing " << d->sharp_vertices_missing << " of "
        << d->sharp_vertices_total << "\n";
-    os << "  feature distance to mesh edges max " << d->feature_max_distance << ", feature nodes off curves max "
-       << d->feature_node_max_distance << "\n";
+    os << "  feature distance to mesh edges max " << d->feature_max_distance;
+    if (d->feature_max_distance > 0) os << " at " << at_text(d->feature_max_at);
+    os << ", feature nodes off curves max " << d->feature_node_max_distance;
+    if (d->feature_node_max_distance > 0) os << " at " << at_text(d->feature_node_max_at);
+    os << "\n";
   }
   return os.str();
 }

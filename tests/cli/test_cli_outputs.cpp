@@ -140,6 +140,7 @@ TEST(CliOutputs, OptionValuesAreValidatedBeforeReading) {
       {"--min-sj nan", "--min-sj"},          {"--min-sj -0.1", "--min-sj"},
       {"--min-sj 1.5", "--min-sj"},          {"--max-edge-ratio nan", "--max-edge-ratio"},
       {"--max-edge-ratio 0", "--max-edge-ratio"}, {"--max-edge-ratio -3", "--max-edge-ratio"},
+      {"--max-poor-fraction nan", "--max-poor-fraction"}, {"--max-poor-fraction 2", "--max-poor-fraction"},
       {"--corner-angle nan", "--corner-angle"}, {"--corner-angle -5", "--corner-angle"},
       {"--simplify nan", "--simplify"},       {"--simplify -1", "--simplify"},
       {"--boundary-weight nan", "--boundary-weight"}, {"--boundary-weight -1", "--boundary-weight"},

@@ -143,6 +143,7 @@ TEST(MeshOptionsCheck, DefaultsPassAndEveryNaNIsRefusedByName) {
       {"--size", [](MeshOptions& o, double v) { o.size = v; }},
       {"--min-sj", [](MeshOptions& o, double v) { o.min_scaled_jacobian = v; }},
       {"--max-edge-ratio", [](MeshOptions& o, double v) { o.max_edge_ratio = v; }},
+      {"--max-poor-fraction", [](MeshOptions& o, double v) { o.max_poor_fraction = v; }},
       {"--corner-angle", [](MeshOptions& o, double v) { o.corner_threshold_deg = v; }},
       {"--simplify", [](MeshOptions& o, double v) { o.simplify = v; }},
       {"--min-island-width", [](MeshOptions& o, double v) { o.min_island_width = v; }},

@@ -4,6 +4,9 @@
 
 #include <cmath>
 #include <deque>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <map>
 #include <set>
 #include <numbers>
@@ -264,4 +267,15 @@ TEST(PartitionFaces, DeltaBoxPartsStayInsideFeatureFaces) {
     }
     EXPECT_EQ(partition_triangles(m, o).triangle_part, r.triangle_part);
   }
+}
+
+TEST(PartitionPicture, AnEmptyBackgroundGivesABoundedPictureThatSaysSo) {
+  // When every part was meshed without a partition the picture had a box from +inf to -inf (height -2^31).
+  const std::filesystem::path path = std::filesystem::temp_directory_path() / "polysquare_empty_partition.svg";
+  write_partition_svg(path, TriMesh{}, PartitionResult{});
+  std::ifstream in(path);
+  const std::string svg((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(svg.find("height=\"40\""), std::string::npos) << svg;
+  EXPECT_NE(svg.find("no partition"), std::string::npos) << svg;
+  std::filesystem::remove(path);
 }

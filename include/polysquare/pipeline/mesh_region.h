@@ -54,8 +54,15 @@ struct MeshOptions {
   int repair_rounds = 4;          ///< times a candidate is meshed again with the mapped subregions whose quads stay
                                   ///< folded after smoothing turned into patches (local repair)
   bool keep_partition = false;   ///< return the background triangulation and its partition (for pictures)
-  double min_scaled_jacobian = 0.2;    ///< a candidate whose worst quad is below this is refused; 0 = accept any valid mesh
+  double min_scaled_jacobian = 0.2;    ///< a candidate with a quad below this is refused (see max_poor_fraction);
+                                       ///< 0 = accept any valid mesh
   double max_edge_ratio = 20.0;        ///< refuse a mesh with a quad whose longest / shortest edge exceeds this
+  double max_poor_fraction = 0.001;    ///< valid quads outside the two gates above that local patches did not mend
+                                       ///< are accepted, each reported with its place, while they are at most this
+                                       ///< fraction of the part's quads; the repair rounds turn their subregions
+                                       ///< into patches only beyond it, worst first, and a candidate with more is
+                                       ///< refused. A candidate with none wins over one with some. 0 = every quad
+                                       ///< must pass both gates (folded quads are never accepted)
   double feature_tolerance = 0.1;      ///< largest distance, as a fraction of size, between a feature curve and the
                                        ///< mesh edges along it that smoothing allows (SmoothOptions::feature_tolerance);
                                        ///< 0 = unbounded

@@ -13,9 +13,12 @@ namespace polysquare {
 /// Adds the quality figures of the final mesh to `report` (MeshResult::report): `quality` (with
 /// `quality.finite_volume`), `domain` (with `feature_max_distance_over_size` and
 /// `feature_node_max_distance_over_size`, the distances divided by `size`, the target edge length h), and the
-/// summary's `sj_min`, `singularities`, `interior_singularities` and `boundary_singularities`.
+/// summary's `sj_min`, `singularities`, `interior_singularities` and `boundary_singularities`. `domain` measures
+/// the mesh against the input; `simplified`, when the curves were simplified, against the curves the mesh
+/// conforms to (MeshResult::region; design invariant 4), as `domain.simplified`.
 void add_quality_to_report(nlohmann::json& report, const QualityReport& quality, const FiniteVolumeQuality& fv,
-                           const DomainDistance& domain, double size);
+                           const DomainDistance& domain, double size,
+                           const DomainDistance* simplified = nullptr);
 
 /// The report as indented JSON text (2 spaces, ending in a newline) with `summary` first and, inside it,
 /// quads, structured_fraction, sj_min, singularities, seconds and version in that order; the other blocks and

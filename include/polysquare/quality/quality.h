@@ -67,6 +67,7 @@ struct DomainDistance {
   double boundary_max_relative = 0;  ///< the same divided by the region's bounding-box diagonal
   double feature_max_distance = 0;   ///< max over samples of the feature curves of the distance to the mesh edges
   double feature_node_max_distance = 0;  ///< max over mesh feature nodes of the distance to the feature curves
+  Vec2 feature_max_at{}, feature_node_max_at{};  ///< where those two maxima are (the curve sample, the node)
   double area_relative_change = 0;   ///< (mesh area - region area) / region area
   std::size_t sharp_vertices_total = 0, sharp_vertices_missing = 0;
 };
