@@ -22,6 +22,8 @@ void add_quality_to_report(nlohmann::json& report, const QualityReport& quality,
   summary["singularities"] = quality.singularities;
   summary["interior_singularities"] = quality.interior_singularities;
   summary["boundary_singularities"] = quality.boundary_singularities;
+  summary["regular_quad_fraction"] = quality.regular_quad_fraction;
+  summary["sj_below_0_3_fraction"] = quality.sj_below_0_3_fraction;
 }
 
 std::string report_text(const nlohmann::json& report) {

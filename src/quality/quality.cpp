@@ -191,6 +191,12 @@ QualityReport compute_quality(const QuadMesh& mesh, const QuadMetrics& m) {
     if (!on_boundary[v] && valence[v] != 4) r.interior_singularities++;
   }
   r.singularities = r.boundary_singularities + r.interior_singularities;
+  std::size_t regular = 0;
+  for (const auto& q : mesh.quads)
+    regular += std::none_of(q.begin(), q.end(), [&](std::int32_t v) { return !on_boundary[v] && valence[v] != 4; });
+  const double quads = static_cast<double>(std::max<std::size_t>(mesh.quads.size(), 1));
+  r.regular_quad_fraction = static_cast<double>(regular) / quads;
+  r.sj_below_0_3_fraction = static_cast<double>(std::count_if(m.sj.begin(), m.sj.end(), [](double v) { return v < 0.3; })) / quads;
   return r;
 }
 
@@ -500,7 +506,8 @@ nlohmann::json to_json(const QualityReport& q) {
           {"non_manifold_edges", q.non_manifold_edges}, {"boundary_edges", q.boundary_edges},
           {"sj", st(q.sj)}, {"eta", st(q.eta)}, {"skew", st(q.skew)}, {"edge_ratio", st(q.edge_ratio)},
           {"singularities", q.singularities}, {"interior_singularities", q.interior_singularities},
-          {"boundary_singularities", q.boundary_singularities}};
+          {"boundary_singularities", q.boundary_singularities}, {"regular_quad_fraction", q.regular_quad_fraction},
+          {"sj_below_0_3_fraction", q.sj_below_0_3_fraction}};
 }
 
 nlohmann::json to_json(const DomainDistance& d) {
@@ -525,7 +532,8 @@ std::string format_quality_text(const QualityReport& q, const DomainDistance* d)
   line("skewness (eq. 16)                   ", q.skew);
   line("edge ratio                          ", q.edge_ratio);
   os << "  singularities: " << q.singularities << " (paper: boundary valence != 3 + interior valence != 4), interior "
-     << q.interior_singularities << "\n";
+     << q.interior_singularities << "; quads touching no interior singular node " << q.regular_quad_fraction
+     << ", quads with scaled Jacobian below 0.3 " << q.sj_below_0_3_fraction << "\n";
   if (d) {
     os << "  boundary distance max " << d->boundary_max_distance << " (relative " << d->boundary_max_relative
        << "), area change " << d->area_relative_change << ", sharp vertices missing " << d->sharp_vertices_missing << " of "

@@ -37,6 +37,9 @@ struct QualityReport {
   std::size_t singularities = 0;            ///< paper: boundary valence != 3 plus interior valence != 4
   std::size_t interior_singularities = 0;   ///< interior vertices of valence != 4
   std::size_t boundary_singularities = 0;   ///< boundary vertices of valence != 3
+  double regular_quad_fraction = 0;         ///< quads with no interior singular node among their four: how much
+                                            ///< of the mesh is semi-structured, wherever its quads came from
+  double sj_below_0_3_fraction = 0;         ///< quads whose scaled Jacobian is below 0.3
 };
 /// Valence counts the distinct quad edges at a vertex; triangles (from other tools) are not counted, as in
 /// anchors.md. non_manifold_edges and boundary_edges are over the quads too.
