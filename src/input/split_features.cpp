@@ -12,6 +12,9 @@
 namespace polysquare {
 namespace {
 
+// Stretches of feature curves along the boundary named one by one in the warnings; the rest are counted.
+constexpr std::size_t kStretchWarnings = 20;
+
 // One straight piece of a ring (owner >= 0) or of a feature curve (owner = -1 - feature index).
 struct Piece {
   Vec2 a, b;
@@ -270,7 +273,7 @@ FeatureSplitStats split_features(Region& region, const FeatureSplitOptions& opti
         on_boundary = true;
         ++stats.pieces_dropped;
         ++stats.stretches_along_boundary;
-        if (stats.warnings.size() < 20)
+        if (stats.stretches_along_boundary <= kStretchWarnings)
           stats.warnings.push_back(name + ": the stretch from " + point_text(piece.points.front()) + " to " +
                                    point_text(piece.points.back()) + " runs along the boundary (within " + pt_len(tol) +
                                    ") and is left to it");
@@ -306,9 +309,10 @@ FeatureSplitStats split_features(Region& region, const FeatureSplitOptions& opti
       stats.ring_vertices_added += region.rings[r].points.size() - before;
     }
   }
-  if (stats.stretches_along_boundary > stats.warnings.size())
+  // Only the stretches' warnings are capped (pieces left outside are each named), so count them, not all.
+  if (stats.stretches_along_boundary > kStretchWarnings)
     stats.warnings.push_back(region.source + ": ... and " +
-                             std::to_string(stats.stretches_along_boundary - stats.warnings.size()) +
+                             std::to_string(stats.stretches_along_boundary - kStretchWarnings) +
                              " more stretches of feature curves along the boundary");
   region.features = std::move(out);
   return stats;

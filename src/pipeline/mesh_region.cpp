@@ -311,6 +311,10 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
       if (measure() && options.local_patch.enabled &&
           patch_locally(poor, options.local_patch.max_rings, options.local_patch.max_quads))
         patch_locally(poor, options.local_patch.second_rings, options.local_patch.second_max_quads);
+      // Quads beside a crack (pieces that do not share their nodes) count as folded: their subregions are meshed
+      // again, instead of the whole candidate failing the invariants after the last round.
+      const std::vector<std::uint8_t> cracked = quads_beside_cracks(r.mesh);
+      const auto cracks = static_cast<std::size_t>(std::count(cracked.begin(), cracked.end(), std::uint8_t{1}));
       // Subregions still holding a folded quad are meshed again (a mapped one as a patch, a patch by the matching
       // construction); the rest of the part keeps its maps. Valid quads outside the gates cost a subregion its map
       // only beyond the max_poor_fraction budget, worst subregion first: a 400-quad map is not traded for a
@@ -322,8 +326,9 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
       for (std::size_t q = 0; q < metrics.sj.size(); ++q) {
         const bool folded = metrics.sj[q] <= 0.0;
         if (folded && first_folded == metrics.sj.size()) first_folded = q;
-        if (!poor[q]) continue;
         const int s = subregion_of(q);
+        if (cracked[q] && s >= 0) bad.insert(s);
+        if (!poor[q]) continue;
         if (folded) {
           if (s >= 0) bad.insert(s);
           continue;
@@ -352,7 +357,7 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
       {
         std::size_t folded = 0;
         for (double v : metrics.sj) folded += v <= 0.0;
-        c.summary["repair_rounds"].push_back({{"folded", folded}, {"poor_kept", poor_valid},
+        c.summary["repair_rounds"].push_back({{"folded", folded}, {"beside_cracks", cracks}, {"poor_kept", poor_valid},
                                               {"remeshed", std::vector<int>(bad.begin(), bad.end())}});
       }
       if (round < options.repair_rounds && repairs.add(bad, r.stats)) continue;

@@ -10,6 +10,7 @@
 
 #include "polysquare/core/error.h"
 #include "polysquare/input/read_region.h"
+#include "polysquare/input/split_features.h"
 #include "polysquare/io/geojson.h"
 #include "polysquare/pipeline/check_options.h"
 #include "polysquare/pipeline/local_frame.h"
@@ -213,4 +214,30 @@ TEST(LocalFrame, FarRegionsMoveExactlyAndNearOnesStay) {
   const Region near = read_input(fs::path(POLYSQUARE_DATA_DIR) / "cases" / "smile.geojson", {}, notes);
   EXPECT_EQ(local_origin(near).x, 0.0);
   EXPECT_EQ(local_origin(near).y, 0.0);
+}
+
+TEST(AdversarialInput, StretchesAlongTheBoundaryAreCountedApartFromOtherWarnings) {
+  // Three curves leave the domain (each named), then 25 lie along its bottom side: 20 are named and "5 more"
+  // counted. The cap counted every warning, so the pieces outside took three of the stretches' places.
+  std::string features;
+  for (int i = 0; i < 3; ++i)
+    features += R"(,{"type":"Feature","properties":{"role":"feature"},"geometry":{"type":"LineString","coordinates":[[)" +
+                std::to_string(20 + 20 * i) + ",50],[" + std::to_string(20 + 20 * i) + ",150]]}}";
+  for (int i = 0; i < 25; ++i)
+    features += R"(,{"type":"Feature","properties":{"role":"feature"},"geometry":{"type":"LineString","coordinates":[[)" +
+                std::to_string(2 + 3 * i) + ",0],[" + std::to_string(3 + 3 * i) + ",0]]}}";
+  Region r = parse_geojson(R"({"type":"FeatureCollection","features":[{"type":"Feature","properties":{"role":"domain"},
+    "geometry":{"type":"Polygon","coordinates":[[[0,0],[100,0],[100,100],[0,100],[0,0]]]}})" + features + "]}",
+                           "stretches.geojson");
+  const FeatureSplitStats stats = split_features(r);
+  EXPECT_EQ(stats.stretches_along_boundary, 25u);
+  std::size_t named = 0, outside = 0, more = 0;
+  for (const std::string& w : stats.warnings) {
+    named += w.find("runs along the boundary") != std::string::npos;
+    outside += w.find("lies outside the domain") != std::string::npos;
+    more += w.find("... and 5 more stretches") != std::string::npos;
+  }
+  EXPECT_EQ(named, 20u);
+  EXPECT_EQ(outside, 3u);
+  EXPECT_EQ(more, 1u);
 }

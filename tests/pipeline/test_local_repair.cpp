@@ -176,3 +176,20 @@ TEST(LocalRepair, APatchCrossedByFeaturesGetsEvenCountsFromItsMappedNeighbours) 
     EXPECT_LT(d.feature_max_distance, 0.1 * o.size) << s;
   }
 }
+
+TEST(LocalRepair, QuadsBesideACrackAreFlaggedForRepair) {
+  // Two unit squares side by side whose shared side has its own nodes on each side: a crack. Stitched (one pair
+  // of nodes), nothing is flagged; the outer sides are tagged boundary edges either way.
+  QuadMesh m;
+  m.nodes = {{0, 0}, {1, 0}, {1, 1}, {0, 1}, {1, 0}, {2, 0}, {2, 1}, {1, 1}};
+  m.quads = {{0, 1, 2, 3}, {4, 5, 6, 7}};
+  m.boundary_edges = {{0, 1}, {2, 3}, {3, 0}, {4, 5}, {5, 6}, {6, 7}};
+  const std::vector<std::uint8_t> cracked = quads_beside_cracks(m);
+  EXPECT_EQ(cracked, (std::vector<std::uint8_t>{1, 1}));
+  EXPECT_FALSE(check_invariants(m).ok());
+  EXPECT_NE(check_invariants(m).first_problem.find("(1.000000, 0.000000)"), std::string::npos) << check_invariants(m).first_problem;
+  m.quads[1] = {1, 5, 6, 2};
+  m.boundary_edges = {{0, 1}, {2, 3}, {3, 0}, {1, 5}, {5, 6}, {6, 2}};
+  EXPECT_EQ(quads_beside_cracks(m), (std::vector<std::uint8_t>{0, 0}));
+  EXPECT_TRUE(check_invariants(m).ok()) << check_invariants(m).first_problem;
+}

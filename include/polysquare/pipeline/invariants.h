@@ -1,7 +1,9 @@
 // The invariants every output mesh must hold (design.md), checked before anything is written.
 #pragma once
 
+#include <cstdint>
 #include <string>
+#include <vector>
 
 #include "polysquare/core/quad_mesh.h"
 
@@ -21,5 +23,10 @@ struct InvariantReport {
 /// Checks invariants 1-3 of design.md and the consistency of the curve tags (boundary edges are exactly the
 /// edges with one quad; feature edges are quad edges).
 InvariantReport check_invariants(const QuadMesh& mesh);
+
+/// #quads: 1 for a quad with an edge that no other quad shares and that is not a tagged boundary edge (a crack
+/// between pieces that do not share their nodes), or an edge shared by more than two quads. The repair rounds
+/// mesh the subregions of these quads again, as they do for folded ones.
+std::vector<std::uint8_t> quads_beside_cracks(const QuadMesh& mesh);
 
 }  // namespace polysquare
