@@ -878,6 +878,7 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
   // patch needs it (patch_runs); the subregions' maps are kept, only their snap is redone.
   std::vector<std::uint8_t> quantized(n, 0), is_patch(n, 0);
   std::vector<std::string> patch_error(n);
+  std::vector<std::string> grown_because(n);  // a grown patch's root: why its first patch could not be built
   std::vector<QuadMesh> meshes(n);
   std::vector<std::size_t> side_nodes(n, 0);
   std::vector<std::vector<Vec2>> unsnapped(n);  // deformed positions before the snap, to snap again
@@ -1006,7 +1007,10 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
     for (int grow = 0; grow < options.patch_growth; ++grow) {
       std::set<std::int32_t> failed;
       for (std::size_t p = 0; p < n; ++p)
-        if (!patch_error[p].empty()) failed.insert(group[p]);
+        if (!patch_error[p].empty()) {
+          failed.insert(group[p]);
+          if (grown_because[static_cast<std::size_t>(group[p])].empty()) grown_because[static_cast<std::size_t>(group[p])] = patch_error[p];
+        }
       if (failed.empty()) break;
       // Every failed group absorbs the groups across its boundary (groups meeting through one merge).
       std::vector<std::int32_t> into(n);
@@ -1107,6 +1111,8 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
                : is_patch[p]       ? sub_name(p) + ": its neighbour's patch could not be built without it"
                                    : std::string();
     if (group[p] != static_cast<std::int32_t>(p)) s.reason += " (meshed in the patch of subregion " + std::to_string(group[p]) + ")";
+    else if (is_patch[p] && !grown_because[p].empty())
+      s.reason += "; its patch grew over its neighbours because " + grown_because[p];
     s.quads = meshes[p].quads.size();
     s.at = subs[p].mesh.vertices.empty() ? Vec2{} : subs[p].mesh.vertices.front();
   }

@@ -210,16 +210,19 @@ struct Candidate {
 // subregions become patches, patches are built by the other (matching) construction.
 struct Repairs {
   std::vector<int> patches, matched, grown;
-  // Adds the subregions in `bad`; false when none of them can be repaired further. A mapped one becomes a
-  // patch, a patch is built by the matching construction, and a matched patch grows over its neighbours.
-  bool add(const std::set<int>& bad, const PartMapStats& stats) {
+  std::map<int, std::string> why;  // a subregion of `patches` -> why its map was given up
+  // Adds the subregions in `bad` (subregion -> what is wrong with its quads); false when none of them can be
+  // repaired further. A mapped one becomes a patch, a patch is built by the matching construction, and a
+  // matched patch grows over its neighbours.
+  bool add(const std::map<int, std::string>& bad, const PartMapStats& stats) {
     bool added = false;
     auto has = [](const std::vector<int>& list, int s) { return std::find(list.begin(), list.end(), s) != list.end(); };
-    for (int s : bad) {
+    for (const auto& [s, what] : bad) {
       const bool mapped = stats.subregions[static_cast<std::size_t>(s)].mapped;
       std::vector<int>& list = mapped ? patches : (has(matched, s) ? grown : matched);
       if (has(list, s)) continue;
       list.push_back(s);
+      if (mapped) why.emplace(s, what);
       added = true;
     }
     return added;
@@ -319,7 +322,7 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
       // construction); the rest of the part keeps its maps. Valid quads outside the gates cost a subregion its map
       // only beyond the max_poor_fraction budget, worst subregion first: a 400-quad map is not traded for a
       // quad at SJ 0.18.
-      std::set<int> bad;
+      std::map<int, std::string> bad;
       std::size_t first_folded = metrics.sj.size();
       std::map<int, std::pair<double, std::size_t>> poor_in;  // subregion -> (worst gate ratio, poor valid quads)
       std::size_t poor_valid = 0;
@@ -327,10 +330,11 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
         const bool folded = metrics.sj[q] <= 0.0;
         if (folded && first_folded == metrics.sj.size()) first_folded = q;
         const int s = subregion_of(q);
-        if (cracked[q] && s >= 0) bad.insert(s);
+        if (cracked[q] && s >= 0) bad.emplace(s, "its quads do not share their nodes with a neighbour's (a crack) at " + at_text(r.mesh.nodes[r.mesh.quads[q][0]]));
         if (!poor[q]) continue;
         if (folded) {
-          if (s >= 0) bad.insert(s);
+          if (s >= 0) bad.emplace(s, "its map left a folded quad at " + at_text(r.mesh.nodes[r.mesh.quads[q][0]]) +
+                                         " after smoothing and local patches");
           continue;
         }
         ++poor_valid;
@@ -351,14 +355,20 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
       const double budget = options.max_poor_fraction * static_cast<double>(metrics.sj.size());
       for (const auto& [ratio, s] : worst_first) {
         if (static_cast<double>(poor_valid) <= budget) break;
-        bad.insert(s);
+        bad.emplace(s, "its map left " + std::to_string(poor_in[s].second) +
+                           " quads below --min-sj or above --max-edge-ratio after smoothing and local patches, beyond "
+                           "the --max-poor-fraction budget");
         poor_valid -= poor_in[s].second;
       }
       {
         std::size_t folded = 0;
         for (double v : metrics.sj) folded += v <= 0.0;
         c.summary["repair_rounds"].push_back({{"folded", folded}, {"beside_cracks", cracks}, {"poor_kept", poor_valid},
-                                              {"remeshed", std::vector<int>(bad.begin(), bad.end())}});
+                                              {"remeshed", [&] {
+                                                 std::vector<int> v;
+                                                 for (const auto& b : bad) v.push_back(b.first);
+                                                 return v;
+                                               }()}});
       }
       if (round < options.repair_rounds && repairs.add(bad, r.stats)) continue;
       // The invariants are checked once the repair rounds are over (a round that continues never reads them).
@@ -525,12 +535,17 @@ Candidate try_candidate(const Region& region, const RegionPart& part, const Poly
       faces = r.partition->faces;
     }
     // Subregions the repair rounds turned into patches say why, not merely that a patch was asked for.
-    for (int s : repairs.patches)
-      if (static_cast<std::size_t>(s) < r.stats.subregions.size() && !r.stats.subregions[static_cast<std::size_t>(s)].mapped &&
-          std::find(map.patch_subregions.begin(), map.patch_subregions.end(), s) == map.patch_subregions.end())
-        r.stats.subregions[static_cast<std::size_t>(s)].reason =
-            name_of(region, part) + ": subregion " + std::to_string(s) +
-            ": its map left quads folded or below --min-sj after smoothing and local patches (meshed again as a patch)";
+    // The map's text says a patch was requested; what follows it (a union it joined) is kept.
+    for (int s : repairs.patches) {
+      if (static_cast<std::size_t>(s) >= r.stats.subregions.size() || r.stats.subregions[static_cast<std::size_t>(s)].mapped ||
+          std::find(map.patch_subregions.begin(), map.patch_subregions.end(), s) != map.patch_subregions.end())
+        continue;
+      std::string& reason = r.stats.subregions[static_cast<std::size_t>(s)].reason;
+      const std::string asked = "a patch was requested";
+      const std::string why = repairs.why.count(s) ? repairs.why.at(s) + " (meshed again as a patch)" : asked;
+      if (const std::size_t at = reason.find(asked); at != std::string::npos) reason.replace(at, asked.size(), why);
+      else reason = name_of(region, part) + ": subregion " + std::to_string(s) + ": " + why;
+    }
     r.stats.split = split;
     r.stats.joint_splits = joint_splits;
     if (r.partition) r.partition->faces = faces;  // a reused partition keeps the first round's count
