@@ -1,3 +1,4 @@
 # Sources of the core module (relative to this folder).
 list(APPEND MODULE_SOURCES)
 list(APPEND MODULE_SOURCES version.cpp)
+list(APPEND MODULE_SOURCES quad_topology.cpp)

@@ -1,6 +1,8 @@
 // Mesh pictures with Cairo (libcairo2): one drawing for both PNG (image surface) and SVG (SVG surface).
 #include "polysquare/io/render.h"
 
+#include "polysquare/core/quad_topology.h"
+
 #include <cairo/cairo-svg.h>
 #include <cairo/cairo.h>
 
@@ -267,22 +269,13 @@ RenderStats render_mesh(const std::filesystem::path& path, const QuadMesh& mesh,
   }
 
   // Valence of every quad node and whether it is on the boundary (edges with one quad).
-  std::unordered_map<std::uint64_t, int> edge_quads;
-  edge_quads.reserve(mesh.quads.size() * 2);
-  for (const auto& q : mesh.quads)
-    for (int k = 0; k < 4; ++k) edge_quads[edge_key(q[static_cast<std::size_t>(k)], q[static_cast<std::size_t>((k + 1) % 4)])]++;
-  std::vector<int> valence(mesh.nodes.size(), 0);
-  std::vector<std::uint8_t> on_boundary(mesh.nodes.size(), 0);
+  const auto edge_quads = quad_edge_counts(mesh);
+  const NodeValences nv = node_valences(mesh, edge_quads);
+  const std::vector<int>& valence = nv.valence;
+  const std::vector<std::uint8_t>& on_boundary = nv.on_boundary;
   std::vector<std::array<std::int32_t, 2>> derived_boundary;
-  for (const auto& [key, count] : edge_quads) {
-    const auto a = static_cast<std::int32_t>(key >> 32), b = static_cast<std::int32_t>(key & 0xffffffffu);
-    valence[static_cast<std::size_t>(a)]++;
-    valence[static_cast<std::size_t>(b)]++;
-    if (count == 1) {
-      on_boundary[static_cast<std::size_t>(a)] = on_boundary[static_cast<std::size_t>(b)] = 1;
-      derived_boundary.push_back({a, b});
-    }
-  }
+  for (const auto& [key, count] : edge_quads)
+    if (count == 1) derived_boundary.push_back({static_cast<std::int32_t>(key >> 32), static_cast<std::int32_t>(key & 0xffffffffu)});
 
   // Boundary (black) and feature (blue) edges; a mesh read without tags gets its one-quad edges as boundary.
   auto stroke_edges = [&](const std::vector<std::array<std::int32_t, 2>>& edges, const Rgb& c, double width) {

@@ -4,6 +4,7 @@
 #include <unordered_map>
 #include <unordered_set>
 
+#include "polysquare/core/quad_topology.h"
 #include "polysquare/smooth/smooth.h"
 
 namespace polysquare {
@@ -61,17 +62,14 @@ InvariantReport check_invariants(const QuadMesh& mesh) {
 }
 
 std::vector<std::uint8_t> quads_beside_cracks(const QuadMesh& mesh) {
-  std::unordered_map<std::uint64_t, int> edge_count;
-  edge_count.reserve(mesh.quads.size() * 2);
-  for (const auto& quad : mesh.quads)
-    for (int k = 0; k < 4; ++k) edge_count[edge_key(quad[k], quad[(k + 1) % 4])]++;
+  const auto edge_count = quad_edge_counts(mesh);
   std::unordered_set<std::uint64_t> tagged;
   for (const auto& e : mesh.boundary_edges) tagged.insert(edge_key(e[0], e[1]));
   std::vector<std::uint8_t> out(mesh.quads.size(), 0);
   for (std::size_t q = 0; q < mesh.quads.size(); ++q)
     for (int k = 0; k < 4; ++k) {
       const std::uint64_t key = edge_key(mesh.quads[q][k], mesh.quads[q][(k + 1) % 4]);
-      const int count = edge_count[key];
+      const int count = edge_count.at(key);
       out[q] |= count > 2 || (count == 1 && !tagged.count(key));
     }
   return out;

@@ -1,5 +1,7 @@
 #include "polysquare/quality/quality.h"
 
+#include "polysquare/core/quad_topology.h"
+
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -168,25 +170,18 @@ QualityReport compute_quality(const QuadMesh& mesh, const QuadMetrics& m) {
   r.skew = stats_of(m.skew);
   r.edge_ratio = stats_of(m.edge_ratio);
   r.inverted = static_cast<std::size_t>(std::count_if(m.sj.begin(), m.sj.end(), [](double v) { return v <= 0; }));
-  std::unordered_map<std::uint64_t, int> cells_of_edge;
-  auto add_cell = [&](const auto& cell) {
-    const std::size_t k = cell.size();
-    for (std::size_t i = 0; i < k; ++i) cells_of_edge[edge_key(cell[i], cell[(i + 1) % k])]++;
-  };
   // Valence and boundary over the quads only, as anchors.md counted Gmsh's meshes (their few leftover
   // triangles are reported separately, not counted into valences).
-  for (const auto& q : mesh.quads) add_cell(q);
-  std::vector<int> valence(mesh.nodes.size(), 0);
-  std::vector<std::uint8_t> on_boundary(mesh.nodes.size(), 0), used(mesh.nodes.size(), 0);
-  for (const auto& [key, count] : cells_of_edge) {
-    const auto a = static_cast<std::int32_t>(key >> 32), b = static_cast<std::int32_t>(key & 0xffffffffu);
-    valence[a]++; valence[b]++;
-    used[a] = used[b] = 1;
-    if (count == 1) { on_boundary[a] = on_boundary[b] = 1; r.boundary_edges++; }
-    if (count > 2) r.non_manifold_edges++;
+  const auto edge_counts = quad_edge_counts(mesh);
+  for (const auto& [key, count] : edge_counts) {
+    r.boundary_edges += count == 1;
+    r.non_manifold_edges += count > 2;
   }
+  const NodeValences nv = node_valences(mesh, edge_counts);
+  const std::vector<int>& valence = nv.valence;
+  const std::vector<std::uint8_t>& on_boundary = nv.on_boundary;
   for (std::size_t v = 0; v < mesh.nodes.size(); ++v) {
-    if (!used[v]) continue;
+    if (valence[v] == 0) continue;  // a node of no quad
     if (on_boundary[v] && valence[v] != 3) r.boundary_singularities++;
     if (!on_boundary[v] && valence[v] != 4) r.interior_singularities++;
   }

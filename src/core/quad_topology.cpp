@@ -1,0 +1,26 @@
+#include "polysquare/core/quad_topology.h"
+
+namespace polysquare {
+
+std::unordered_map<std::uint64_t, int> quad_edge_counts(const QuadMesh& mesh) {
+  std::unordered_map<std::uint64_t, int> counts;
+  counts.reserve(mesh.quads.size() * 2);
+  for (const auto& q : mesh.quads)
+    for (std::size_t k = 0; k < 4; ++k) counts[edge_key(q[k], q[(k + 1) % 4])]++;
+  return counts;
+}
+
+NodeValences node_valences(const QuadMesh& mesh, const std::unordered_map<std::uint64_t, int>& edge_counts) {
+  NodeValences out;
+  out.valence.assign(mesh.nodes.size(), 0);
+  out.on_boundary.assign(mesh.nodes.size(), 0);
+  for (const auto& [key, count] : edge_counts) {
+    const auto a = static_cast<std::size_t>(key >> 32), b = static_cast<std::size_t>(key & 0xffffffffu);
+    out.valence[a]++;
+    out.valence[b]++;
+    if (count == 1) out.on_boundary[a] = out.on_boundary[b] = 1;
+  }
+  return out;
+}
+
+}  // namespace polysquare
