@@ -332,10 +332,15 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
         const int s = subregion_of(q);
         if (cracked[q] && s >= 0) bad.emplace(s, "its quads do not share their nodes with a neighbour's (a crack) at " + at_text(r.mesh.nodes[r.mesh.quads[q][0]]));
         if (!poor[q]) continue;
-        if (folded) {
-          if (s >= 0) bad.emplace(s, "its map left a folded quad at " + at_text(r.mesh.nodes[r.mesh.quads[q][0]]) +
-                                         " after smoothing and local patches");
-          continue;
+        // Far outside a gate (half the SJ gate, twice the edge-ratio gate) counts as folded: the budget is for
+        // quads just outside, not for near-degenerate ones a patch can mend.
+        const bool severe = !folded && !pinned[q] &&
+                            (metrics.sj[q] < 0.5 * options.min_scaled_jacobian || metrics.edge_ratio[q] > 2.0 * options.max_edge_ratio);
+        if (folded || severe) {
+          if (s >= 0)
+            bad.emplace(s, "its map left a " + std::string(folded ? "folded" : "near-degenerate") + " quad at " +
+                               at_text(r.mesh.nodes[r.mesh.quads[q][0]]) + " after smoothing and local patches");
+          if (folded) continue;
         }
         ++poor_valid;
         if (s < 0) continue;

@@ -60,7 +60,8 @@ struct MeshOptions {
   double max_poor_fraction = 0.001;    ///< valid quads outside the two gates above that local patches did not mend
                                        ///< are accepted, each reported with its place, while they are at most this
                                        ///< fraction of the part's quads; the repair rounds turn their subregions
-                                       ///< into patches only beyond it, worst first, and a candidate with more is
+                                       ///< into patches only beyond it, worst first (always for a quad below half
+                                       ///< the SJ gate or above twice the edge-ratio gate), and a candidate with more is
                                        ///< refused. A candidate with none wins over one with some. 0 = every quad
                                        ///< must pass both gates (folded quads are never accepted)
   double feature_tolerance = 0.1;      ///< largest distance, as a fraction of size, between a feature curve and the
