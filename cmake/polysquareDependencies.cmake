@@ -20,9 +20,9 @@ polysquare_find(nlohmann_json 3.11)
 polysquare_find(spdlog)
 polysquare_find(GDAL)
 
-# METIS, LEMON, GLPK, netCDF and Cairo (pictures): Debian ships no CMake package for four of them (netCDF's pulls
+# METIS, LEMON, netCDF and Cairo (pictures): Debian ships no CMake package for four of them (netCDF's pulls
 # in HDF5 targets), so each becomes an imported target polysquare::dep_<name> made here, in both places.
-foreach(dep IN ITEMS "METIS;metis.h;metis" "LEMON;lemon/matching.h;lemon" "GLPK;glpk.h;glpk" "NETCDF;netcdf.h;netcdf"
+foreach(dep IN ITEMS "METIS;metis.h;metis" "LEMON;lemon/matching.h;lemon" "NETCDF;netcdf.h;netcdf"
                     "CAIRO;cairo/cairo.h;cairo")
   list(GET dep 0 name)
   list(GET dep 1 header)
@@ -44,3 +44,20 @@ foreach(dep IN ITEMS "METIS;metis.h;metis" "LEMON;lemon/matching.h;lemon" "GLPK;
                                                               INTERFACE_INCLUDE_DIRECTORIES "${${name}_INCLUDE_DIR}")
   endif()
 endforeach()
+
+# COIN-OR Cbc and Clp (quantization's integer programs): Debian ships a pkg-config file, no CMake package.
+if(NOT TARGET polysquare::dep_cbc)
+  find_package(PkgConfig QUIET)
+  if(PkgConfig_FOUND)
+    pkg_check_modules(POLYSQUARE_CBC QUIET IMPORTED_TARGET GLOBAL cbc)
+  endif()
+  if(NOT POLYSQUARE_CBC_FOUND)
+    if(POLYSQUARE_FIND_WITH_DEPENDENCY)
+      set(polysquare_FOUND FALSE)
+      set(polysquare_NOT_FOUND_MESSAGE "polysquare needs COIN-OR Cbc (pkg-config cbc)")
+      return()
+    endif()
+    message(FATAL_ERROR "polysquare needs COIN-OR Cbc: pkg-config cbc not found (scripts/install-deps)")
+  endif()
+  add_library(polysquare::dep_cbc ALIAS PkgConfig::POLYSQUARE_CBC)
+endif()

@@ -1,24 +1,18 @@
 #include "polysquare/map/quantize.h"
 
-#include <glpk.h>
-#include <cstdio>
-#include <cstdlib>
 
 #include <algorithm>
 #include <cmath>
 #include <numeric>
 #include <memory>
-#include <mutex>
+#include <optional>
 #include <array>
 
+#include "map/integer_program.h"
 #include "polysquare/core/error.h"
 
 namespace polysquare {
 namespace {
-
-// GLPK keeps its environment in process-wide state unless built with thread-local storage; parts and candidates
-// are quantized from several threads, so every call into GLPK holds this lock (the programs take milliseconds).
-std::mutex glpk_mutex;
 
 struct UnionFind {
   std::vector<int> parent;
@@ -53,7 +47,7 @@ struct Separation {
 // coordinate per class of break points per axis per layout; every segment's length n = sign * (end - start)
 // >= 1, near t and preferably within [t / c, c t] (deviation columns); coupled segments (the two sides of an interface) get the
 // same n. Without couplings the matrix is totally unimodular and the simplex optimum is integral; with them,
-// GLPK's branch-and-cut finishes from the simplex optimum.
+// Cbc's branch-and-cut finishes from the LP optimum.
 struct JointProblem {
   std::vector<Layout*> layouts;
   std::vector<const std::vector<Vec2>*> deformed;
@@ -64,18 +58,9 @@ struct JointProblem {
 void solve_joint(JointProblem& jp, const std::vector<SegmentCoupling>& couplings,
                  const std::vector<EvenGroup>& even_groups, const std::vector<Separation>& separations,
                  const QuantizeOptions& options, const std::string& part_name, QuantizeStats& stats) {
-  const std::lock_guard<std::mutex> lock(glpk_mutex);
-  std::unique_ptr<glp_prob, void (*)(glp_prob*)> lp(glp_create_prob(), glp_delete_prob);
-  glp_prob* P = lp.get();
-  glp_set_obj_dir(P, GLP_MIN);
+  IntegerProgram P;
   const bool integer = !couplings.empty() || !even_groups.empty();
-  std::vector<int> ia{0}, ja{0};
-  std::vector<double> ar{0.0};
-  auto add_row = [&](std::initializer_list<std::pair<int, double>> terms, int type, double lo, double hi) {
-    const int row = glp_add_rows(P, 1);
-    glp_set_row_bnds(P, row, type, lo, hi);
-    for (auto [col, val] : terms) { ia.push_back(row); ja.push_back(col); ar.push_back(val); }
-  };
+  constexpr double inf = IntegerProgram::inf;
   auto col = [&](std::size_t l, int axis, int b) { return jp.col0[l][axis] + jp.cls[l][axis][b]; };
   // Class coordinate columns with the weak pull of each class towards its mean deformed coordinate (anchors
   // pieces, such as interior features, that no segment ties to the boundary).
@@ -84,7 +69,7 @@ void solve_joint(JointProblem& jp, const std::vector<SegmentCoupling>& couplings
     const int nb = static_cast<int>(layout.break_vertex.size());
     for (int axis = 0; axis < 2; ++axis) {
       const int ncls = jp.ncls[l][axis];
-      jp.col0[l][axis] = glp_add_cols(P, ncls);
+      jp.col0[l][axis] = P.add_columns(ncls, -1e8, 1e8, 0.0, integer);
       std::vector<double> anchor(ncls, 0.0);
       std::vector<int> members(ncls, 0);
       for (int b = 0; b < nb; ++b) {
@@ -92,16 +77,12 @@ void solve_joint(JointProblem& jp, const std::vector<SegmentCoupling>& couplings
         anchor[jp.cls[l][axis][b]] += axis == 0 ? p.x : p.y;
         members[jp.cls[l][axis][b]]++;
       }
-      const int v0 = glp_add_cols(P, ncls);
+      const int v0 = P.add_columns(ncls, 0.0, inf, options.position_weight);
       for (int c = 0; c < ncls; ++c) {
         const int xc = jp.col0[l][axis] + c;
-        glp_set_col_bnds(P, xc, GLP_DB, -1e8, 1e8);
-        if (integer) glp_set_col_kind(P, xc, GLP_IV);
         const double a = std::round(anchor[c] / members[c]);
-        glp_set_col_bnds(P, v0 + c, GLP_LO, 0.0, 0.0);
-        glp_set_obj_coef(P, v0 + c, options.position_weight);
-        add_row({{v0 + c, 1.0}, {xc, -1.0}}, GLP_LO, -a, 0.0);
-        add_row({{v0 + c, 1.0}, {xc, 1.0}}, GLP_LO, a, 0.0);
+        P.add_row({{v0 + c, 1.0}, {xc, -1.0}}, -a, inf);
+        P.add_row({{v0 + c, 1.0}, {xc, 1.0}}, a, inf);
       }
     }
     for (std::size_t k = 0; k < layout.segments.size(); ++k) {
@@ -112,22 +93,20 @@ void solve_joint(JointProblem& jp, const std::vector<SegmentCoupling>& couplings
         throw MeshingError(part_name + ": quantization is infeasible: a side of the poly-square (chain " +
                            std::to_string(s.chain) + ") would have zero length");
       const double sg = label_sign(s.label);
-      const int u = glp_add_cols(P, 2);  // u: deviation from t; w: deviation beyond the band [lo, hi]
-      glp_set_col_bnds(P, u, GLP_LO, 0.0, 0.0);
-      glp_set_obj_coef(P, u, 1.0 / std::max(s.target, 1.0));
-      glp_set_col_bnds(P, u + 1, GLP_LO, 0.0, 0.0);
-      glp_set_obj_coef(P, u + 1, options.outside_band_weight / std::max(s.target, 1.0));
+      // u: deviation from t; w: deviation beyond the band [lo, hi]
+      const int u = P.add_columns(1, 0.0, inf, 1.0 / std::max(s.target, 1.0));
+      const int w = P.add_columns(1, 0.0, inf, options.outside_band_weight / std::max(s.target, 1.0));
       // Integer right-hand sides keep the LP vertex integral (the matrix is totally unimodular).
       const double t = std::max(std::round(s.target), 1.0);
       // n = sg (X_b - X_a) >= 1 ; u >= |n - t| ; w >= n - hi, w >= lo - n. The band is soft: a layout that only
       // closes with a stretched side still gets counts, and the quality checks downstream judge the result.
       const double lo = std::max(1.0, std::ceil(t / options.max_side_change));
       const double hi = std::max(lo, std::floor(t * options.max_side_change));
-      add_row({{xb, sg}, {xa, -sg}}, GLP_LO, 1.0, 0.0);
-      add_row({{u, 1.0}, {xb, -sg}, {xa, sg}}, GLP_LO, -t, 0.0);
-      add_row({{u, 1.0}, {xb, sg}, {xa, -sg}}, GLP_LO, t, 0.0);
-      add_row({{u + 1, 1.0}, {xb, -sg}, {xa, sg}}, GLP_LO, -hi, 0.0);
-      add_row({{u + 1, 1.0}, {xb, sg}, {xa, -sg}}, GLP_LO, lo, 0.0);
+      P.add_row({{xb, sg}, {xa, -sg}}, 1.0, inf);
+      P.add_row({{u, 1.0}, {xb, -sg}, {xa, sg}}, -t, inf);
+      P.add_row({{u, 1.0}, {xb, sg}, {xa, -sg}}, t, inf);
+      P.add_row({{w, 1.0}, {xb, -sg}, {xa, sg}}, -hi, inf);
+      P.add_row({{w, 1.0}, {xb, sg}, {xa, -sg}}, lo, inf);
     }
   }
   for (const SegmentCoupling& c : couplings) {
@@ -136,72 +115,34 @@ void solve_joint(JointProblem& jp, const std::vector<SegmentCoupling>& couplings
     const double ss = label_sign(s.label), st = label_sign(t.label);
     const int sa = col(c.layout_a, label_axis(s.label), s.break_a), sb = col(c.layout_a, label_axis(s.label), s.break_b);
     const int ta = col(c.layout_b, label_axis(t.label), t.break_a), tb = col(c.layout_b, label_axis(t.label), t.break_b);
-    add_row({{sb, ss}, {sa, -ss}, {tb, -st}, {ta, st}}, GLP_FX, 0.0, 0.0);
+    P.add_row({{sb, ss}, {sa, -ss}, {tb, -st}, {ta, st}}, 0.0, 0.0);
   }
   for (const EvenGroup& g : even_groups) {
     // sum of the counts - 2 m = 0, m integer.
-    const int m = glp_add_cols(P, 1);
-    glp_set_col_bnds(P, m, GLP_LO, 0.0, 0.0);
-    glp_set_col_kind(P, m, GLP_IV);
-    const int row = glp_add_rows(P, 1);
-    glp_set_row_bnds(P, row, GLP_FX, 0.0, 0.0);
-    ia.push_back(row); ja.push_back(m); ar.push_back(-2.0);
+    const int m = P.add_columns(1, 0.0, inf, 0.0, true);
+    std::vector<std::pair<int, double>> terms{{m, -2.0}};
     for (const auto& [l, k] : g) {
       const LayoutSegment& s = jp.layouts[l]->segments[static_cast<std::size_t>(k)];
       const double sg = label_sign(s.label);
       const int axis = label_axis(s.label);
-      ia.push_back(row); ja.push_back(col(l, axis, s.break_b)); ar.push_back(sg);
-      ia.push_back(row); ja.push_back(col(l, axis, s.break_a)); ar.push_back(-sg);
+      terms.push_back({col(l, axis, s.break_b), sg});
+      terms.push_back({col(l, axis, s.break_a), -sg});
     }
+    P.add_row(terms, 0.0, 0.0);
   }
   for (const Separation& sep : separations)
-    add_row({{col(sep.layout, sep.axis, sep.hi), 1.0}, {col(sep.layout, sep.axis, sep.lo), -1.0}}, GLP_LO, 1.0, 0.0);
-  // A row may name one column twice (consecutive sides of one axis in an even group share a break class; a
-  // coupling may tie a layout to itself): GLPK refuses repeated entries, so they are summed and zeros dropped.
-  {
-    std::vector<std::size_t> order(ia.size() - 1);
-    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i + 1;
-    std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-      return ia[a] != ia[b] ? ia[a] < ia[b] : (ja[a] != ja[b] ? ja[a] < ja[b] : a < b);
-    });
-    std::vector<int> mi{0}, mj{0};
-    std::vector<double> ma{0.0};
-    for (std::size_t i : order) {
-      if (mi.size() > 1 && mi.back() == ia[i] && mj.back() == ja[i]) {
-        ma.back() += ar[i];
-        continue;
-      }
-      if (mi.size() > 1 && ma.back() == 0.0) { mi.pop_back(); mj.pop_back(); ma.pop_back(); }
-      mi.push_back(ia[i]); mj.push_back(ja[i]); ma.push_back(ar[i]);
-    }
-    if (mi.size() > 1 && ma.back() == 0.0) { mi.pop_back(); mj.pop_back(); ma.pop_back(); }
-    ia.swap(mi); ja.swap(mj); ar.swap(ma);
-  }
-  glp_load_matrix(P, static_cast<int>(ia.size()) - 1, ia.data(), ja.data(), ar.data());
-  glp_smcp parm;
-  glp_init_smcp(&parm);
-  parm.presolve = GLP_ON;
-  parm.msg_lev = GLP_MSG_OFF;
-  parm.tm_lim = options.time_limit_ms;
-  const std::string infeasible = part_name + ": quantization has no integer solution (the labelled sides cannot close "
-                                             "into poly-squares without overlapping)";
-  if (glp_simplex(P, &parm) != 0 || glp_get_status(P) != GLP_OPT) throw MeshingError(infeasible);
-  auto value = [&](int c) { return integer ? glp_mip_col_val(P, c) : glp_get_col_prim(P, c); };
-  if (integer) {
-    glp_iocp iparm;
-    glp_init_iocp(&iparm);
-    iparm.msg_lev = GLP_MSG_OFF;
-    iparm.tm_lim = options.time_limit_ms;
-    if (glp_intopt(P, &iparm) != 0 || (glp_mip_status(P) != GLP_OPT && glp_mip_status(P) != GLP_FEAS))
-      throw MeshingError(infeasible);
-  }
+    P.add_row({{col(sep.layout, sep.axis, sep.hi), 1.0}, {col(sep.layout, sep.axis, sep.lo), -1.0}}, 1.0, inf);
+  const std::optional<std::vector<double>> x = P.solve(options.time_limit_ms / 1000.0);
+  if (!x)
+    throw MeshingError(part_name + ": quantization has no integer solution (the labelled sides cannot close "
+                                   "into poly-squares without overlapping)");
   for (std::size_t l = 0; l < jp.layouts.size(); ++l) {
     Layout& layout = *jp.layouts[l];
     const std::size_t nb = layout.break_vertex.size();
     layout.lattice.resize(nb);
     for (std::size_t b = 0; b < nb; ++b)
       for (int axis = 0; axis < 2; ++axis) {
-        const double v = value(col(l, axis, static_cast<int>(b)));
+        const double v = (*x)[static_cast<std::size_t>(col(l, axis, static_cast<int>(b)))];
         if (std::abs(v - std::round(v)) > 1e-6)
           throw MeshingError(part_name + ": quantization returned a fractional coordinate " + std::to_string(v));
         layout.lattice[b][static_cast<std::size_t>(axis)] = std::llround(v);
@@ -248,10 +189,6 @@ bool best_separation(const Layout& layout, const std::vector<Vec2>& deformed, co
 QuantizeStats quantize_layouts(const std::vector<Layout*>& layouts, const std::vector<const std::vector<Vec2>*>& deformed,
                                const std::vector<SegmentCoupling>& couplings, const QuantizeOptions& options,
                                const std::string& part_name, const std::vector<EvenGroup>& even_groups) {
-  {
-    const std::lock_guard<std::mutex> lock(glpk_mutex);
-    glp_term_out(GLP_OFF);
-  }
   JointProblem jp;
   jp.layouts = layouts;
   jp.deformed = deformed;

@@ -2,6 +2,7 @@
 list(APPEND MODULE_SOURCES)
 list(APPEND MODULE_SOURCES deform.cpp)
 list(APPEND MODULE_SOURCES layout.cpp)
+list(APPEND MODULE_SOURCES integer_program.cpp)
 list(APPEND MODULE_SOURCES quantize.cpp)
 list(APPEND MODULE_SOURCES extract.cpp)
 list(APPEND MODULE_SOURCES polysquare_map.cpp)

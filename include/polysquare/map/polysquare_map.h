@@ -51,7 +51,7 @@ struct PolysquareMapOptions {
                                ///< joint counts cannot reach, an infeasible quantization) are split and the part
                                ///< mapped again; the new partition is kept when more quads come from maps
   int split_max_subregions = 128; ///< no split takes a part beyond this many subregions: the joint quantization's
-                                  ///< time grows with the count (GLPK); twice the automatic cap leaves a part
+                                  ///< time grows with the count; twice the automatic cap leaves a part
                                   ///< partitioned at that cap room to split its failures
   int sides_per_split = 12; ///< a failed subregion with s poly-square sides is split into ceil(s / this) pieces
                             ///< (at least 2, at most 8)

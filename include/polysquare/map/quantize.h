@@ -14,7 +14,7 @@ struct QuantizeOptions {
   double outside_band_weight = 20.0;  ///< cost per element outside the band, relative to the cost inside it: the
                                       ///< band is soft so that tight layouts still close; quality checks judge them
   int max_separation_rounds = 20; ///< rounds of re-solving with separations between overlapping sides
-  int time_limit_ms = 20000;      ///< GLPK simplex time limit
+  int time_limit_ms = 20000;      ///< time limit of each LP (Clp) or branch-and-cut (Cbc) solve
 };
 
 struct QuantizeStats {
@@ -49,7 +49,7 @@ std::vector<LayoutConflict> find_conflicts(const Layout& layout, std::size_t max
 
 /// Chooses integer lattice positions for every break point so that each segment of label +-X (+-Y) keeps y (x)
 /// constant and advances by an integer n >= 1 in its direction, with n close to its target, minimizing
-/// sum |n - target| / max(target, 1). X and Y are independent integer programs solved with GLPK; the constraint
+/// sum |n - target| / max(target, 1). X and Y are independent programs solved with Clp (Cbc with couplings); the constraint
 /// matrices are network matrices, so the LP optimum is already integral. When the solution makes sides overlap,
 /// the separation the deformed layout shows (one side left of / below the other) is added and the programs are
 /// solved again. Fills layout.lattice. Throws MeshingError naming `part_name` when there is no solution.

@@ -1,0 +1,117 @@
+#include "map/integer_program.h"
+
+#include <Cbc_C_Interface.h>
+#include <Clp_C_Interface.h>
+
+#include <algorithm>
+#include <memory>
+#include <mutex>
+#include <numeric>
+
+namespace polysquare {
+namespace {
+
+// Cbc_solve runs CbcMain1, which keeps some state in statics; Clp models are independent. Branch-and-cut calls
+// are therefore serialized (they take milliseconds to seconds), LP solves run in parallel.
+std::mutex cbc_mutex;
+
+// The program's matrix in compressed sparse columns, duplicates summed and zeros dropped.
+struct Csc {
+  std::vector<CoinBigIndex> start;
+  std::vector<int> index;
+  std::vector<double> value;
+};
+
+Csc compress(int columns, const std::vector<int>& rows, const std::vector<int>& cols, const std::vector<double>& values) {
+  std::vector<std::size_t> order(values.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return cols[a] != cols[b] ? cols[a] < cols[b] : rows[a] < rows[b];
+  });
+  Csc m;
+  m.start.assign(static_cast<std::size_t>(columns) + 1, 0);
+  std::vector<int> col_of;
+  for (std::size_t i : order) {
+    if (!m.index.empty() && col_of.back() == cols[i] && m.index.back() == rows[i]) {
+      m.value.back() += values[i];
+      continue;
+    }
+    if (!m.value.empty() && m.value.back() == 0.0) { m.index.pop_back(); m.value.pop_back(); col_of.pop_back(); }
+    m.index.push_back(rows[i]);
+    m.value.push_back(values[i]);
+    col_of.push_back(cols[i]);
+  }
+  if (!m.value.empty() && m.value.back() == 0.0) { m.index.pop_back(); m.value.pop_back(); col_of.pop_back(); }
+  for (int c : col_of) ++m.start[static_cast<std::size_t>(c) + 1];
+  for (std::size_t c = 0; c < static_cast<std::size_t>(columns); ++c) m.start[c + 1] += m.start[c];
+  return m;
+}
+
+}  // namespace
+
+int IntegerProgram::add_columns(int count, double lo, double hi, double cost, bool integer) {
+  const int first = columns();
+  col_lo_.insert(col_lo_.end(), static_cast<std::size_t>(count), lo);
+  col_hi_.insert(col_hi_.end(), static_cast<std::size_t>(count), hi);
+  cost_.insert(cost_.end(), static_cast<std::size_t>(count), cost);
+  integer_.insert(integer_.end(), static_cast<std::size_t>(count), integer ? 1 : 0);
+  return first;
+}
+
+void IntegerProgram::add_row(std::initializer_list<std::pair<int, double>> terms, double lo, double hi) {
+  add_row(std::vector<std::pair<int, double>>(terms), lo, hi);
+}
+
+void IntegerProgram::add_row(const std::vector<std::pair<int, double>>& terms, double lo, double hi) {
+  const int row = rows();
+  row_lo_.push_back(lo);
+  row_hi_.push_back(hi);
+  for (const auto& [col, value] : terms) {
+    entry_row_.push_back(row);
+    entry_col_.push_back(col);
+    entry_value_.push_back(value);
+  }
+}
+
+bool IntegerProgram::has_integers() const {
+  return std::any_of(integer_.begin(), integer_.end(), [](char i) { return i != 0; });
+}
+
+std::optional<std::vector<double>> IntegerProgram::solve(double seconds) const {
+  const Csc m = compress(columns(), entry_row_, entry_col_, entry_value_);
+  const std::size_t n = cost_.size();
+  if (!has_integers()) {
+    std::unique_ptr<Clp_Simplex, void (*)(Clp_Simplex*)> lp(Clp_newModel(), Clp_deleteModel);
+    Clp_setLogLevel(lp.get(), 0);
+    Clp_loadProblem(lp.get(), columns(), rows(), m.start.data(), m.index.data(), m.value.data(), col_lo_.data(),
+                    col_hi_.data(), cost_.data(), row_lo_.data(), row_hi_.data());
+    Clp_setMaximumSeconds(lp.get(), seconds);
+    // The primal simplex: on the small cases its choice among equal-cost optima gave the same meshes as the
+    // GLPK primal simplex used before (turtle_shell SJ min 0.72; the dual simplex's choice 0.69).
+    Clp_primal(lp.get(), 0);
+    if (Clp_status(lp.get()) != 0) return std::nullopt;  // 0: optimal
+    const double* x = Clp_getColSolution(lp.get());
+    return std::vector<double>(x, x + n);
+  }
+  const std::lock_guard<std::mutex> lock(cbc_mutex);
+  std::unique_ptr<Cbc_Model, void (*)(Cbc_Model*)> mip(Cbc_newModel(), Cbc_deleteModel);
+  Cbc_Model* P = mip.get();
+  Cbc_loadProblem(P, columns(), rows(), m.start.data(), m.index.data(), m.value.data(), col_lo_.data(), col_hi_.data(),
+                  cost_.data(), row_lo_.data(), row_hi_.data());
+  for (std::size_t c = 0; c < n; ++c)
+    if (integer_[c]) Cbc_setInteger(P, static_cast<int>(c));
+  Cbc_setLogLevel(P, 0);
+  Cbc_setMaximumSeconds(P, seconds);
+  Cbc_solve(P);
+  if (Cbc_isProvenOptimal(P)) {
+    const double* x = Cbc_getColSolution(P);
+    return std::vector<double>(x, x + n);
+  }
+  if (!Cbc_isProvenInfeasible(P) && Cbc_numberSavedSolutions(P) > 0 && Cbc_bestSolution(P) != nullptr) {
+    const double* x = Cbc_bestSolution(P);
+    return std::vector<double>(x, x + n);
+  }
+  return std::nullopt;
+}
+
+}  // namespace polysquare

@@ -1,0 +1,39 @@
+// A small sparse (mixed-integer) linear program and its solution with COIN-OR: Clp when every column is
+// continuous, Cbc's branch-and-cut when some are integer. Internal to the map module (quantization).
+#pragma once
+
+#include <optional>
+#include <utility>
+#include <vector>
+
+namespace polysquare {
+
+/// min c^T x subject to row_lo <= A x <= row_hi and col_lo <= x <= col_hi, some x integer.
+class IntegerProgram {
+ public:
+  static constexpr double inf = 1e30;  ///< an absent bound (COIN-OR's infinity)
+
+  /// Adds `count` columns with the given bounds, objective coefficient and kind; returns the first one's index.
+  int add_columns(int count, double lo, double hi, double cost = 0.0, bool integer = false);
+  /// Adds the row lo <= sum of coefficient * column <= hi. A column named twice in one row has its coefficients
+  /// summed.
+  void add_row(std::initializer_list<std::pair<int, double>> terms, double lo, double hi);
+  void add_row(const std::vector<std::pair<int, double>>& terms, double lo, double hi);
+
+  int columns() const { return static_cast<int>(cost_.size()); }
+  int rows() const { return static_cast<int>(row_lo_.size()); }
+  bool has_integers() const;
+
+  /// The optimal (or, for an integer program stopped by the time limit, the best feasible) column values;
+  /// nullopt when the program is infeasible or no feasible point was found within `seconds`.
+  std::optional<std::vector<double>> solve(double seconds) const;
+
+ private:
+  std::vector<double> col_lo_, col_hi_, cost_;
+  std::vector<char> integer_;
+  std::vector<double> row_lo_, row_hi_;
+  std::vector<int> entry_row_, entry_col_;
+  std::vector<double> entry_value_;
+};
+
+}  // namespace polysquare
