@@ -24,7 +24,8 @@ class IntegerProgram {
   int rows() const { return static_cast<int>(row_lo_.size()); }
   bool has_integers() const;
 
-  /// The optimal (or, for an integer program stopped by the time limit, the best feasible) column values;
+  /// The optimal (or, for an integer program stopped by the time limit, the best feasible) column values: the
+  /// LP relaxation's optimum when it is integral, otherwise branch-and-cut's;
   /// nullopt when the program is infeasible or no feasible point was found within `seconds`.
   std::optional<std::vector<double>> solve(double seconds) const;
 

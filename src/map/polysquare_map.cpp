@@ -95,7 +95,8 @@ void snap_to_layout(const TriMesh& tri, MappedMesh& mm, const Layout& layout, co
   std::vector<std::uint8_t> mask;
   polysquare_targets(tri, tri.vertices, mm.x, layout, targets, mask);
   if (!move_constrained_vertices(mm.problem, options.deform, mask, targets, mm.x))
-    throw MeshingError(name + ": the deformation cannot reach the quantized poly-square without inverting triangles");
+    throw MeshingError(name + ": the deformation cannot reach the quantized poly-square without inverting triangles [" +
+                       std::to_string(layout.segments.size()) + " sides]");
 }
 
 PartMapResult map_part(const Region& region, const RegionPart& part, const PolysquareMapOptions& options) {

@@ -36,12 +36,10 @@ double region_area(const Region& region) {
 nlohmann::json part_json(const PartMapStats& s) {
   nlohmann::json subregions = nlohmann::json::array();
   for (const SubregionStats& r : s.subregions) {
-    nlohmann::json j = {{"subregion", r.subregion}, {"quads", r.quads}, {"meshed_by", r.mapped ? "map" : "patch"}};
+    nlohmann::json j = {{"subregion", r.subregion}, {"quads", r.quads}, {"meshed_by", r.mapped ? "map" : "patch"},
+                        {"at", {r.at.x, r.at.y}}};
     if (r.local_patch_quads > 0) j["local_patch_quads"] = r.local_patch_quads;
-    if (!r.mapped) {
-      j["reason"] = r.reason;
-      j["at"] = {r.at.x, r.at.y};
-    }
+    if (!r.mapped) j["reason"] = r.reason;
     subregions.push_back(std::move(j));
   }
   return {{"subregions", subregions},
