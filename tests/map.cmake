@@ -1,2 +1,3 @@
 list(APPEND TEST_SOURCES map/test_map_stages.cpp)
 list(APPEND TEST_SOURCES map/test_ppm.cpp)
+list(APPEND TEST_SOURCES map/test_integer_program.cpp)
