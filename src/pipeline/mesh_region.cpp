@@ -88,6 +88,7 @@ struct CandidateSpec {
   int subregions = 1;
   bool bend_interfaces = false;
   bool split = true;  // failed subregions are split before the joint map (PolysquareMapOptions::split_rounds)
+  bool fine = false;  // background triangulation at MeshOptions::fine_parameterization_ratio
   bool operator==(const CandidateSpec&) const = default;
 };
 
@@ -175,6 +176,15 @@ std::vector<std::vector<CandidateSpec>> candidate_rounds(const Region& region, c
     if (quads / k >= 16.0) add({k});  // at least a 4 x 4 block per subregion
   add({1});
   if (quads <= static_cast<double>(options.bent_round_quads)) add_bent_round();
+  // Last, the straight candidates again on a finer background triangulation: thin subregions of a coast have
+  // about as many vertices on their chains as inside, and a snap or fold that fails there often holds with
+  // twice the chain vertices. Meshed only while no candidate is fully structured.
+  if (options.fine_parameterization_ratio > 0.0) {
+    std::vector<CandidateSpec> fine;
+    for (const CandidateSpec& c : rounds.front())
+      if (!c.bend_interfaces) fine.push_back({c.subregions, false, c.split, true});
+    rounds.push_back(std::move(fine));
+  }
   return rounds;
 }
 
@@ -513,7 +523,7 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
 Candidate try_candidate(const Region& region, const RegionPart& part, const PolysquareMapOptions& map,
                         const MeshOptions& options) {
   const int k = map.partition.parts;
-  nlohmann::json summary = {{"part", part.part}, {"subregions", k}};
+  nlohmann::json summary = {{"part", part.part}, {"subregions", k}, {"parameterization_ratio", map.parameterization_ratio}};
   if (k > 1 && map.composition == MapComposition::ppm) {
     summary["bent_interfaces"] = !map.layout.straight_interfaces;
     summary["split_rounds"] = map.split_rounds;
@@ -662,6 +672,7 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
         part_map.partition.parts = ks[c].subregions;
         part_map.layout.straight_interfaces = !ks[c].bend_interfaces;
         if (!ks[c].split) part_map.split_rounds = 0;
+        if (ks[c].fine) part_map.parameterization_ratio = options.fine_parameterization_ratio;
         cands[c] = try_candidate(*work, parts[k], part_map, options);
       });
       for (std::size_t c = first; c < cands.size(); ++c) {

@@ -12,14 +12,27 @@
 
 using namespace polysquare;
 
+namespace {
+
+Region coast(const std::string& name) { return read_region(std::string(POLYSQUARE_DATA_DIR) + "/cases/" + name + ".geojson"); }
+
+// The mesh at default options but the size, with its invariants and no inverted quad checked.
+MeshResult mesh_checked(const Region& region, const MeshOptions& o, QualityReport& q) {
+  MeshResult r = mesh_region(region, o);
+  EXPECT_TRUE(check_invariants(r.mesh).ok()) << check_invariants(r.mesh).first_problem;
+  q = compute_quality(r.mesh);
+  EXPECT_EQ(q.inverted, 0u);
+  return r;
+}
+
+}  // namespace
+
 TEST(Coasts, DeltaWaterAt200MetresIsSemiStructured) {
-  const Region region = read_region(std::string(POLYSQUARE_DATA_DIR) + "/cases/delta_water.geojson");
+  const Region region = coast("delta_water");
   MeshOptions o;
   o.size = 200.0;
-  const MeshResult r = mesh_region(region, o);
-  ASSERT_TRUE(check_invariants(r.mesh).ok()) << check_invariants(r.mesh).first_problem;
-  const QualityReport q = compute_quality(r.mesh);
-  EXPECT_EQ(q.inverted, 0u);
+  QualityReport q;
+  const MeshResult r = mesh_checked(region, o, q);
   const auto& summary = r.report["summary"];
   // The floors: 95 % of the quads from poly-square maps and touching no interior singular node, at most
   // 20 singular nodes per 1000 quads (Gmsh: 212).
@@ -52,4 +65,29 @@ TEST(Coasts, DeltaWaterAt200MetresIsSemiStructured) {
   EXPECT_LT(domain_distance(r.mesh, r.region, measure).boundary_max_relative, 1e-9);
   EXPECT_LE(domain_distance(r.mesh, region, measure).boundary_max_distance, o.size);
   EXPECT_LT(std::abs(domain_distance(r.mesh, region, measure).area_relative_change), 0.03);
+}
+
+TEST(Coasts, FjordCoastAt400MetresIsSemiStructuredThroughTheFineBackgroundRound) {
+  // A coast nobody tuned the mesher to: its small parts' thin subregions fail their snaps or fold on the default
+  // background triangulation; the round on a finer one (MeshOptions::fine_parameterization_ratio) maps them.
+  const Region region = coast("fjord_coast");
+  MeshOptions o;
+  o.size = 400.0;
+  QualityReport q;
+  const MeshResult r = mesh_checked(region, o, q);
+  EXPECT_GE(r.report["summary"]["structured_fraction"].get<double>(), 0.95);
+  EXPECT_GE(q.regular_quad_fraction, 0.95);
+  EXPECT_LE(1000.0 * static_cast<double>(q.interior_singularities) / static_cast<double>(r.mesh.quads.size()), 20.0);
+  // The fine round is what did it: some part's chosen candidate ran on the finer background.
+  int fine_chosen = 0;
+  for (const auto& part : r.report["candidates"])
+    for (const auto& c : part)
+      fine_chosen += c.value("chosen", false) &&
+                     c.value("parameterization_ratio", 0.0) == o.fine_parameterization_ratio;
+  EXPECT_GT(fine_chosen, 0);
+  for (const auto& u : r.report["unstructured"]) EXPECT_NE(u["meshed_by"], "split_triangles") << u.dump();
+  DomainDistanceOptions measure;
+  for (const auto& d : r.report["dropped_parts"]) measure.skip_parts.push_back(d["part"].get<int>());
+  EXPECT_LT(domain_distance(r.mesh, r.region, measure).boundary_max_relative, 1e-9);
+  EXPECT_LE(domain_distance(r.mesh, region, measure).boundary_max_distance, o.size);
 }

@@ -45,6 +45,10 @@ struct MeshOptions {
   bool drop_small_parts = true;               ///< leave out (and report) polygon parts smaller than size^2
   std::size_t search_quads = 5'000;           ///< parts up to this many quads try every count of search_subregions
   std::vector<int> search_subregions{2, 3, 4, 5, 6, 8};
+  double fine_parameterization_ratio = 0.5;   ///< automatic mode, parts up to search_quads quads: when no
+                                              ///< candidate is fully structured, the straight ones are meshed
+                                              ///< again with background edges of this many sizes on the curves
+                                              ///< (PolysquareMapOptions::parameterization_ratio); 0 = off
   std::size_t bent_round_quads = 5'000;       ///< automatic mode retries partitions with bendable interfaces only
                                               ///< for parts up to this many quads (smile, 1,300, needed it once;
                                               ///< delta_water's coastline parts spent half their search there and
