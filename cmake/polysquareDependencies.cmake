@@ -20,7 +20,7 @@ polysquare_find(nlohmann_json 3.11)
 polysquare_find(spdlog)
 polysquare_find(GDAL)
 
-# METIS, LEMON, netCDF and Cairo (pictures): Debian ships no CMake package for four of them (netCDF's pulls
+# METIS, LEMON, netCDF and Cairo (pictures): Debian ships no usable CMake package for them (netCDF's pulls
 # in HDF5 targets), so each becomes an imported target polysquare::dep_<name> made here, in both places.
 foreach(dep IN ITEMS "METIS;metis.h;metis" "LEMON;lemon/matching.h;lemon" "NETCDF;netcdf.h;netcdf"
                     "CAIRO;cairo/cairo.h;cairo")

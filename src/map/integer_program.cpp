@@ -29,21 +29,26 @@ Csc compress(int columns, const std::vector<int>& rows, const std::vector<int>& 
   std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
     return cols[a] != cols[b] ? cols[a] < cols[b] : rows[a] < rows[b];
   });
-  Csc m;
-  m.start.assign(static_cast<std::size_t>(columns) + 1, 0);
-  std::vector<int> col_of;
+  // Entries in column-major order, repeats summed; then the zeros dropped while the column starts are counted.
+  std::vector<int> col_of, row_of;
+  std::vector<double> sum;
   for (std::size_t i : order) {
-    if (!m.index.empty() && col_of.back() == cols[i] && m.index.back() == rows[i]) {
-      m.value.back() += values[i];
+    if (!sum.empty() && col_of.back() == cols[i] && row_of.back() == rows[i]) {
+      sum.back() += values[i];
       continue;
     }
-    if (!m.value.empty() && m.value.back() == 0.0) { m.index.pop_back(); m.value.pop_back(); col_of.pop_back(); }
-    m.index.push_back(rows[i]);
-    m.value.push_back(values[i]);
     col_of.push_back(cols[i]);
+    row_of.push_back(rows[i]);
+    sum.push_back(values[i]);
   }
-  if (!m.value.empty() && m.value.back() == 0.0) { m.index.pop_back(); m.value.pop_back(); col_of.pop_back(); }
-  for (int c : col_of) ++m.start[static_cast<std::size_t>(c) + 1];
+  Csc m;
+  m.start.assign(static_cast<std::size_t>(columns) + 1, 0);
+  for (std::size_t e = 0; e < sum.size(); ++e) {
+    if (sum[e] == 0.0) continue;
+    m.index.push_back(row_of[e]);
+    m.value.push_back(sum[e]);
+    ++m.start[static_cast<std::size_t>(col_of[e]) + 1];
+  }
   for (std::size_t c = 0; c < static_cast<std::size_t>(columns); ++c) m.start[c + 1] += m.start[c];
   return m;
 }
@@ -74,44 +79,26 @@ void IntegerProgram::add_row(const std::vector<std::pair<int, double>>& terms, d
   }
 }
 
-bool IntegerProgram::has_integers() const {
-  return std::any_of(integer_.begin(), integer_.end(), [](char i) { return i != 0; });
-}
-
-namespace {
-
-std::optional<std::vector<double>> solve_relaxation(const Csc& m, int columns, int rows, const std::vector<double>& col_lo,
-                                                    const std::vector<double>& col_hi, const std::vector<double>& cost,
-                                                    const std::vector<double>& row_lo, const std::vector<double>& row_hi,
-                                                    double seconds) {
-  std::unique_ptr<Clp_Simplex, void (*)(Clp_Simplex*)> lp(Clp_newModel(), Clp_deleteModel);
-  Clp_setLogLevel(lp.get(), 0);
-  Clp_loadProblem(lp.get(), columns, rows, m.start.data(), m.index.data(), m.value.data(), col_lo.data(), col_hi.data(),
-                  cost.data(), row_lo.data(), row_hi.data());
-  Clp_setMaximumSeconds(lp.get(), seconds);
-  // The primal simplex: on the small cases its choice among equal-cost optima gave the same meshes as the
-  // GLPK primal simplex used before (turtle_shell SJ min 0.72; the dual simplex's choice 0.69).
-  Clp_primal(lp.get(), 0);
-  if (Clp_status(lp.get()) != 0) return std::nullopt;  // 0: optimal
-  const double* x = Clp_getColSolution(lp.get());
-  return std::vector<double>(x, x + columns);
-}
-
-}  // namespace
-
 std::optional<std::vector<double>> IntegerProgram::solve(double seconds) const {
   const Csc m = compress(columns(), entry_row_, entry_col_, entry_value_);
   const std::size_t n = cost_.size();
   // The LP relaxation first: the quantization's matrices are network matrices apart from a few coupling and
   // parity rows, so its optimum is often integral already (then it is the integer optimum too), and Clp finds
   // it in a fraction of branch-and-cut's time. An infeasible relaxation means an infeasible program.
-  std::optional<std::vector<double>> relaxed =
-      solve_relaxation(m, columns(), rows(), col_lo_, col_hi_, cost_, row_lo_, row_hi_, seconds);
-  if (!relaxed) return std::nullopt;
+  std::unique_ptr<Clp_Simplex, void (*)(Clp_Simplex*)> lp(Clp_newModel(), Clp_deleteModel);
+  Clp_setLogLevel(lp.get(), 0);
+  Clp_loadProblem(lp.get(), columns(), rows(), m.start.data(), m.index.data(), m.value.data(), col_lo_.data(),
+                  col_hi_.data(), cost_.data(), row_lo_.data(), row_hi_.data());
+  Clp_setMaximumSeconds(lp.get(), seconds);
+  // The primal simplex: on the small cases its choice among equal-cost optima gave the same meshes as the
+  // GLPK primal simplex used before (turtle_shell SJ min 0.72; the dual simplex's choice 0.69).
+  Clp_primal(lp.get(), 0);
+  if (Clp_status(lp.get()) != 0) return std::nullopt;  // 0: optimal
+  const double* relaxed = Clp_getColSolution(lp.get());
   bool integral = true;
   for (std::size_t c = 0; c < n && integral; ++c)
-    integral = !integer_[c] || std::abs((*relaxed)[c] - std::round((*relaxed)[c])) <= 1e-9;
-  if (integral) return relaxed;
+    integral = !integer_[c] || std::abs(relaxed[c] - std::round(relaxed[c])) <= 1e-9;
+  if (integral) return std::vector<double>(relaxed, relaxed + n);
   const std::lock_guard<std::mutex> lock(cbc_mutex);
   std::unique_ptr<Cbc_Model, void (*)(Cbc_Model*)> mip(Cbc_newModel(), Cbc_deleteModel);
   Cbc_Model* P = mip.get();

@@ -1,5 +1,5 @@
-// A small sparse (mixed-integer) linear program and its solution with COIN-OR: Clp when every column is
-// continuous, Cbc's branch-and-cut when some are integer. Internal to the map module (quantization).
+// A small sparse (mixed-integer) linear program and its solution with COIN-OR: the LP relaxation by Clp, and
+// Cbc's branch-and-cut only when that is fractional. Internal to the map module (quantization).
 #pragma once
 
 #include <optional>
@@ -22,11 +22,10 @@ class IntegerProgram {
 
   int columns() const { return static_cast<int>(cost_.size()); }
   int rows() const { return static_cast<int>(row_lo_.size()); }
-  bool has_integers() const;
 
-  /// The optimal (or, for an integer program stopped by the time limit, the best feasible) column values: the
-  /// LP relaxation's optimum when it is integral, otherwise branch-and-cut's;
-  /// nullopt when the program is infeasible or no feasible point was found within `seconds`.
+  /// The optimal column values: the LP relaxation's optimum when its integer columns are integral (it is then
+  /// the integer optimum too), otherwise branch-and-cut's (its best feasible point if stopped by the time limit);
+  /// nullopt when the program is infeasible or no feasible point was found within `seconds` (per solve).
   std::optional<std::vector<double>> solve(double seconds) const;
 
  private:

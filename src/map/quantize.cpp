@@ -1,10 +1,8 @@
 #include "polysquare/map/quantize.h"
 
-
 #include <algorithm>
 #include <cmath>
 #include <numeric>
-#include <memory>
 #include <optional>
 #include <array>
 

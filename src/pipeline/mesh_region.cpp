@@ -180,9 +180,8 @@ std::vector<std::vector<CandidateSpec>> candidate_rounds(const Region& region, c
   // about as many vertices on their chains as inside, and a snap or fold that fails there often holds with
   // twice the chain vertices. Meshed only while no candidate is fully structured.
   if (options.fine_parameterization_ratio > 0.0) {
-    std::vector<CandidateSpec> fine;
-    for (const CandidateSpec& c : rounds.front())
-      if (!c.bend_interfaces) fine.push_back({c.subregions, false, c.split, true});
+    std::vector<CandidateSpec> fine = rounds.front();  // the first round's candidates are the straight ones
+    for (CandidateSpec& c : fine) c.fine = true;
     rounds.push_back(std::move(fine));
   }
   return rounds;
@@ -698,9 +697,10 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
         all += (c ? "; " : "") +
                (cands.size() <= 1          ? std::string()
                 : ks[c].subregions == 0    ? std::string("the split-triangle fallback: ")
-                : ks[c].subregions == 1    ? std::string("one poly-square: ")
-                                           : "with " + std::to_string(ks[c].subregions) + " subregions" +
-                                              (ks[c].bend_interfaces ? " (bent interfaces): " : ": ")) +
+                : (ks[c].subregions == 1   ? std::string("one poly-square")
+                                           : "with " + std::to_string(ks[c].subregions) + " subregions") +
+                      (ks[c].bend_interfaces ? " (bent interfaces)" : "") +
+                      (ks[c].fine ? " (fine background)" : "") + ": ") +
                cands[c].error;
       errors[k] = all;
       return;
