@@ -7,6 +7,7 @@
 #include <sstream>
 #include <unordered_map>
 
+#include "crs_info.h"
 #include "polysquare/core/error.h"
 #include "polysquare/io/atomic_file.h"
 #include "polysquare/io/mesh_io.h"
@@ -209,11 +210,26 @@ void read_physical_names(Cursor& c, Builder& b) {
   c.expect("$EndPhysicalNames");
 }
 
+// $Comments ... $EndComments (Gmsh ignores sections it does not know; our writer keeps the CRS there): skipped
+// as text whatever it holds, its "crs VALUE" line read into the mesh.
+void read_comments(Cursor& c, Builder& b) {
+  const std::size_t end = c.data.find("\n$EndComments", c.pos);
+  if (end == std::string::npos) c.fail("$Comments without $EndComments");
+  std::istringstream lines(c.data.substr(c.pos, end - c.pos));
+  for (std::string line; std::getline(lines, line);) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.rfind("crs ", 0) == 0) b.mesh.crs = line.substr(4);
+  }
+  c.pos = end + 1;
+  c.expect("$EndComments");
+}
+
 void read_v2(Cursor& c, Builder& b, bool binary) {
   while (c.pos < c.data.size()) {
     std::string section;
     try { section = c.token(); } catch (const InputError&) { break; }
     if (section == "$PhysicalNames") read_physical_names(c, b);
+    else if (section == "$Comments") read_comments(c, b);
     else if (section == "$Nodes") {
       const std::size_t n = c.count(c.integer(), binary ? 28 : 8);
       if (binary) c.skip_line();
@@ -269,6 +285,9 @@ void read_v4(Cursor& c, Builder& b, bool binary) {
     if (section == "$PhysicalNames") {
       if (binary) c.pos -= 0;  // PhysicalNames is ASCII in both forms
       read_physical_names(c, b);
+    } else if (section == "$Comments") {
+      if (binary) c.pos -= 1;  // the line break skipped above: the section's text starts after it
+      read_comments(c, b);
     } else if (section == "$Entities") {
       const long long np = size(), nc = size(), ns = size(), nv = size();
       for (long long i = 0; i < np; ++i) {
@@ -423,6 +442,27 @@ std::string physical_name(std::string name) {
   return name;
 }
 
+// The CRS of the coordinates, where other readers pass it by: a $Comments section after $EndElements (the Gmsh
+// manual: a reader skips a section whose header it does not know, $Comments/$EndComments being its example of a
+// place for comments; deal.II's reader stops at $EndElements). One "key value" line
+// each: crs (as recorded, e.g. EPSG:32616), crs_name, crs_epsg (0 when no EPSG code is identified), crs_wkt (one
+// line). No line starts with '$', so no reader ends the section early.
+void write_crs_comments(std::ostream& os, const std::string& crs) {
+  if (crs.empty()) return;
+  auto one_line = [](std::string text) {
+    for (char& ch : text)
+      if (ch == '\n' || ch == '\r') ch = ' ';
+    return text;
+  };
+  const crs::CrsInfo info = crs::crs_info(crs);
+  os << "$Comments\ncrs " << one_line(crs) << "\n";
+  if (info.known) {
+    os << "crs_name " << one_line(info.name) << "\ncrs_epsg " << info.epsg << "\n";
+    if (!info.wkt.empty()) os << "crs_wkt " << one_line(info.wkt) << "\n";
+  }
+  os << "$EndComments\n";
+}
+
 void write_physical_names(std::ostream& os, const std::vector<SurfaceGroup>& surfaces, const std::vector<Group>& groups) {
   os << "$PhysicalNames\n" << groups.size() + surfaces.size() << "\n";
   for (const SurfaceGroup& s : surfaces) os << "2 " << s.tag << " \"" << physical_name(s.name) << "\"\n";
@@ -552,6 +592,7 @@ void write_msh(const std::filesystem::path& path, const QuadMesh& mesh, const Me
     write_physical_names(os, named.surfaces, groups);
     if (v41) write_v41(w, mesh, named.surfaces, groups);
     else write_v22(w, mesh, named.surfaces, groups);
+    write_crs_comments(os, mesh.crs);
   }, options.binary);
 }
 

@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <ostream>
 #include <unordered_map>
@@ -162,18 +163,22 @@ void write_2dm(const fs::path& path, const QuadMesh& mesh, const MeshWriteOption
       os << "ND " << i + 1 << " " << mesh.nodes[i].x << " " << mesh.nodes[i].y << " " << depth_at(options, i) << "\n";
     // One nodestring per boundary chain: the rest of each ring (a ring without segments closed, its first node
     // repeated), then every named segment, in the order of the groups' tags.
-    std::vector<const std::vector<std::int32_t>*> strings;
+    // The group's name follows the last (negative) node id, blanks made '_' so it stays one field.
+    std::vector<std::pair<const std::vector<std::int32_t>*, const CurveGroup*>> strings;
     for (const CurveGroup& g : groups.rings)
-      for (const auto& chain : g.chains) strings.push_back(&chain);
+      for (const auto& chain : g.chains) strings.emplace_back(&chain, &g);
     for (const CurveGroup& g : groups.segments)
-      for (const auto& chain : g.chains) strings.push_back(&chain);
-    for (const auto* chain : strings) {
+      for (const auto& chain : g.chains) strings.emplace_back(&chain, &g);
+    for (const auto& [chain, group] : strings) {
       const std::vector<std::int32_t>& ids = *chain;
       for (std::size_t k = 0; k < ids.size(); ++k) {
         if (k % 10 == 0) os << (k ? "\n" : "") << "NS";
         os << " " << (k + 1 == ids.size() ? -(ids[k] + 1) : ids[k] + 1);
       }
-      os << "\n";
+      std::string name = group->name;
+      for (char& ch : name)
+        if (std::isspace(static_cast<unsigned char>(ch))) ch = '_';
+      os << (name.empty() ? "" : " ") << name << "\n";
     }
   }, false);
 }

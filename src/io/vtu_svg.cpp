@@ -3,6 +3,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "crs_info.h"
 #include "polysquare/core/error.h"
 #include "polysquare/io/atomic_file.h"
 #include "polysquare/io/mesh_io.h"
@@ -46,6 +47,17 @@ std::vector<T> numbers(const std::string& text, const std::string& path) {
   return out;
 }
 
+// Text for an XML comment: no "--" inside and no '-' at its end.
+std::string comment_text(const std::string& text) {
+  std::string out;
+  for (char ch : text) {
+    if (ch == '-' && !out.empty() && out.back() == '-') out += ' ';
+    out += ch == '\n' || ch == '\r' ? ' ' : ch;
+  }
+  if (!out.empty() && out.back() == '-') out += ' ';
+  return out;
+}
+
 }  // namespace
 
 QuadMesh read_vtu(const std::filesystem::path& path) { return parse_vtu(read_file(path), path.string()); }
@@ -76,6 +88,12 @@ QuadMesh parse_vtu(const std::string& xml, const std::string& name) {
                        (types[c] >= 10 && types[c] <= 14 ? " (it is a 3D cell)" : ""));
     start = end;
   }
+  // The CRS our writer records as field data (a VTK file from another tool has none).
+  const std::size_t epsg_at = xml.find("Name=\"crs_epsg\"");
+  if (epsg_at != std::string::npos && epsg_at < xml.find("<Piece")) {
+    const auto epsg = numbers<long long>(array_text(xml, xml.rfind("<DataArray", epsg_at), "crs_epsg", name), name);
+    if (epsg.size() == 1 && epsg[0] > 0 && epsg[0] < 1000000) mesh.crs = "EPSG:" + std::to_string(epsg[0]);
+  }
   return mesh;
 }
 
@@ -84,7 +102,15 @@ void write_vtu(const std::filesystem::path& path, const QuadMesh& mesh) {
   write_file_atomically(path, [&](std::ostream& os) {
     os.precision(17);
     os << "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\">\n"
-       << "<UnstructuredGrid>\n<Piece NumberOfPoints=\"" << mesh.nodes.size() << "\" NumberOfCells=\"" << mesh.quads.size() << "\">\n"
+       << "<UnstructuredGrid>\n";
+    // The CRS as field data readers keep (VTK, ParaView, meshio's field_data): its EPSG code, 0 when none is
+    // identified. The CRS itself (any PROJ string or WKT) goes into a comment at the end: a String array would be
+    // VTK's way, but meshio 5 refuses String arrays.
+    const crs::CrsInfo info = crs::crs_info(mesh.crs);
+    if (!mesh.crs.empty())
+      os << "<FieldData>\n<DataArray type=\"Int32\" Name=\"crs_epsg\" NumberOfTuples=\"1\" format=\"ascii\">\n"
+         << info.epsg << "\n</DataArray>\n</FieldData>\n";
+    os << "<Piece NumberOfPoints=\"" << mesh.nodes.size() << "\" NumberOfCells=\"" << mesh.quads.size() << "\">\n"
        << "<Points>\n<DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n";
     for (Vec2 p : mesh.nodes) os << p.x << " " << p.y << " 0\n";
     os << "</DataArray>\n</Points>\n<Cells>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n";
@@ -108,7 +134,12 @@ void write_vtu(const std::filesystem::path& path, const QuadMesh& mesh) {
     os << "</DataArray>\n</CellData>\n<PointData>\n<DataArray type=\"UInt8\" Name=\"node_kind\" format=\"ascii\">\n";
     for (std::size_t i = 0; i < mesh.nodes.size(); ++i)
       os << (mesh.node_kind.empty() ? 0 : static_cast<int>(mesh.node_kind[i])) << "\n";
-    os << "</DataArray>\n</PointData>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n";
+    os << "</DataArray>\n</PointData>\n</Piece>\n</UnstructuredGrid>\n";
+    if (!mesh.crs.empty()) {
+      os << "<!-- crs: " << comment_text(mesh.crs) << " -->\n";
+      if (info.known) os << "<!-- crs_name: " << comment_text(info.name) << " -->\n<!-- crs_wkt: " << comment_text(info.wkt) << " -->\n";
+    }
+    os << "</VTKFile>\n";
   }, false);
 }
 

@@ -1,7 +1,7 @@
 // Parsers of solver files for the tests, written from the formats' documentation, not from our writers:
 // SCHISM hgrid.gr3 (SCHISM manual, "hgrid.gr3": header, NE NP, nodes "id x y depth", elements "id i34 n1..n4",
 // then NOPE, NETA, per open boundary its node count and nodes, NBOU, NVEL, per land boundary "count flag" and its
-// nodes) and SMS 2dm (cards MESH2D, E4Q id n1..n4 mat, ND id x y z, NS node ids with the last one negative).
+// nodes) and SMS 2dm (cards MESH2D, E4Q id n1..n4 mat, ND id x y z, NS node ids with the last one negative, then optionally the nodestring's name).
 #pragma once
 
 #include <cmath>
@@ -95,6 +95,7 @@ struct Sms {
   std::map<long, double> z;
   std::map<long, std::vector<long>> e4q;
   std::vector<std::vector<long>> strings;
+  std::vector<std::string> string_names;  ///< per string: what follows its negative last id ("" when nothing)
   bool mesh2d = false;
 };
 inline Sms parse_2dm(const std::filesystem::path& p) {
@@ -127,6 +128,10 @@ inline Sms parse_2dm(const std::filesystem::path& p) {
         if (v < 0) {
           s.strings.push_back(current);
           current.clear();
+          std::string name;
+          std::getline(ls >> std::ws, name);
+          s.string_names.push_back(name);
+          break;
         }
       }
     }

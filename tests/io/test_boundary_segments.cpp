@@ -267,6 +267,8 @@ print(json.dumps(out))
     for (std::size_t i = 0; i < ns.size(); ++i) EXPECT_EQ(ns[i], g.open[k][i]);
   }
   for (std::size_t k = 0; k < 2; ++k) EXPECT_EQ(s.strings[k].size(), 101u) << "a 200 m wall at h = 2";
+  // Each nodestring carries its group's name after its last node.
+  EXPECT_EQ(s.string_names, (std::vector<std::string>{"boundary_ring_0", "boundary_ring_0", "inflow", "outflow"}));
   // The groups themselves: names from the input, tags in the documented order.
   ASSERT_EQ(m.groups.surfaces.size(), 1u);
   EXPECT_EQ(m.groups.surfaces[0].name, "channel");

@@ -1,5 +1,7 @@
 // Mesh files round-trip exactly, other tools read what we write, malformed files are clean errors.
 #include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cstdlib>
@@ -190,6 +192,106 @@ TEST(MeshIo, GmshAndMeshioReadOurMsh) {
   if (std::system("/usr/bin/python3 -c 'import meshio' 2>/dev/null") == 0) EXPECT_EQ(std::system(py.c_str()), 0);
   fs::remove(p);
   fs::remove(out);
+}
+
+// Runs a shell command; returns its stdout and sets `code` to its exit status.
+std::string shell_output(const std::string& cmd, int& code) {
+  const fs::path out = temp("shell.out");
+  const int status = std::system((cmd + " > " + out.string() + " 2>/dev/null").c_str());
+  code = WEXITSTATUS(status);
+  std::ifstream in(out);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  fs::remove(out);
+  return text;
+}
+
+TEST(MeshIo, MshAndVtuRecordTheCrsWhereOtherReadersKeepReading) {
+  QuadMesh m = sample_mesh();
+  m.crs = "EPSG:32616";
+  const bool have_gmsh = std::system("command -v gmsh > /dev/null 2>&1") == 0;
+  const bool have_meshio = std::system("/usr/bin/python3 -c 'import meshio' 2>/dev/null") == 0;
+  const bool have_gdalsrsinfo = std::system("command -v gdalsrsinfo > /dev/null 2>&1") == 0;
+  for (MshVersion version : {MshVersion::v2_2, MshVersion::v4_1})
+    for (bool binary : {false, true}) {
+      const std::string what = std::string(version == MshVersion::v4_1 ? "4.1" : "2.2") + (binary ? " binary" : " ASCII");
+      const fs::path p = temp("crs.msh"), out = temp("crs_gmsh.msh");
+      MeshWriteOptions o;
+      o.msh_version = version;
+      o.binary = binary;
+      write_mesh(p, m, o);
+      std::ifstream in(p, std::ios::binary);
+      const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+      // The Gmsh manual: a section with an unknown header is skipped, e.g. $Comments ... $EndComments. Ours holds
+      // "key value" lines and comes after $EndElements (deal.II and DUNE stop reading there).
+      const std::size_t begin = text.find("\n$Comments\n"), end = text.find("\n$EndComments\n");
+      ASSERT_NE(begin, std::string::npos) << what;
+      ASSERT_NE(end, std::string::npos) << what;
+      EXPECT_GT(begin, text.rfind("$EndElements")) << what;
+      std::map<std::string, std::string> keys;
+      std::istringstream lines(text.substr(begin + 11, end - begin - 10));
+      for (std::string line; std::getline(lines, line);) {
+        ASSERT_NE(line.substr(0, 1), "$") << what << ": a line starting with $ would end the section for Gmsh";
+        const std::size_t space = line.find(' ');
+        if (space != std::string::npos) keys[line.substr(0, space)] = line.substr(space + 1);
+      }
+      EXPECT_EQ(keys["crs"], "EPSG:32616") << what;
+      EXPECT_EQ(keys["crs_epsg"], "32616") << what;
+      EXPECT_EQ(keys["crs_name"], "WGS 84 / UTM zone 16N") << what;
+      if (have_gdalsrsinfo) {
+        // GDAL's own tool identifies the WKT as the same CRS.
+        const fs::path wkt = temp("crs.wkt");
+        std::ofstream(wkt) << keys["crs_wkt"];
+        int code = 0;
+        const std::string epsg = shell_output("gdalsrsinfo -e " + wkt.string(), code);
+        EXPECT_EQ(code, 0) << what;
+        EXPECT_NE(epsg.find("EPSG:32616"), std::string::npos) << what << ": " << epsg;
+        fs::remove(wkt);
+      }
+      // Our reader skips the section and takes the CRS back.
+      const QuadMesh r = read_mesh(p);
+      EXPECT_EQ(r.quads, m.quads) << what;
+      EXPECT_EQ(r.crs, "EPSG:32616") << what;
+      // Gmsh and meshio still read every quad.
+      if (have_gmsh) {
+        const std::string cmd = "gmsh " + p.string() + " -0 -format msh41 -o " + out.string() + " > /dev/null 2>&1";
+        ASSERT_EQ(std::system(cmd.c_str()), 0) << what;
+        EXPECT_EQ(compute_quality(read_mesh(out)).quads, m.quads.size()) << what;
+      }
+      if (have_meshio) {
+        int code = 0;
+        const std::string n = shell_output("/usr/bin/python3 -c \"import meshio; m=meshio.read('" + p.string() +
+                                           "'); print(sum(len(c.data) for c in m.cells if c.type=='quad'))\"", code);
+        EXPECT_EQ(code, 0) << what;
+        EXPECT_EQ(std::atol(n.c_str()), static_cast<long>(m.quads.size())) << what;
+      }
+      fs::remove(p);
+      fs::remove(out);
+    }
+  // VTU: the EPSG code as field data (meshio's field_data), the CRS itself in a comment; our reader takes it back.
+  const fs::path v = temp("crs.vtu");
+  write_mesh(v, m);
+  EXPECT_EQ(read_mesh(v).crs, "EPSG:32616");
+  if (have_meshio) {
+    int code = 0;
+    const std::string got = shell_output("/usr/bin/python3 -c \"import meshio; m=meshio.read('" + v.string() +
+                                         "'); print(int(m.field_data['crs_epsg'][0]), len(m.points), sum(len(c.data) for c in m.cells if c.type=='quad'))\"",
+                                         code);
+    EXPECT_EQ(code, 0);
+    EXPECT_EQ(got, "32616 " + std::to_string(m.nodes.size()) + " " + std::to_string(m.quads.size()) + "\n");
+  }
+  // Without a CRS neither file has one.
+  m.crs.clear();
+  const fs::path plain = temp("plain.msh");
+  write_mesh(plain, m);
+  write_mesh(v, m);
+  std::ifstream pin(plain), vin(v);
+  const std::string ptext((std::istreambuf_iterator<char>(pin)), std::istreambuf_iterator<char>());
+  const std::string vtext((std::istreambuf_iterator<char>(vin)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(ptext.find("$Comments"), std::string::npos);
+  EXPECT_EQ(vtext.find("FieldData"), std::string::npos);
+  EXPECT_TRUE(read_mesh(v).crs.empty());
+  fs::remove(plain);
+  fs::remove(v);
 }
 
 TEST(MeshIo, MalformedFilesAreInputErrors) {

@@ -260,6 +260,7 @@ TEST(SolverFiles, TwoDmReadBackNodeForNodeWithNodestrings) {
       EXPECT_TRUE(covered.insert(sorted(static_cast<std::int32_t>(ns[i] - 1), static_cast<std::int32_t>(ns[i + 1] - 1))).second);
   }
   EXPECT_EQ(covered, one_quad_edges(c.mesh));
+  EXPECT_EQ(s.string_names, (std::vector<std::string>{"boundary_ring_0", "boundary_ring_1"}));
 }
 
 TEST(SolverFiles, UgridReadBackByNetcdf4NodeForNode) {
