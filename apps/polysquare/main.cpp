@@ -118,6 +118,15 @@ int run_mesh(const MeshArgs& args) {
   if (notes.reprojected) info << "input in " << notes.input_crs << ", meshed in " << region.crs << " (--size in metres)\n";
   MeshOptions options = args.options;
   check_mesh_size(region, options);
+  {
+    // The figure to choose --size from, before minutes of meshing: quads of size h cover about area / h^2.
+    const Box2 box = region.bounding_box();
+    const double area = domain_area(region);
+    info << "region " << short_number(box.hi.x - box.lo.x) << " x " << short_number(box.hi.y - box.lo.y)
+         << ", area " << short_number(area) << ": --size " << short_number(options.size) << " gives about "
+         << static_cast<long long>(std::llround(area / (options.size * options.size)))
+         << " quads (area / size^2; half the size, four times as many)\n";
+  }
   options.keep_partition = !args.partition_picture.empty();
   options.map.composition = args.map == "gpm" ? MapComposition::gpm : MapComposition::ppm;
   options.map.layout.straight_interfaces = !args.bend_interfaces;

@@ -64,6 +64,21 @@ void text(cairo_t* cr, double x, double y, const std::string& s) {
   cairo_show_text(cr, s.c_str());
 }
 
+// Text that must end before x_max (the picture's right margin): drawn smaller when it would not.
+void text_within(cairo_t* cr, double x, double y, const std::string& s, double x_max) {
+  cairo_text_extents_t e;
+  cairo_text_extents(cr, s.c_str(), &e);
+  const double room = x_max - x, used = e.x_bearing + e.x_advance;
+  if (used <= room || !(used > 0)) return text(cr, x, y, s);
+  cairo_save(cr);
+  cairo_matrix_t m;
+  cairo_get_font_matrix(cr, &m);
+  cairo_matrix_scale(&m, room / used, room / used);
+  cairo_set_font_matrix(cr, &m);
+  text(cr, x, y, s);
+  cairo_restore(cr);
+}
+
 std::string fixed(double v, int digits) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.*f", digits, v);
@@ -402,7 +417,8 @@ RenderStats render_mesh(const std::filesystem::path& path, const QuadMesh& mesh,
     cairo_fill(cr);
     cairo_set_source_rgb(cr, 0, 0, 0);
     const auto it = marked_by_extra.find(extra);
-    text(cr, lx + 15, ly, std::string(label) + ": " + std::to_string(it == marked_by_extra.end() ? 0 : it->second));
+    text_within(cr, lx + 15, ly, std::string(label) + ": " + std::to_string(it == marked_by_extra.end() ? 0 : it->second),
+                options.width_px - pad);
     ly += 16;
   }
   text(cr, lx, ly, "(rings: boundary nodes)");

@@ -162,6 +162,40 @@ TEST_F(Render, SingularNodesAreMarkedByValence) {
   EXPECT_EQ(st.bar_h, 0.0);
 }
 
+TEST_F(Render, LegendWithLargeCountsStaysInsideThePicture) {
+  // 40,000 valence marks of one kind (delta_box has 5,600): "valence 3 (boundary 2): 40000" is wider than the
+  // legend column at the normal font and ran past the picture's right edge.
+  QuadMesh mesh;
+  const QuadMesh one = split_triangle();
+  for (int k = 0; k < 10000; ++k) {
+    const auto base = static_cast<std::int32_t>(mesh.nodes.size());
+    const Vec2 shift{7.0 * (k % 100), 6.0 * (k / 100)};
+    for (const Vec2& p : one.nodes) mesh.nodes.push_back({p.x + shift.x, p.y + shift.y});
+    for (auto q : one.quads) {
+      for (auto& v : q) v += base;
+      mesh.quads.push_back(q);
+    }
+  }
+  RenderOptions ro;
+  ro.width_px = 400;
+  ro.color = RenderColor::singularities;
+  const RenderStats st = render_mesh(dir_ / "l.png", mesh, nullptr, ro);
+  EXPECT_EQ(st.singular_nodes_marked, 40000u);
+  const Png png(dir_ / "l.png");
+  ASSERT_TRUE(png.ok());
+  // The legend lies right of the plot; its last 5 px columns (the margin) stay white on every row, while the
+  // legend itself writes dark text into the column.
+  int margin_marked = 0, legend_dark = 0;
+  for (int y = 0; y < png.height(); ++y) {
+    for (int x = png.width() - 5; x < png.width(); ++x)
+      if (png.pixel(x, y)[0] < 250) ++margin_marked;
+    for (int x = static_cast<int>(st.plot_x0 + st.scale * (st.window.hi.x - st.window.lo.x)) + 20; x < png.width() - 5; ++x)
+      if (png.pixel(x, y)[0] < 100 && png.pixel(x, y)[2] < 100) ++legend_dark;
+  }
+  EXPECT_EQ(margin_marked, 0);
+  EXPECT_GT(legend_dark, 100);
+}
+
 TEST_F(Render, WindowShowsOnlyItsPart) {
   const QuadMesh mesh = square_and_sheared();
   RenderOptions ro;
