@@ -155,7 +155,9 @@ int run_mesh(const MeshArgs& args) {
   }
   if (moved) result.report["input"]["local_origin"] = {origin.x, origin.y};
   progress.start("quality");
-  const QualityReport quality = compute_quality(result.mesh);
+  QualityReport quality = compute_quality(result.mesh);
+  quality.schism.angle_ratio_worst_at = quality.schism.angle_ratio_worst_at + origin;
+  quality.schism.aspect_ratio_worst_at = quality.schism.aspect_ratio_worst_at + origin;
   DomainDistanceOptions measure{args.options.corner_threshold_deg, {}};
   for (const auto& d : result.report["dropped_parts"]) measure.skip_parts.push_back(d["part"].get<int>());
   // The mesh covers the (simplified) domain it conforms to, less the parts left out as too small, up to the
@@ -308,7 +310,7 @@ int run_mesh(const MeshArgs& args) {
                                  short_number(simplified->feature_max_distance) + ", feature nodes off curves max " +
                                  short_number(simplified->feature_node_max_distance) + "\n"
                            : std::string())
-            << format_finite_volume_text(fv);
+            << format_finite_volume_text(fv) << format_schism_text(quality.schism);
   return 0;
 }
 
@@ -351,7 +353,8 @@ int run_quality(const std::string& mesh_path, const std::string& domain_path, bo
     if (domain) j["domain"] = to_json(*domain);
     std::cout << j.dump(2) << "\n";
   } else {
-    std::cout << format_quality_text(quality, domain ? &*domain : nullptr) << format_finite_volume_text(fv);
+    std::cout << format_quality_text(quality, domain ? &*domain : nullptr) << format_finite_volume_text(fv)
+              << format_schism_text(quality.schism);
   }
   return require_quads && quality.triangles > 0 ? 2 : 0;
 }

@@ -118,6 +118,101 @@ QuadMetrics quad_metrics(const QuadMesh& mesh) {
   return m;
 }
 
+namespace {
+
+// SCHISM's angle ratio of one quad (quality.h, SchismQuadQuality): smallest over largest interior angle when every
+// corner turns counter-clockwise by less than 180 degrees, else 0 (fix_bad_quads.f90 splits such a quad anyway).
+double schism_angle_ratio(const QuadMesh& mesh, const std::array<std::int32_t, 4>& quad) {
+  double smallest = INFINITY, largest = 0.0;
+  for (int k = 0; k < 4; ++k) {
+    const Vec2 p = mesh.nodes[quad[k]];
+    const Vec2 next = mesh.nodes[quad[(k + 1) % 4]] - p, prev = mesh.nodes[quad[(k + 3) % 4]] - p;
+    if (!(norm(next) > 0) || !(norm(prev) > 0)) return 0.0;  // a zero-length (or non-finite) side
+    const double turn = cross(next, prev);
+    if (!(turn > 0)) return 0.0;  // a straight, reflex or inverted corner: not a convex quad
+    const double angle = std::atan2(turn, dot(next, prev));  // in (0, pi)
+    smallest = std::min(smallest, angle);
+    largest = std::max(largest, angle);
+  }
+  return smallest / largest;
+}
+
+// Longest over shortest side; 1e300 for a zero-length or non-finite side (as QuadMetrics::edge_ratio).
+double side_ratio(const QuadMesh& mesh, const std::array<std::int32_t, 4>& quad) {
+  double shortest = INFINITY, longest = 0.0;
+  for (int k = 0; k < 4; ++k) {
+    const double l = distance(mesh.nodes[quad[k]], mesh.nodes[quad[(k + 1) % 4]]);
+    if (!std::isfinite(l)) return 1e300;
+    shortest = std::min(shortest, l);
+    longest = std::max(longest, l);
+  }
+  return shortest > 0 ? longest / shortest : 1e300;
+}
+
+Vec2 quad_centre(const QuadMesh& mesh, const std::array<std::int32_t, 4>& quad) {
+  return 0.25 * (mesh.nodes[quad[0]] + mesh.nodes[quad[1]] + mesh.nodes[quad[2]] + mesh.nodes[quad[3]]);
+}
+
+}  // namespace
+
+std::vector<double> schism_angle_ratios(const QuadMesh& mesh) {
+  std::vector<double> r(mesh.quads.size());
+  for (std::size_t q = 0; q < mesh.quads.size(); ++q) r[q] = schism_angle_ratio(mesh, mesh.quads[q]);
+  return r;
+}
+
+SchismQuadQuality schism_quad_quality(const QuadMesh& mesh, double angle_ratio_limit, double aspect_ratio_limit) {
+  SchismQuadQuality r;
+  r.angle_ratio_limit = angle_ratio_limit;
+  r.aspect_ratio_limit = aspect_ratio_limit;
+  const std::vector<double> angle = schism_angle_ratios(mesh);
+  std::vector<double> aspect(mesh.quads.size());
+  double worst_angle = INFINITY, worst_aspect = -INFINITY;
+  for (std::size_t q = 0; q < mesh.quads.size(); ++q) {
+    aspect[q] = side_ratio(mesh, mesh.quads[q]);
+    const bool angle_fails = angle[q] < angle_ratio_limit, aspect_fails = aspect[q] > aspect_ratio_limit;
+    r.non_convex += angle[q] == 0.0;
+    r.angle_ratio_below += angle_fails;
+    r.aspect_ratio_above += aspect_fails;
+    r.failing += angle_fails || aspect_fails;
+    if (angle[q] < worst_angle) { worst_angle = angle[q]; r.angle_ratio_worst_at = quad_centre(mesh, mesh.quads[q]); }
+    if (aspect[q] > worst_aspect) { worst_aspect = aspect[q]; r.aspect_ratio_worst_at = quad_centre(mesh, mesh.quads[q]); }
+  }
+  r.angle_ratio = stats_of(angle);
+  r.aspect_ratio = stats_of(aspect);
+  return r;
+}
+
+nlohmann::json to_json(const SchismQuadQuality& q) {
+  auto st = [](const Stats& s) { return nlohmann::json{{"min", s.min}, {"avg", s.avg}, {"max", s.max}, {"std", s.std}}; };
+  return {{"angle_ratio", st(q.angle_ratio)}, {"angle_ratio_limit", q.angle_ratio_limit},
+          {"angle_ratio_below_limit", q.angle_ratio_below},
+          {"angle_ratio_worst_at", {q.angle_ratio_worst_at.x, q.angle_ratio_worst_at.y}},
+          {"aspect_ratio", st(q.aspect_ratio)}, {"aspect_ratio_limit", q.aspect_ratio_limit},
+          {"aspect_ratio_above_limit", q.aspect_ratio_above},
+          {"aspect_ratio_worst_at", {q.aspect_ratio_worst_at.x, q.aspect_ratio_worst_at.y}},
+          {"non_convex", q.non_convex}, {"failing", q.failing}};
+}
+
+std::string format_schism_text(const SchismQuadQuality& q) {
+  std::ostringstream os;
+  os.precision(4);
+  os << "  SCHISM quad checks: angle ratio (min / max interior angle) min " << q.angle_ratio.min << " avg "
+     << q.angle_ratio.avg << ", " << q.angle_ratio_below << " below " << q.angle_ratio_limit;
+  if (q.non_convex > 0) os << " (" << q.non_convex << " not convex)";
+  os << "; aspect ratio (longest / shortest side) max " << q.aspect_ratio.max << ", " << q.aspect_ratio_above
+     << " above " << q.aspect_ratio_limit << "; " << q.failing << " quads fail either";
+  if (q.failing > 0) {
+    os.precision(10);
+    if (q.angle_ratio_below > 0)
+      os << " (worst angle ratio at " << q.angle_ratio_worst_at.x << ", " << q.angle_ratio_worst_at.y << ")";
+    if (q.aspect_ratio_above > 0)
+      os << " (worst aspect ratio at " << q.aspect_ratio_worst_at.x << ", " << q.aspect_ratio_worst_at.y << ")";
+  }
+  os << "\n";
+  return os.str();
+}
+
 QualityReport compute_quality(const QuadMesh& mesh) { return compute_quality(mesh, quad_metrics(mesh)); }
 
 double mesh_area(const QuadMesh& mesh) {
@@ -170,8 +265,8 @@ QualityReport compute_quality(const QuadMesh& mesh, const QuadMetrics& m) {
   r.skew = stats_of(m.skew);
   r.edge_ratio = stats_of(m.edge_ratio);
   r.inverted = static_cast<std::size_t>(std::count_if(m.sj.begin(), m.sj.end(), [](double v) { return v <= 0; }));
-  // Valence and boundary over the quads only, as anchors.md counted Gmsh's meshes (their few leftover
-  // triangles are reported separately, not counted into valences).
+  // Valence and boundary over the quads only, as the Gmsh reference figures of data/cases/PROVENANCE.md count
+  // Gmsh's meshes (their few leftover triangles are reported separately, not counted into valences).
   const auto edge_counts = quad_edge_counts(mesh);
   for (const auto& [key, count] : edge_counts) {
     r.boundary_edges += count == 1;
@@ -192,6 +287,7 @@ QualityReport compute_quality(const QuadMesh& mesh, const QuadMetrics& m) {
   const double quads = static_cast<double>(std::max<std::size_t>(mesh.quads.size(), 1));
   r.regular_quad_fraction = static_cast<double>(regular) / quads;
   r.sj_below_0_3_fraction = static_cast<double>(std::count_if(m.sj.begin(), m.sj.end(), [](double v) { return v < 0.3; })) / quads;
+  r.schism = schism_quad_quality(mesh);
   return r;
 }
 
@@ -502,7 +598,7 @@ nlohmann::json to_json(const QualityReport& q) {
           {"sj", st(q.sj)}, {"eta", st(q.eta)}, {"skew", st(q.skew)}, {"edge_ratio", st(q.edge_ratio)},
           {"singularities", q.singularities}, {"interior_singularities", q.interior_singularities},
           {"boundary_singularities", q.boundary_singularities}, {"regular_quad_fraction", q.regular_quad_fraction},
-          {"sj_below_0_3_fraction", q.sj_below_0_3_fraction}};
+          {"sj_below_0_3_fraction", q.sj_below_0_3_fraction}, {"schism", to_json(q.schism)}};
 }
 
 nlohmann::json to_json(const DomainDistance& d) {

@@ -1,5 +1,5 @@
 // polysquare judges Gmsh's meshes with the same code as its own: the Gmsh 4.8.4 mesh of letter_R, in every
-// format, reproduces the anchors.md figures.
+// format, reproduces its row of the Gmsh reference figures in data/cases/PROVENANCE.md.
 #include <gtest/gtest.h>
 
 #include <string>

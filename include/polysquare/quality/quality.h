@@ -1,4 +1,4 @@
-// Stage 9: quality figures, with the definitions of anchors.md, for our meshes and for other tools' meshes.
+// Stage 9: quality figures, defined below, for our meshes and for other tools' meshes.
 #pragma once
 
 #include <cstddef>
@@ -28,6 +28,36 @@ struct QuadMetrics {
 /// The metrics of every quad of `mesh` (triangles are left out).
 QuadMetrics quad_metrics(const QuadMesh& mesh);
 
+/// SCHISM's quality checks of quads, as SCHISM's own tools define them (the grid-generation chapter of the SCHISM
+/// manual, https://schism-dev.github.io/schism/master/getting-started/grid-generation.html, "Mesh quality": quads
+/// are checked in xmgredit5 with a cutoff of 0.5 on "the ratio between the min and max interior angles", and bad
+/// quads are split by the pre-processing script fix_bad_quads.f90, whose inputs are a threshold for that angle
+/// ratio (e.g. 0.5) and one for the quad aspect ratio, longest over shortest side (e.g. 5); a concave quad is
+/// always split). Per quad: angle_ratio = smallest / largest interior angle (1 for a rectangle; 0 for a quad with a
+/// reflex or inverted corner, which SCHISM splits whatever the thresholds); aspect_ratio = longest / shortest side
+/// (the same figure as QualityReport::edge_ratio). A quad with a zero-length side has angle ratio 0 and aspect ratio
+/// 1e300 (as edge_ratio).
+struct SchismQuadQuality {
+  double angle_ratio_limit = 0.5;     ///< quads below it fail (xmgredit5's and fix_bad_quads' example cutoff)
+  double aspect_ratio_limit = 5.0;    ///< quads above it fail (fix_bad_quads' example threshold)
+  Stats angle_ratio;                  ///< over quads, in [0, 1]
+  Stats aspect_ratio;                 ///< over quads, >= 1
+  std::size_t non_convex = 0;         ///< quads with a corner of 180 degrees or more (or inverted, or degenerate)
+  std::size_t angle_ratio_below = 0;  ///< quads with angle_ratio < angle_ratio_limit (the non-convex ones included)
+  std::size_t aspect_ratio_above = 0; ///< quads with aspect_ratio > aspect_ratio_limit
+  std::size_t failing = 0;            ///< quads failing either check: those fix_bad_quads would split
+  Vec2 angle_ratio_worst_at{};        ///< centre (mean of the nodes) of the quad with the smallest angle ratio
+  Vec2 aspect_ratio_worst_at{};       ///< centre of the quad with the largest aspect ratio
+};
+/// #quads SCHISM angle ratio of each quad of `mesh` (see SchismQuadQuality).
+std::vector<double> schism_angle_ratios(const QuadMesh& mesh);
+/// SCHISM's quad checks over the quads of `mesh` (triangles are left out) with the given cutoffs.
+SchismQuadQuality schism_quad_quality(const QuadMesh& mesh, double angle_ratio_limit = 0.5,
+                                      double aspect_ratio_limit = 5.0);
+/// The report's `quality.schism` block (keys in schema/report.schema.json) and its one-line text.
+nlohmann::json to_json(const SchismQuadQuality& q);
+std::string format_schism_text(const SchismQuadQuality& q);
+
 struct QualityReport {
   std::size_t nodes = 0, quads = 0, triangles = 0;
   std::size_t inverted = 0;            ///< quads with SJ <= 0
@@ -40,9 +70,10 @@ struct QualityReport {
   double regular_quad_fraction = 0;         ///< quads with no interior singular node among their four: how much
                                             ///< of the mesh is semi-structured, wherever its quads came from
   double sj_below_0_3_fraction = 0;         ///< quads whose scaled Jacobian is below 0.3
+  SchismQuadQuality schism;                 ///< SCHISM's quad checks, default cutoffs (schism_quad_quality)
 };
-/// Valence counts the distinct quad edges at a vertex; triangles (from other tools) are not counted, as in
-/// anchors.md. non_manifold_edges and boundary_edges are over the quads too.
+/// Valence counts the distinct quad edges at a vertex; triangles (from other tools) are not counted, as in the Gmsh
+/// reference figures of data/cases/PROVENANCE.md. non_manifold_edges and boundary_edges are over the quads too.
 QualityReport compute_quality(const QuadMesh& mesh);
 /// Throws InputError naming `name` when `mesh` cannot be judged by compute_quality: it has no quadrilateral (no
 /// cells, or triangles only: figures over no quads would read as a perfect or a zero mesh), or a node of a cell
