@@ -40,7 +40,9 @@ bool looks_like_degrees(const Region& region, const Box2& box) {
 }  // namespace
 
 int utm_epsg(double lon, double lat) {
-  const int zone = std::clamp(static_cast<int>(std::floor((lon + 180.0) / 6.0)) % 60 + 1, 1, 60);
+  // Clamped before the cast: a longitude far out of range (a broken file) must not overflow an int.
+  const double lon_clamped = std::isfinite(lon) ? std::clamp(lon, -180.0, 360.0) : 0.0;
+  const int zone = std::clamp(static_cast<int>(std::floor((lon_clamped + 180.0) / 6.0)) % 60 + 1, 1, 60);
   return (lat >= 0 ? 32600 : 32700) + zone;
 }
 
@@ -73,6 +75,16 @@ void project_region(Region& region, const std::string& target_crs, InputNotes& n
       notes.warnings.push_back(region.source + ": the CRS's unit is " + region.units + ", so --size is in " +
                                region.units + " (--crs EPSG:n reprojects to a metric CRS)");
     return;
+  }
+  if (source.IsGeographic()) {
+    // Geographic coordinates outside longitude [-180, 360] and latitude [-90, 90] are not positions on the earth.
+    const double to_degree = source.GetAngularUnits() / (M_PI / 180.0);
+    const Vec2 lo = to_degree * box.lo, hi = to_degree * box.hi;
+    const bool lon_ok = lo.x >= -180.0 && hi.x <= 360.0, lat_ok = lo.y >= -90.0 && hi.y <= 90.0;
+    if (!lon_ok || !lat_ok)
+      throw InputError(region.source + ": its CRS " + region.crs.substr(0, 80) + " is geographic, but its coordinates run from " +
+                       point_text(box.lo) + " to " + point_text(box.hi) + ", outside longitude -180..360 and latitude -90..90 " +
+                       "degrees (planar coordinates with a wrong CRS? ogr2ogr -a_srs sets the right one)");
   }
   OGRSpatialReference target;
   std::string target_name = target_crs;

@@ -203,6 +203,30 @@ TEST(GdalInput, DegreeLookingCoordinatesWithoutCrsAreWarnedAbout) {
   fs::remove_all(dir);
 }
 
+TEST(GdalInput, GeographicCrsWithCoordinatesOffTheEarthIsRefused) {
+  // A UTM region labelled EPSG:4326 (and a fuzzed file with x = 3e35): refused with the file and the range, not
+  // projected to some UTM zone (before: an int overflow picking the zone).
+  const fs::path dir = scratch("offearth");
+  for (const char* x : {"3e35", "284000"}) {
+    const fs::path file = dir / (std::string("off_") + x + ".geojson");
+    std::ofstream(file) << R"({"type": "FeatureCollection", "crs": {"type": "name", "properties": {"name": "EPSG:4326"}},
+      "features": [{"type": "Feature", "properties": {}, "geometry": {"type": "Polygon", "coordinates": [[[)"
+                        << x << R"(, 10], [)" << x << R"(, 11], [10, 11], [10, 10], [)" << x << R"(, 10]]]}}]})";
+    InputNotes notes;
+    try {
+      read_input(file, {}, notes);
+      ADD_FAILURE() << x << ": accepted";
+    } catch (const InputError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find(file.filename().string()), std::string::npos) << what;
+      EXPECT_NE(what.find("outside longitude"), std::string::npos) << what;
+    }
+  }
+  EXPECT_EQ(utm_epsg(3e35, 10.0), 32631);  // clamped to 360 degrees, which is 0
+  EXPECT_EQ(utm_epsg(-1e300, -5.0), 32701);
+  fs::remove_all(dir);
+}
+
 TEST(GdalInput, NearCoincidentPointsAreSnappedAndReported) {
   const fs::path dir = scratch("snap");
   const fs::path file = dir / "near.geojson";
