@@ -7,6 +7,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
+#include <set>
 #include <string>
 #include <unordered_map>
 #include <unordered_set>
@@ -391,7 +393,7 @@ QuadMesh split_patch(const PatchInput& in, const PatchOptions& options) {
 // on no curve, weighted by the quad's worst corner. No edge skips a given node, so a convoluted boundary cannot
 // make two curve edges cross. Pairs that would make a folded quad are kept at a tiny weight, so they are used
 // only where no perfect matching exists without them (the untangling sweeps and the mesh's checks judge them).
-QuadMesh matched_patch_once(const PatchInput& in, const PatchOptions& options, Vec2 offset) {
+QuadMesh matched_patch_once(const PatchInput& in, const PatchOptions& options, Vec2 offset, int repairs) {
   const double h = options.size;
   const auto loops = loop_polygons(in);
   SegmentGrid grid{h, {}};
@@ -414,31 +416,62 @@ QuadMesh matched_patch_once(const PatchInput& in, const PatchOptions& options, V
   break_ears(idx, tri, curve_edge);
   if (tri.triangles.size() % 2 != 0)
     throw MeshingError("patch: an odd number of triangles near " + at_text(in.nodes.front()) + " cannot pair into quads");
-  std::vector<std::array<int, 2>> edges;
-  std::vector<double> weights;
-  for (const auto& [key, owner] : edge_owners(tri)) {
-    if (owner[1] < 0 || curve_edge.count(key)) continue;
-    const std::int32_t t = std::min(owner[0], owner[1]), u = std::max(owner[0], owner[1]);
-    const auto q = quad_of_pair(tri, t, u);
-    const double sj = quad_min_sj(tri.vertices[q[0]], tri.vertices[q[1]], tri.vertices[q[2]], tri.vertices[q[3]]);
-    // Every pair counts (a perfect matching first), better quads more; a folded one only where nothing else
-    // pairs, left to the untangling sweeps and the mesh's checks.
-    edges.push_back({t, u});
-    weights.push_back(sj > 0.0 ? 1.0 + sj : 0.01);
-  }
-  // Edges in a fixed order (the hash map's is not), so the matching does not depend on it.
-  std::vector<std::size_t> order(edges.size());
-  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
-  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return edges[a] < edges[b]; });
   std::vector<std::array<int, 2>> sorted_edges;
-  std::vector<double> sorted_weights;
-  for (std::size_t i : order) {
-    sorted_edges.push_back(edges[i]);
-    sorted_weights.push_back(weights[i]);
-  }
   std::vector<int> matched;
-  if (!lemon_bridge::max_weight_perfect_matching(static_cast<int>(tri.triangles.size()), sorted_edges, sorted_weights, matched))
-    throw MeshingError("patch: the triangles near " + at_text(in.nodes.front()) + " cannot all pair into quads");
+  // A triangulation can hold a knot no perfect matching resolves (a narrow wedge between two curves, triangles
+  // hanging off one neighbour): the triangles a maximum matching leaves alone get a vertex at their centre, which
+  // re-triangulates the knot, and the matching is tried again.
+  for (int round = 0;; ++round) {
+    std::vector<std::array<int, 2>> edges;
+    std::vector<double> weights;
+    for (const auto& [key, owner] : edge_owners(tri)) {
+      if (owner[1] < 0 || curve_edge.count(key)) continue;
+      const std::int32_t t = std::min(owner[0], owner[1]), u = std::max(owner[0], owner[1]);
+      const auto q = quad_of_pair(tri, t, u);
+      const double sj = quad_min_sj(tri.vertices[q[0]], tri.vertices[q[1]], tri.vertices[q[2]], tri.vertices[q[3]]);
+      // Every pair counts (a perfect matching first), better quads more; a folded one only where nothing else
+      // pairs, left to the untangling sweeps and the mesh's checks.
+      edges.push_back({t, u});
+      weights.push_back(sj > 0.0 ? 1.0 + sj : 0.01);
+    }
+    // Edges in a fixed order (the hash map's is not), so the matching does not depend on it.
+    std::vector<std::size_t> order(edges.size());
+    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return edges[a] < edges[b]; });
+    sorted_edges.clear();
+    std::vector<double> sorted_weights;
+    for (std::size_t i : order) {
+      sorted_edges.push_back(edges[i]);
+      sorted_weights.push_back(weights[i]);
+    }
+    const int count = static_cast<int>(tri.triangles.size());
+    if (lemon_bridge::max_weight_perfect_matching(count, sorted_edges, sorted_weights, matched)) break;
+    const std::vector<int> alone = lemon_bridge::unmatched_nodes(count, sorted_edges);
+    if (round >= repairs || alone.empty())
+      throw MeshingError("patch: the triangles near " + at_text(in.nodes.front()) + " cannot all pair into quads (" +
+                         std::to_string(alone.size()) + " left alone" +
+                         (alone.empty() ? std::string()
+                                        : ", the first at " + at_text(tri.vertices[static_cast<std::size_t>(tri.triangles[static_cast<std::size_t>(alone.front())][0])])) +
+                         ")");
+    // The knot is wider than the triangles left alone: their neighbours get a centre vertex too, and the rings
+    // beyond them in later rounds.
+    std::set<int> knot(alone.begin(), alone.end());
+    for (int ring = 0; ring <= round / 2; ++ring) {
+      std::set<int> grown = knot;
+      for (const auto& e : sorted_edges)
+        if (knot.count(e[0]) || knot.count(e[1])) {
+          grown.insert(e[0]);
+          grown.insert(e[1]);
+        }
+      knot = std::move(grown);
+    }
+    std::vector<Vec2> centres;
+    for (int t : knot) {
+      const auto& v = tri.triangles[static_cast<std::size_t>(t)];
+      centres.push_back((1.0 / 3.0) * (tri.vertices[v[0]] + tri.vertices[v[1]] + tri.vertices[v[2]]));
+    }
+    tri.triangles = idx.triangles(centres, tri.vertices);
+  }
   QuadMesh out;
   out.nodes = tri.vertices;
   out.node_kind = in.kind;
@@ -454,15 +487,42 @@ QuadMesh matched_patch_once(const PatchInput& in, const PatchOptions& options, V
 // neighbour): the interior lattice is shifted and the matching tried again.
 QuadMesh matched_patch(const PatchInput& in, const PatchOptions& options) {
   const double h = options.size;
+  const int attempts = std::max(1, options.matching_attempts);
+  // Shifts along the golden-ratio sequence cover the lattice cell evenly.
+  auto offset = [&](int attempt) {
+    return Vec2{std::fmod(attempt * 0.618034, 1.0) * h, std::fmod(attempt * 0.381966, 1.0) * h * 0.866};
+  };
   for (int attempt = 0;; ++attempt) {
-    // Shifts along the golden-ratio sequence cover the lattice cell evenly.
-    const Vec2 offset{std::fmod(attempt * 0.618034, 1.0) * h, std::fmod(attempt * 0.381966, 1.0) * h * 0.866};
     try {
-      return matched_patch_once(in, options, offset);
+      return matched_patch_once(in, options, offset(attempt), 0);
     } catch (const MeshingError&) {
-      if (attempt + 1 >= options.matching_attempts) throw;
+      if (attempt + 1 >= attempts && options.matching_repairs <= 0) throw;
+      if (attempt + 1 >= attempts) break;
     }
   }
+  // No lattice gives a perfect matching: the same lattices with their knots repaired by centre vertices. Those
+  // pairs are the poorer ones, so the patch with the fewest folded quads left after untangling is kept.
+  std::optional<QuadMesh> best;
+  std::size_t best_folded = 0;
+  std::string last_error;
+  for (int attempt = 0; attempt < attempts; ++attempt) {
+    try {
+      QuadMesh m = matched_patch_once(in, options, offset(attempt), options.matching_repairs);
+      std::size_t folded = 0;
+      for (const auto& q : m.quads)
+        folded += quad_min_sj(m.nodes[static_cast<std::size_t>(q[0])], m.nodes[static_cast<std::size_t>(q[1])],
+                              m.nodes[static_cast<std::size_t>(q[2])], m.nodes[static_cast<std::size_t>(q[3])]) <= 0.0;
+      if (!best || folded < best_folded) {
+        best = std::move(m);
+        best_folded = folded;
+      }
+      if (best_folded == 0) break;
+    } catch (const MeshingError& e) {
+      last_error = e.what();
+    }
+  }
+  if (!best) throw MeshingError(last_error);
+  return std::move(*best);
 }
 
 }  // namespace

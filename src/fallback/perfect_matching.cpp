@@ -28,4 +28,18 @@ bool max_weight_perfect_matching(int nodes, const std::vector<std::array<int, 2>
   return true;
 }
 
+std::vector<int> unmatched_nodes(int nodes, const std::vector<std::array<int, 2>>& edges) {
+  lemon::ListGraph g;
+  std::vector<lemon::ListGraph::Node> node;
+  node.reserve(static_cast<std::size_t>(nodes));
+  for (int i = 0; i < nodes; ++i) node.push_back(g.addNode());
+  for (const auto& e : edges) g.addEdge(node[static_cast<std::size_t>(e[0])], node[static_cast<std::size_t>(e[1])]);
+  lemon::MaxMatching<lemon::ListGraph> matching(g);
+  matching.run();
+  std::vector<int> out;
+  for (int i = 0; i < nodes; ++i)
+    if (matching.mate(node[static_cast<std::size_t>(i)]) == lemon::INVALID) out.push_back(i);
+  return out;
+}
+
 }  // namespace polysquare::lemon_bridge

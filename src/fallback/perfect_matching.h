@@ -12,4 +12,7 @@ namespace polysquare::lemon_bridge {
 bool max_weight_perfect_matching(int nodes, const std::vector<std::array<int, 2>>& edges,
                                  const std::vector<double>& weights, std::vector<int>& matched);
 
+/// The nodes a maximum-cardinality matching leaves unmatched (empty when a perfect matching exists), ascending.
+std::vector<int> unmatched_nodes(int nodes, const std::vector<std::array<int, 2>>& edges);
+
 }  // namespace polysquare::lemon_bridge

@@ -10,6 +10,7 @@
 #include <set>
 #include <tuple>
 #include <unordered_map>
+#include <unordered_set>
 
 #include "polysquare/core/error.h"
 #include "polysquare/fallback/patch.h"
@@ -232,8 +233,77 @@ using SideKey = std::tuple<std::int32_t, std::int32_t, std::int32_t>;
 // The given nodes of the patch that repairs subregion `sub`: its boundary loops and inner feature curves cut
 // into pieces (at sharp vertices, curve meetings and the mapped neighbours' side ends), each with its element
 // count: a mapped neighbour's count on its interfaces, length / h elsewhere (even on inner features, which the
-// patch splits in pairs). Ring pieces absorb the parity: between two anchors (ends of inner features) a loop
-// must have an even count.
+// patch splits in pairs). Ring pieces absorb the parity: the split construction needs an even count between two
+// anchors (ends of inner features), the matching one only an even count in all.
+// The faces of a subregion's triangles cut by its inner feature chains (chains in no loop), and for every piece
+// given by its chain vertices the face on each side (equal for a loop piece or a dangling feature).
+template <class Piece, class EvenOut>
+void even_faces(const TriMesh& m, std::vector<std::vector<Piece>>& loops, std::vector<std::vector<Piece>>& inner,
+                EvenOut&& even_out) {
+  if (inner.empty()) return;
+  std::unordered_set<std::uint64_t> cut;
+  for (const auto& pieces : inner)
+    for (const Piece& pc : pieces)
+      for (std::size_t i = 0; i + 1 < pc.verts.size(); ++i) cut.insert(edge_key(pc.verts[i], pc.verts[i + 1]));
+  const auto owners = edge_owners(m);
+  std::vector<std::int32_t> face(m.triangles.size());
+  for (std::size_t t = 0; t < face.size(); ++t) face[t] = static_cast<std::int32_t>(t);
+  auto root = [&](std::int32_t t) {
+    while (face[static_cast<std::size_t>(t)] != t) t = face[static_cast<std::size_t>(t)] = face[static_cast<std::size_t>(face[static_cast<std::size_t>(t)])];
+    return t;
+  };
+  for (const auto& [key, own] : owners)
+    if (own[1] >= 0 && !cut.count(key)) {
+      const std::int32_t a = root(own[0]), b = root(own[1]);
+      if (a != b) face[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);
+    }
+  auto sides = [&](const Piece& pc) -> std::array<std::int32_t, 2> {
+    const auto it = owners.find(edge_key(pc.verts[0], pc.verts[1]));
+    if (it == owners.end()) return {-1, -1};
+    return {root(it->second[0]), it->second[1] >= 0 ? root(it->second[1]) : root(it->second[0])};
+  };
+  std::map<std::int32_t, long long> parity;
+  for (const auto& pieces : loops)
+    for (const Piece& pc : pieces)
+      if (const auto f = sides(pc); f[0] >= 0) parity[f[0]] += pc.n;
+  // Face graph: an edge per inner piece between two faces; a breadth-first tree from the first face.
+  std::map<std::int32_t, std::vector<std::pair<std::int32_t, Piece*>>> graph;
+  for (auto& pieces : inner)
+    for (Piece& pc : pieces) {
+      const auto f = sides(pc);
+      if (f[0] < 0) continue;
+      parity[f[0]] += pc.n;
+      parity[f[1]] += pc.n;
+      if (f[0] != f[1]) {
+        graph[f[0]].push_back({f[1], &pc});
+        graph[f[1]].push_back({f[0], &pc});
+      }
+    }
+  std::map<std::int32_t, std::pair<std::int32_t, Piece*>> parent;
+  std::vector<std::int32_t> order;
+  for (const auto& [start, unused] : parity) {
+    if (parent.count(start)) continue;
+    parent[start] = {-1, nullptr};
+    order.push_back(start);
+    for (std::size_t i = order.size() - 1; i < order.size(); ++i)
+      for (const auto& [g, pc] : graph[order[i]])
+        if (!parent.count(g)) {
+          parent[g] = {order[i], pc};
+          order.push_back(g);
+        }
+  }
+  // Leaves first: an odd face flips the piece to its parent, which passes the flip on.
+  for (std::size_t i = order.size(); i-- > 0;) {
+    const std::int32_t f = order[i];
+    const auto [up, pc] = parent[f];
+    if (parity[f] % 2 == 0 || !pc) continue;
+    const long long before = pc->n;
+    even_out(*pc);
+    parity[f] += pc->n - before;
+    parity[up] += pc->n - before;
+  }
+}
+
 PatchInput patch_input(const Subregion& sub, const std::vector<std::uint8_t>& is_patch,
                        const std::map<SideKey, long long>& side_count, double h, double corner_deg,
                        const std::string& where) {
@@ -342,6 +412,7 @@ PatchInput patch_input(const Subregion& sub, const std::vector<std::uint8_t>& is
   // Every run of fixed pieces (interfaces) with an odd count is evened out by the ring piece right after it
   // (or before it), so that ring pieces keep starting on coarse vertices. Anchors (ends of inner features) start
   // new runs: between two of them the count must be even.
+  auto even_out = [&](Piece& pc) { pc.n = pc.n + 1 <= std::llround(pc.length / h) + 1 || pc.n == 1 ? pc.n + 1 : pc.n - 1; };
   for (auto& pieces : loops) {
     const std::size_t np = pieces.size();
     std::size_t start = 0;  // a run may not wrap past a loop start that is an adjustable piece or an anchor
@@ -358,13 +429,9 @@ PatchInput patch_input(const Subregion& sub, const std::vector<std::uint8_t>& is
         std::size_t fix = np;
         if (pieces[k].adjustable) fix = k;  // at step == np, k is the loop's start again
         else if (pieces[before].adjustable) fix = before;
-        if (fix == np)
-          throw MeshingError(where + ": an odd number of interface elements between " +
-                             at_text(m.vertices[pieces[run_begin].verts.front()]) + " and " +
-                             at_text(m.vertices[pieces[(k + np - 1) % np].verts.back()]) +
-                             " and no boundary piece next to them to even it out");
-        Piece& pc = pieces[fix];
-        pc.n = pc.n + 1 <= std::llround(pc.length / h) + 1 || pc.n == 1 ? pc.n + 1 : pc.n - 1;
+        // No ring piece next to the run: the split construction cannot take it, the matching one can (it
+        // needs only an even count in all, below).
+        if (fix != np) even_out(pieces[fix]);
         run = 0;
       }
       if (step == np) break;
@@ -377,6 +444,81 @@ PatchInput patch_input(const Subregion& sub, const std::vector<std::uint8_t>& is
       }
     }
   }
+
+  // Chords between given nodes must not cross another curve's: where two curves run closer than the node
+  // spacing (a shallow crossing, a river beside a shoreline) the pieces there whose counts are free (inner
+  // features) take twice the nodes, at most three times.
+  auto pts_of = [&](const Piece& pc) {
+    std::vector<Vec2> pts;
+    for (std::int32_t v : pc.verts) pts.push_back(m.vertices[static_cast<std::size_t>(v)]);
+    return spread_along(pts, pts, pc.n);
+  };
+  for (int round = 0; round < 3; ++round) {
+    std::vector<Piece*> all;
+    std::vector<std::uint8_t> free_count;
+    for (auto& pieces : loops)
+      for (Piece& pc : pieces) { all.push_back(&pc); free_count.push_back(0); }
+    for (auto& pieces : inner)
+      for (Piece& pc : pieces) { all.push_back(&pc); free_count.push_back(1); }
+    struct Chord { Vec2 a, b; std::size_t piece; };
+    std::vector<Chord> chords;
+    for (std::size_t k = 0; k < all.size(); ++k) {
+      const std::vector<Vec2> q = pts_of(*all[k]);
+      for (std::size_t i = 0; i + 1 < q.size(); ++i) chords.push_back({q[i], q[i + 1], k});
+    }
+    std::unordered_map<std::uint64_t, std::vector<std::size_t>> cells;
+    auto cell_key = [&](long long i, long long j) { return (static_cast<std::uint64_t>(i) << 32) ^ static_cast<std::uint64_t>(j & 0xffffffffLL); };
+    std::vector<std::uint8_t> crossed(all.size(), 0);
+    for (std::size_t c = 0; c < chords.size(); ++c) {
+      const Chord& e = chords[c];
+      const long long i0 = static_cast<long long>(std::floor(std::min(e.a.x, e.b.x) / h)), i1 = static_cast<long long>(std::floor(std::max(e.a.x, e.b.x) / h));
+      const long long j0 = static_cast<long long>(std::floor(std::min(e.a.y, e.b.y) / h)), j1 = static_cast<long long>(std::floor(std::max(e.a.y, e.b.y) / h));
+      std::set<std::size_t> near;
+      for (long long i = i0; i <= i1; ++i)
+        for (long long j = j0; j <= j1; ++j) {
+          auto& cell = cells[cell_key(i, j)];
+          near.insert(cell.begin(), cell.end());
+          cell.push_back(c);
+        }
+      for (std::size_t d : near) {
+        const Chord& f = chords[d];
+        if (f.piece == e.piece) continue;
+        if (e.a == f.a || e.a == f.b || e.b == f.a || e.b == f.b) continue;
+        const double o1 = orient2(e.a, e.b, f.a), o2 = orient2(e.a, e.b, f.b);
+        const double o3 = orient2(f.a, f.b, e.a), o4 = orient2(f.a, f.b, e.b);
+        if (((o1 > 0) != (o2 > 0)) && ((o3 > 0) != (o4 > 0)) && o1 != 0 && o2 != 0 && o3 != 0 && o4 != 0)
+          crossed[e.piece] = crossed[f.piece] = 1;
+      }
+    }
+    bool refined = false;
+    for (std::size_t k = 0; k < all.size(); ++k)
+      if (crossed[k] && free_count[k]) {
+        all[k]->n *= 2;
+        refined = true;
+      }
+    if (!refined) break;
+  }
+
+  // A quad mesh has an even number of boundary edges in all (every quad has four edges, every inner edge is
+  // in two quads); the first ring piece evens it out, and without one the quantization should have.
+  long long total = 0;
+  Piece* first_adjustable = nullptr;
+  for (auto& pieces : loops)
+    for (Piece& pc : pieces) {
+      total += pc.n;
+      if (pc.adjustable && !first_adjustable) first_adjustable = &pc;
+    }
+  if (total % 2 != 0) {
+    if (!first_adjustable)
+      throw MeshingError(where + ": an odd number of interface elements (" + std::to_string(total) +
+                         ") all round it, from " + at_text(m.vertices[loops.front().front().verts.front()]) +
+                         ", and no boundary piece to even it out");
+    even_out(*first_adjustable);
+  }
+  // Inner features cut the patch into faces, and the matching construction pairs triangles within a face: each
+  // face needs an even count along its sides too. An inner piece between two faces flips both when its count
+  // changes by one, so odd faces are paired along a spanning tree of the faces (the total is even, so they pair).
+  even_faces(m, loops, inner, even_out);
 
   PatchInput in;
   std::unordered_map<std::int32_t, std::int32_t> node_of;
@@ -984,7 +1126,13 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
       PatchOptions po;
       po.size = options.size;
       po.method = method;
-      meshes[p] = mesh_patch(in, po);
+      try {
+        meshes[p] = mesh_patch(in, po);
+      } catch (const MeshingError&) {
+        if (method == PatchMethod::automatic) throw;
+        po.method = PatchMethod::automatic;  // the method asked for is a preference: the other may still work
+        meshes[p] = mesh_patch(in, po);
+      }
       side_nodes[p] = in.nodes.size();
     };
     for_each_subregion(n, [&](std::size_t p) {

@@ -3,6 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
+#include <map>
+#include <set>
 #include <string>
 
 #include "polysquare/core/error.h"
@@ -68,6 +71,87 @@ TEST(Patch, RefusesAnOddBoundary) {
   PatchOptions o;
   o.size = 2.0;
   EXPECT_THROW(mesh_patch(in, o), MeshingError);
+}
+
+namespace {
+// A patch input as written by a delta_box run (400 m, 128 subregions) whose repairs failed: h, the nodes
+// (x y kind), the curves (closed loop count, node indices, role tag per edge), the isolated points.
+PatchInput read_patch(const std::string& name, double& h) {
+  std::ifstream f(std::string(POLYSQUARE_DATA_DIR) + "/../tests/data/patches/" + name);
+  PatchInput in;
+  std::size_t n = 0;
+  f >> h >> n;
+  for (std::size_t i = 0; i < n; ++i) {
+    Vec2 p;
+    int kind = 0;
+    f >> p.x >> p.y >> kind;
+    in.nodes.push_back(p);
+    in.kind.push_back(static_cast<NodeKind>(kind));
+  }
+  std::size_t curves = 0;
+  f >> curves;
+  for (std::size_t c = 0; c < curves; ++c) {
+    PatchCurve cv;
+    int closed = 0, loop = 0;
+    std::size_t m = 0;
+    f >> closed >> loop >> m;
+    cv.closed = closed != 0;
+    cv.loop = loop != 0;
+    cv.nodes.resize(m);
+    for (auto& v : cv.nodes) f >> v;
+    for (std::size_t e = 0; e < (cv.closed ? m : m - 1); ++e) {
+      int role = 0, tag = 0;
+      f >> role >> tag;
+      cv.role.push_back(static_cast<PatchEdgeRole>(role));
+      cv.tag.push_back(tag);
+    }
+    in.curves.push_back(std::move(cv));
+  }
+  std::size_t points = 0;
+  f >> points;
+  in.points.resize(points);
+  for (auto& v : in.points) f >> v;
+  EXPECT_TRUE(f.good()) << name;
+  return in;
+}
+}  // namespace
+
+TEST(Patch, MatchingUnknotsTheTrianglesNoPerfectMatchingPairs) {
+  // Two delta_box patches (shorelines and rivers inside, wedges between them narrower than h) whose first
+  // triangulations have no perfect matching; the knots get centre vertices until one exists.
+  for (const char* name : {"delta_box_400m_subregion45.txt", "delta_box_400m_subregion45_grown.txt"}) {
+    double h = 0;
+    const PatchInput in = read_patch(name, h);
+    PatchOptions o;
+    o.size = h;
+    o.method = PatchMethod::matching;
+    o.matching_repairs = 0;
+    EXPECT_THROW(mesh_patch(in, o), MeshingError) << name << ": a perfect matching at once; the case is moot";
+    o.matching_repairs = PatchOptions{}.matching_repairs;
+    const QuadMesh m = mesh_patch(in, o);
+    for (std::size_t v = 0; v < in.nodes.size(); ++v) EXPECT_EQ(m.nodes[v], in.nodes[v]) << name;
+    // Its border is exactly the given loops: every loop edge is in one quad, every other edge in two.
+    std::map<std::pair<std::int32_t, std::int32_t>, int> uses;
+    for (const auto& q : m.quads)
+      for (int k = 0; k < 4; ++k) uses[std::minmax(q[k], q[(k + 1) % 4])]++;
+    std::set<std::pair<std::int32_t, std::int32_t>> border, loop_edges;
+    for (const auto& [e, count] : uses)
+      if (count == 1) border.insert(e);
+    for (const PatchCurve& c : in.curves)
+      for (std::size_t i = 0; c.loop && i < c.nodes.size(); ++i)
+        loop_edges.insert(std::minmax(c.nodes[i], c.nodes[(i + 1) % c.nodes.size()]));
+    EXPECT_EQ(border, loop_edges) << name;
+    // And it covers the patch once: the signed quad areas add up to the area the loops enclose (folds left
+    // to the mesh's smoothing would still add up; overlaps or gaps would not).
+    double quads_area = 0, loops_area = 0;
+    for (const auto& q : m.quads)
+      quads_area += 0.5 * cross(m.nodes[q[2]] - m.nodes[q[0]], m.nodes[q[3]] - m.nodes[q[1]]);
+    for (const PatchCurve& c : in.curves)
+      for (std::size_t i = 0; c.loop && i < c.nodes.size(); ++i)
+        loops_area += 0.5 * cross(in.nodes[c.nodes[i]], in.nodes[c.nodes[(i + 1) % c.nodes.size()]]);
+    EXPECT_NEAR(quads_area, loops_area, 1e-9 * std::abs(loops_area)) << name;
+    EXPECT_GT(m.quads.size(), loop_edges.size() / 4) << name;
+  }
 }
 
 TEST(LocalRepair, ASubregionMadeToFailIsPatchedAndOnlyIt) {

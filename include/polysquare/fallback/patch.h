@@ -47,6 +47,7 @@ enum class PatchMethod : std::uint8_t {
 struct PatchOptions {
   PatchMethod method = PatchMethod::automatic;
   int matching_attempts = 8;   ///< matching: interior lattices (shifted) tried before giving up
+  int matching_repairs = 8;    ///< matching: times the triangles left unmatched get a centre vertex, per lattice
   double size = 1.0;           ///< target quad edge length h; interior triangle vertices are 2 h apart
   double pair_min_sj = 0.3;    ///< triangle pairs merged first when their quad's worst corner reaches this
   bool refuse_folded = false;  ///< throw when a quad is still folded after the sweeps (else the mesh's smoothing
