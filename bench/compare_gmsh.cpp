@@ -1,4 +1,4 @@
-// Side-by-side with Gmsh 4.8.4 (Frontal-Delaunay + Blossom, the anchors.md baseline) on the bundled cases, in
+// Side-by-side with Gmsh 4.8.4 (Frontal-Delaunay + Blossom, the Gmsh baseline of data/cases/PROVENANCE.md) on the bundled cases, in
 // the same run: wall time (median of --repeat runs), quads, SJ min, eta min, skew max, edge ratio max, interior
 // singularities, and ratios. Usage: compare_gmsh [--repeat N] [case:size ...]
 #include <algorithm>

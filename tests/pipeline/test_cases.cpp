@@ -1,5 +1,5 @@
 // The invariants of design.md on the bundled cases this slice supports (one poly-square per part), and the
-// quality figures the slice must reach against Gmsh 4.8.4 (anchors.md).
+// quality figures the slice must reach against Gmsh 4.8.4 (data/cases/PROVENANCE.md).
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -21,8 +21,8 @@ namespace {
 struct Case {
   const char* name;
   double size;
-  double sj_floor;  // the figure to reach (Gmsh's SJ min from anchors.md where we meet it; see README otherwise)
-  std::size_t gmsh_interior_singularities;  // anchors.md; the bound is a quarter of it
+  double sj_floor;  // the figure to reach (Gmsh's SJ min from data/cases/PROVENANCE.md where we meet it; see README otherwise)
+  std::size_t gmsh_interior_singularities;  // data/cases/PROVENANCE.md; the bound is a quarter of it
 };
 
 Region load(const std::string& name) { return read_region(std::string(POLYSQUARE_DATA_DIR) + "/cases/" + name + ".geojson"); }
@@ -89,7 +89,7 @@ TEST_P(SlicedCase, HoldsEveryInvariant) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Cases, SlicedCase,
-                         // Gmsh 4.8.4 SJ min and interior singularities from anchors.md (rect_feature has no Gmsh
+                         // Gmsh 4.8.4 SJ min and interior singularities from data/cases/PROVENANCE.md (rect_feature has no Gmsh
                          // figure: dam_channel's).
                          ::testing::Values(Case{"letter_I", 2.0, 0.99, 58}, Case{"pentagon", 3.0, 0.70, 100},
                                            Case{"letter_M", 2.0, 0.71, 177}, Case{"square_feature", 3.0, 0.34, 219},
