@@ -13,6 +13,7 @@
 #include <unordered_set>
 
 #include "polysquare/core/error.h"
+#include "polysquare/core/union_find.h"
 #include "polysquare/fallback/patch.h"
 #include "polysquare/map/extract.h"
 #include "polysquare/map/layout.h"
@@ -230,13 +231,9 @@ Subregion cut_subregion(const TriMesh& tri, const std::vector<std::int32_t>& tp,
 // same junctions differ there).
 using SideKey = std::tuple<std::int32_t, std::int32_t, std::int32_t>;
 
-// The given nodes of the patch that repairs subregion `sub`: its boundary loops and inner feature curves cut
-// into pieces (at sharp vertices, curve meetings and the mapped neighbours' side ends), each with its element
-// count: a mapped neighbour's count on its interfaces, length / h elsewhere (even on inner features, which the
-// patch splits in pairs). Ring pieces absorb the parity: the split construction needs an even count between two
-// anchors (ends of inner features), the matching one only an even count in all.
-// The faces of a subregion's triangles cut by its inner feature chains (chains in no loop), and for every piece
-// given by its chain vertices the face on each side (equal for a loop piece or a dangling feature).
+// Makes every face even: the faces are the subregion's triangles cut by its inner feature pieces, and a face's
+// count is the sum of the pieces along it (an inner piece between two faces counts in both). An odd face moves
+// the count of the inner piece to its parent in a breadth-first tree of the faces, which passes the flip on.
 template <class Piece, class EvenOut>
 void even_faces(const TriMesh& m, std::vector<std::vector<Piece>>& loops, std::vector<std::vector<Piece>>& inner,
                 EvenOut&& even_out) {
@@ -246,17 +243,10 @@ void even_faces(const TriMesh& m, std::vector<std::vector<Piece>>& loops, std::v
     for (const Piece& pc : pieces)
       for (std::size_t i = 0; i + 1 < pc.verts.size(); ++i) cut.insert(edge_key(pc.verts[i], pc.verts[i + 1]));
   const auto owners = edge_owners(m);
-  std::vector<std::int32_t> face(m.triangles.size());
-  for (std::size_t t = 0; t < face.size(); ++t) face[t] = static_cast<std::int32_t>(t);
-  auto root = [&](std::int32_t t) {
-    while (face[static_cast<std::size_t>(t)] != t) t = face[static_cast<std::size_t>(t)] = face[static_cast<std::size_t>(face[static_cast<std::size_t>(t)])];
-    return t;
-  };
+  UnionFind face(static_cast<int>(m.triangles.size()));
+  auto root = [&](std::int32_t t) { return face.find(t); };
   for (const auto& [key, own] : owners)
-    if (own[1] >= 0 && !cut.count(key)) {
-      const std::int32_t a = root(own[0]), b = root(own[1]);
-      if (a != b) face[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);
-    }
+    if (own[1] >= 0 && !cut.count(key)) face.unite(own[0], own[1]);
   auto sides = [&](const Piece& pc) -> std::array<std::int32_t, 2> {
     const auto it = owners.find(edge_key(pc.verts[0], pc.verts[1]));
     if (it == owners.end()) return {-1, -1};
@@ -304,6 +294,11 @@ void even_faces(const TriMesh& m, std::vector<std::vector<Piece>>& loops, std::v
   }
 }
 
+// The given nodes of the patch that repairs subregion `sub`: its boundary loops and inner feature curves cut
+// into pieces (at sharp vertices, curve meetings and the mapped neighbours' side ends), each with its element
+// count: a mapped neighbour's count on its interfaces, length / h elsewhere (even on inner features, which the
+// patch splits in pairs). Ring pieces absorb the parity: the split construction needs an even count between two
+// anchors (ends of inner features), the matching one only an even count in all.
 PatchInput patch_input(const Subregion& sub, const std::vector<std::uint8_t>& is_patch,
                        const std::map<SideKey, long long>& side_count, double h, double corner_deg,
                        const std::string& where) {
@@ -483,11 +478,7 @@ PatchInput patch_input(const Subregion& sub, const std::vector<std::uint8_t>& is
       for (std::size_t d : near) {
         const Chord& f = chords[d];
         if (f.piece == e.piece) continue;
-        if (e.a == f.a || e.a == f.b || e.b == f.a || e.b == f.b) continue;
-        const double o1 = orient2(e.a, e.b, f.a), o2 = orient2(e.a, e.b, f.b);
-        const double o3 = orient2(f.a, f.b, e.a), o4 = orient2(f.a, f.b, e.b);
-        if (((o1 > 0) != (o2 > 0)) && ((o3 > 0) != (o4 > 0)) && o1 != 0 && o2 != 0 && o3 != 0 && o4 != 0)
-          crossed[e.piece] = crossed[f.piece] = 1;
+        if (segments_cross(e.a, e.b, f.a, f.b)) crossed[e.piece] = crossed[f.piece] = 1;
       }
     }
     bool refined = false;

@@ -8,16 +8,10 @@
 
 #include "map/integer_program.h"
 #include "polysquare/core/error.h"
+#include "polysquare/core/union_find.h"
 
 namespace polysquare {
 namespace {
-
-struct UnionFind {
-  std::vector<int> parent;
-  explicit UnionFind(int n) : parent(static_cast<std::size_t>(n)) { std::iota(parent.begin(), parent.end(), 0); }
-  int find(int a) { return parent[a] == a ? a : parent[a] = find(parent[a]); }
-  void unite(int a, int b) { parent[find(a)] = find(b); }
-};
 
 // Break points that share a coordinate along `axis` (joined by sides of the other axis) form one class.
 std::vector<int> axis_classes(const Layout& layout, int axis, int& ncls) {

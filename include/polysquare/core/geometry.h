@@ -67,6 +67,12 @@ inline Vec2 lerp(Vec2 a, Vec2 b, double t) { return {a.x + t * (b.x - a.x), a.y 
 /// Twice the signed area of triangle abc (positive when counter-clockwise).
 inline double orient2(Vec2 a, Vec2 b, Vec2 c) { return cross(b - a, c - a); }
 
+/// Whether segments [a, b] and [c, d] cross at a point inside both (touching or collinear is no crossing).
+inline bool segments_cross(Vec2 a, Vec2 b, Vec2 c, Vec2 d) {
+  const double o1 = orient2(a, b, c), o2 = orient2(a, b, d), o3 = orient2(c, d, a), o4 = orient2(c, d, b);
+  return ((o1 > 0 && o2 < 0) || (o1 < 0 && o2 > 0)) && ((o3 > 0 && o4 < 0) || (o3 < 0 && o4 > 0));
+}
+
 /// Distance from p to the segment [a, b].
 inline double point_segment_distance(Vec2 p, Vec2 a, Vec2 b) {
   const Vec2 d = b - a;
