@@ -20,11 +20,6 @@ Region square_with(std::vector<FeatureCurve> features) {
 }
 bool has_point(const std::vector<Vec2>& pts, Vec2 p) { return std::find(pts.begin(), pts.end(), p) != pts.end(); }
 
-// Brute force: do two segments cross or touch anywhere but at the listed allowed points?
-bool segments_cross(Vec2 a, Vec2 b, Vec2 c, Vec2 d) {
-  const double d1 = orient2(a, b, c), d2 = orient2(a, b, d), d3 = orient2(c, d, a), d4 = orient2(c, d, b);
-  return ((d1 > 0 && d2 < 0) || (d1 < 0 && d2 > 0)) && ((d3 > 0 && d4 < 0) || (d3 < 0 && d4 > 0));
-}
 }  // namespace
 
 TEST(SplitFeatures, CrossingCurvesBecomeFourPiecesSharingTheCrossing) {
