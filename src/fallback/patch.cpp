@@ -1,4 +1,5 @@
 #include "polysquare/fallback/patch.h"
+#include "polysquare/smooth/untangle.h"
 
 #include <CGAL/Constrained_Delaunay_triangulation_2.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
@@ -114,29 +115,34 @@ void tag_curve_edges(const PatchInput& in, QuadMesh& out) {
   }
 }
 
-// A given node in one quad only keeps the whole angle of the patch there as that quad's corner: on a straight
-// stretch that corner is flat (scaled Jacobian 0) whatever the smoothing does, since the given nodes are fixed.
-// Such a quad is replaced by an inner quad and four quads around it (its edges, shared with its neighbours, stay
-// as they are), so the node gets two corners. Interior angles above options.inset_angle_deg are split.
-void inset_flat_single_corners(const PatchInput& in, const PatchOptions& options, QuadMesh& out) {
+// The angle of quad q at its corner k, counter-clockwise from the next node's edge to the previous one's, in
+// [0, 2 pi): above pi the corner is reflex (the quad folded there).
+double corner_angle(const QuadMesh& out, const std::array<std::int32_t, 4>& q, int k) {
+  const Vec2 p = out.nodes[static_cast<std::size_t>(q[k])], next = out.nodes[static_cast<std::size_t>(q[(k + 1) % 4])] - p,
+             prev = out.nodes[static_cast<std::size_t>(q[(k + 3) % 4])] - p;
+  const double angle = std::atan2(cross(next, prev), dot(next, prev));
+  return angle < 0 ? angle + 2.0 * std::acos(-1.0) : angle;
+}
+
+// Replaces each quad with a corner at a given node above `limit` (radians) by an inner quad and four quads around
+// it (its edges, shared with its neighbours, stay as they are), so that the node gets two corners there. With
+// `single_only`, only corners of nodes in one quad count. Returns the number of quads replaced.
+std::size_t inset_wide_given_corners(const PatchInput& in, double limit, bool single_only, QuadMesh& out) {
   std::vector<int> quads_at(out.nodes.size(), 0);
   for (const auto& q : out.quads)
     for (std::int32_t v : q) quads_at[static_cast<std::size_t>(v)]++;
-  const double limit = options.inset_angle_deg * std::acos(-1.0) / 180.0;
   const std::size_t nq = out.quads.size();
+  std::size_t replaced = 0;
   for (std::size_t i = 0; i < nq; ++i) {
     const auto q = out.quads[i];
-    bool flat = false;
-    for (int k = 0; k < 4 && !flat; ++k) {
+    bool wide = false;
+    for (int k = 0; k < 4 && !wide; ++k) {
       const auto v = static_cast<std::size_t>(q[k]);
-      if (v >= in.nodes.size() || quads_at[v] != 1) continue;
-      const Vec2 p = out.nodes[v], next = out.nodes[static_cast<std::size_t>(q[(k + 1) % 4])] - p,
-                 prev = out.nodes[static_cast<std::size_t>(q[(k + 3) % 4])] - p;
-      double angle = std::atan2(cross(next, prev), dot(next, prev));  // counter-clockwise from next to prev
-      if (angle < 0) angle += 2.0 * std::acos(-1.0);
-      flat = angle > limit;
+      if (v >= in.nodes.size() || (single_only && quads_at[v] != 1)) continue;
+      wide = corner_angle(out, q, k) > limit;
     }
-    if (!flat) continue;
+    if (!wide) continue;
+    ++replaced;
     Vec2 centre{};
     for (std::int32_t v : q) centre = centre + 0.25 * out.nodes[static_cast<std::size_t>(v)];
     std::array<std::int32_t, 4> inner{};
@@ -148,13 +154,70 @@ void inset_flat_single_corners(const PatchInput& in, const PatchOptions& options
     out.quads[i] = inner;
     for (int k = 0; k < 4; ++k) out.quads.push_back({q[k], q[(k + 1) % 4], inner[(k + 1) % 4], inner[k]});
   }
+  return replaced;
 }
 
-// Plain Laplacian sweeps over the nodes after the given ones (a triangulation that hugs a convoluted boundary
-// can give quads that start folded; averaging untangles them before the guarded smoothing of the whole mesh),
-// then the check that every given node is used and, with refuse_folded, that no quad is folded.
+// A free node in exactly two quads that share both its edges (a doublet: its two corners add up to a full turn,
+// so one of them is reflex wherever it moves) is removed and its two quads merged into one; merged quads can
+// leave new doublets, so this repeats. Free nodes left in no quad are dropped (the given ones keep their indices).
+void collapse_doublets(const PatchInput& in, QuadMesh& out) {
+  for (bool changed = true; changed;) {
+    changed = false;
+    std::vector<std::vector<std::int32_t>> quads_at(out.nodes.size());
+    for (std::size_t i = 0; i < out.quads.size(); ++i)
+      for (std::int32_t v : out.quads[i]) quads_at[static_cast<std::size_t>(v)].push_back(static_cast<std::int32_t>(i));
+    std::vector<std::uint8_t> gone(out.quads.size(), 0);
+    for (std::size_t v = in.nodes.size(); v < out.nodes.size(); ++v) {
+      if (quads_at[v].size() != 2) continue;
+      const auto ia = static_cast<std::size_t>(quads_at[v][0]), ib = static_cast<std::size_t>(quads_at[v][1]);
+      if (gone[ia] || gone[ib]) continue;
+      auto rotate_to = [&](std::array<std::int32_t, 4> q) {  // q with v first
+        while (static_cast<std::size_t>(q[0]) != v) std::rotate(q.begin(), q.begin() + 1, q.end());
+        return q;
+      };
+      const auto a = rotate_to(out.quads[ia]), b = rotate_to(out.quads[ib]);
+      // a = (v, p, x, r), b = (v, r, y, p): the two quads meet along v-p and v-r.
+      if (a[1] != b[3] || a[3] != b[1] || a[2] == b[2]) continue;
+      out.quads[ia] = {a[1], a[2], a[3], b[2]};
+      gone[ib] = 1;
+      changed = true;
+    }
+    if (!changed) break;
+    std::size_t kept = 0;
+    for (std::size_t i = 0; i < out.quads.size(); ++i)
+      if (!gone[i]) out.quads[kept++] = out.quads[i];
+    out.quads.resize(kept);
+  }
+  std::vector<std::uint8_t> used(out.nodes.size(), 0);
+  for (const auto& q : out.quads)
+    for (std::int32_t v : q) used[static_cast<std::size_t>(v)] = 1;
+  std::vector<std::int32_t> index(out.nodes.size(), -1);
+  std::size_t kept = 0;
+  for (std::size_t v = 0; v < out.nodes.size(); ++v) {
+    if (v >= in.nodes.size() && !used[v]) continue;
+    index[v] = static_cast<std::int32_t>(kept);
+    out.nodes[kept] = out.nodes[v];
+    out.node_kind[kept] = out.node_kind[v];
+    ++kept;
+  }
+  if (kept == out.nodes.size()) return;
+  out.nodes.resize(kept);
+  out.node_kind.resize(kept);
+  for (auto& q : out.quads)
+    for (std::int32_t& v : q) v = index[static_cast<std::size_t>(v)];
+}
+
+// A given node in one quad only keeps the whole angle of the patch there as that quad's corner: on a straight
+// stretch that corner is flat (scaled Jacobian 0) whatever the smoothing does, since the given nodes are fixed,
+// so such corners above options.inset_angle_deg are split first. Then plain Laplacian sweeps over the nodes after
+// the given ones (a triangulation that hugs a convoluted boundary can give quads that start folded) and the
+// untangler; a quad still flat or reflex at a given node (no move of the free nodes can open it: two triangles of given
+// nodes paired into a non-convex quad) is split the same way and untangled again. Last, the check that every
+// given node is used and, with refuse_folded, that no quad is folded.
 void finish_patch(const PatchInput& in, const PatchOptions& options, QuadMesh& out) {
-  inset_flat_single_corners(in, options, out);
+  const double pi = std::acos(-1.0);
+  collapse_doublets(in, out);
+  inset_wide_given_corners(in, options.inset_angle_deg * pi / 180.0, true, out);
   out.quad_part.assign(out.quads.size(), 0);
   std::vector<std::vector<std::int32_t>> adj(out.nodes.size());
   for (const auto& q : out.quads)
@@ -171,6 +234,16 @@ void finish_patch(const PatchInput& in, const PatchOptions& options, QuadMesh& o
       for (std::int32_t u : adj[v]) c = c + out.nodes[static_cast<std::size_t>(u)];
       out.nodes[v] = (1.0 / static_cast<double>(adj[v].size())) * c;
     }
+  auto free_nodes = [&] {
+    std::vector<std::uint8_t> movable(out.nodes.size(), 0);
+    std::fill(movable.begin() + static_cast<std::ptrdiff_t>(in.nodes.size()), movable.end(), std::uint8_t{1});
+    return movable;
+  };
+  UntangleStats untangled = untangle_quads(out, free_nodes(), options.untangle);
+  if (untangled.folded_after > 0 && inset_wide_given_corners(in, pi * 179.0 / 180.0, false, out) > 0) {
+    out.quad_part.assign(out.quads.size(), 0);
+    untangle_quads(out, free_nodes(), options.untangle);
+  }
   if (!options.refuse_folded) return;
   for (const auto& q : out.quads) {
     const Vec2 a = out.nodes[static_cast<std::size_t>(q[0])], b = out.nodes[static_cast<std::size_t>(q[1])];
@@ -178,6 +251,14 @@ void finish_patch(const PatchInput& in, const PatchOptions& options, QuadMesh& o
     if (quad_min_sj(a, b, c, d) <= 0.0)
       throw MeshingError("patch: a quad at " + at_text(a) + " stays folded (the boundary is too convoluted there)");
   }
+}
+
+std::size_t folded_quads(const QuadMesh& m) {
+  std::size_t folded = 0;
+  for (const auto& q : m.quads)
+    folded += quad_min_sj(m.nodes[static_cast<std::size_t>(q[0])], m.nodes[static_cast<std::size_t>(q[1])],
+                          m.nodes[static_cast<std::size_t>(q[2])], m.nodes[static_cast<std::size_t>(q[3])]) <= 0.0;
+  return folded;
 }
 
 // A CDT whose vertices carry the index of their node; inserting a node where another one is already is an error.
@@ -508,10 +589,7 @@ QuadMesh matched_patch(const PatchInput& in, const PatchOptions& options) {
   for (int attempt = 0; attempt < attempts; ++attempt) {
     try {
       QuadMesh m = matched_patch_once(in, options, offset(attempt), options.matching_repairs);
-      std::size_t folded = 0;
-      for (const auto& q : m.quads)
-        folded += quad_min_sj(m.nodes[static_cast<std::size_t>(q[0])], m.nodes[static_cast<std::size_t>(q[1])],
-                              m.nodes[static_cast<std::size_t>(q[2])], m.nodes[static_cast<std::size_t>(q[3])]) <= 0.0;
+      const std::size_t folded = folded_quads(m);
       if (!best || folded < best_folded) {
         best = std::move(m);
         best_folded = folded;
@@ -543,8 +621,9 @@ QuadMesh mesh_patch(const PatchInput& in, const PatchOptions& options) {
   // follow the boundary, the matching construction works on the given edges themselves.
   if (options.method == PatchMethod::split) return split_patch(in, options);
   if (options.method == PatchMethod::matching) return matched_patch(in, options);
+  QuadMesh split;
   try {
-    return split_patch(in, options);
+    split = split_patch(in, options);
   } catch (const MeshingError& split_error) {
     try {
       return matched_patch(in, options);
@@ -552,6 +631,16 @@ QuadMesh mesh_patch(const PatchInput& in, const PatchOptions& options) {
       throw MeshingError(std::string(split_error.what()) + "; " + e.what());
     }
   }
+  // A split patch with a quad left folded (a sliver of the coarse triangulation along a nearly straight run of
+  // given nodes) gives way to a matched one that has fewer.
+  const std::size_t split_folded = folded_quads(split);
+  if (split_folded == 0) return split;
+  try {
+    QuadMesh matched = matched_patch(in, options);
+    if (folded_quads(matched) < split_folded) return matched;
+  } catch (const MeshingError&) {
+  }
+  return split;
 }
 
 }  // namespace polysquare

@@ -164,6 +164,9 @@ SmoothStats smooth_quads(QuadMesh& mesh, const SmoothOptions& options, const Reg
   SmoothStats stats;
   std::vector<std::uint8_t> interior(nn, 0);
   for (std::size_t v = 0; v < nn; ++v) interior[v] = is_interior(v);
+  // The guarded moves below never make a node's worst quad worse, so a folded quad stays folded unless it is
+  // untangled first.
+  stats.untangle = untangle_quads(mesh, interior, options.untangle);
   const auto interior_classes = colour_classes(mesh, inc, interior);
   // Per-node results of a sweep, reduced in node order afterwards so that the stopping test is deterministic.
   std::vector<double> moved_by(nn, 0.0), edge_of(nn, 0.0);

@@ -1,1 +1,1 @@
-list(APPEND MODULE_SOURCES smooth.cpp)
+list(APPEND MODULE_SOURCES smooth.cpp untangle.cpp)

@@ -154,6 +154,29 @@ TEST(Patch, MatchingUnknotsTheTrianglesNoPerfectMatchingPairs) {
   }
 }
 
+TEST(Patch, NoQuadLeftFoldedOnTheDeltaBoxPatches) {
+  // The same patches, by either construction: slivers along nearly straight runs of given nodes, doublets (a
+  // free node in two quads) and quads of given nodes paired into a non-convex quad are all mended inside the
+  // patch, so no quad is left folded for the mesh's smoothing.
+  for (const char* name : {"delta_box_400m_subregion45.txt", "delta_box_400m_subregion45_grown.txt"})
+    for (PatchMethod method : {PatchMethod::automatic, PatchMethod::matching}) {
+      double h = 0;
+      const PatchInput in = read_patch(name, h);
+      PatchOptions o;
+      o.size = h;
+      o.method = method;
+      const QuadMesh m = mesh_patch(in, o);
+      std::vector<int> quads_at(m.nodes.size(), 0);
+      for (const auto& q : m.quads) {
+        EXPECT_GT(quad_min_sj(m.nodes[q[0]], m.nodes[q[1]], m.nodes[q[2]], m.nodes[q[3]]), 0.0)
+            << name << " method " << int(method) << ": quad at " << at_text(m.nodes[q[0]]);
+        for (auto v : q) quads_at[static_cast<std::size_t>(v)]++;
+      }
+      for (std::size_t v = in.nodes.size(); v < m.nodes.size(); ++v)
+        EXPECT_GE(quads_at[v], 3) << name << ": free node at " << at_text(m.nodes[v]);
+    }
+}
+
 TEST(LocalRepair, ASubregionMadeToFailIsPatchedAndOnlyIt) {
   // letter_M in 4 subregions, subregion 1 forced to a patch: the other three stay mapped, the patch welds to
   // their interface nodes, and the mesh holds every invariant with the boundary exactly on the input.

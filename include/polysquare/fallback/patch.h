@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "polysquare/core/quad_mesh.h"
+#include "polysquare/smooth/untangle.h"
 
 namespace polysquare {
 
@@ -54,7 +55,8 @@ struct PatchOptions {
                                ///< and invariant check decide)
   double inset_angle_deg = 150.0;  ///< a given node in one quad whose angle there exceeds this gets two quads
                                    ///< (that quad is replaced by an inner quad and four around it)
-  int untangle_sweeps = 30;    ///< plain Laplacian sweeps over the interior nodes before the quads are checked
+  int untangle_sweeps = 30;    ///< plain Laplacian sweeps over the interior nodes, before the untangler
+  UntangleOptions untangle;    ///< then the untangler (untangle.h) on the interior nodes
 };
 
 /// The all-quad patch. Its first in.nodes.size() nodes are the given nodes, in order (all of them used), then

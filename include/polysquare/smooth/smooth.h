@@ -4,10 +4,12 @@
 
 #include "polysquare/core/quad_mesh.h"
 #include "polysquare/core/region.h"
+#include "polysquare/smooth/untangle.h"
 
 namespace polysquare {
 
 struct SmoothOptions {
+  UntangleOptions untangle;      ///< first, the interior nodes of folded quads are untangled (untangle.h)
   int iterations = 10;           ///< Gauss-Seidel sweeps of guarded Laplacian smoothing of interior nodes (at most;
                                  ///< more change SJ min by < 0.005 on the bundled cases)
   double converged_fraction = 0.01;  ///< stop the sweeps when no node moves by more than this fraction of an edge
@@ -23,6 +25,7 @@ struct SmoothOptions {
 };
 
 struct SmoothStats {
+  UntangleStats untangle;
   int sweeps = 0;
   std::size_t moves = 0;        ///< accepted interior moves over all sweeps
   std::size_t curve_moves = 0;  ///< accepted moves of boundary and feature nodes along their curves

@@ -1,0 +1,168 @@
+#include "polysquare/smooth/untangle.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "polysquare/core/geometry.h"
+
+namespace polysquare {
+namespace {
+
+// A corner condition on one node: dot(n, v) + d >= 0 with |n| = 1, so that dot(n, v) + d is v's distance to
+// the line on which the corner degenerates (positive on the convex side).
+struct HalfPlane {
+  Vec2 n;
+  double d;
+  double at(Vec2 v) const { return dot(n, v) + d; }
+};
+
+// The part of a convex polygon where h.at(v) >= t.
+std::vector<Vec2> clip(const std::vector<Vec2>& poly, const HalfPlane& h, double t) {
+  std::vector<Vec2> out;
+  out.reserve(poly.size() + 1);
+  for (std::size_t i = 0; i < poly.size(); ++i) {
+    const Vec2 a = poly[i], b = poly[(i + 1) % poly.size()];
+    const double fa = h.at(a) - t, fb = h.at(b) - t;
+    if (fa >= 0) out.push_back(a);
+    if ((fa >= 0) != (fb >= 0)) out.push_back(lerp(a, b, fa / (fa - fb)));
+  }
+  return out;
+}
+
+std::vector<Vec2> kernel(const std::vector<HalfPlane>& hs, const std::vector<Vec2>& box, double t) {
+  std::vector<Vec2> poly = box;
+  for (const HalfPlane& h : hs) {
+    poly = clip(poly, h, t);
+    if (poly.empty()) break;
+  }
+  return poly;
+}
+
+Vec2 centroid(const std::vector<Vec2>& poly) {
+  double area = 0.0;
+  Vec2 c{};
+  for (std::size_t i = 0; i < poly.size(); ++i) {
+    const Vec2 a = poly[i], b = poly[(i + 1) % poly.size()];
+    const double w = cross(a, b);
+    area += w;
+    c = c + w * (a + b);
+  }
+  if (std::abs(area) < 1e-300) {
+    Vec2 m{};
+    for (Vec2 p : poly) m = m + p;
+    return (1.0 / static_cast<double>(poly.size())) * m;
+  }
+  return (1.0 / (3.0 * area)) * c;
+}
+
+// The condition "corner (a, b, c) is convex" (orient2(a, b, c) > 0) on the one of its nodes at index `which`,
+// in coordinates relative to `origin`; false when the other two coincide (no condition on that node).
+bool corner_condition(Vec2 a, Vec2 b, Vec2 c, int which, HalfPlane& h) {
+  // orient2 is linear in each argument: orient2(a, b, c) = cross(b - a, c - a).
+  Vec2 p, q;  // the other two nodes, in the order that keeps the orientation: orient2(p, q, v)
+  if (which == 0) { p = b; q = c; }
+  else if (which == 1) { p = c; q = a; }
+  else { p = a; q = b; }
+  const Vec2 e = q - p;
+  const double len = std::sqrt(dot(e, e));
+  if (len <= 0.0) return false;
+  // orient2(p, q, v) = cross(e, v - p): positive with v left of p -> q.
+  h.n = Vec2{-e.y / len, e.x / len};
+  h.d = -dot(h.n, p);
+  return true;
+}
+
+}  // namespace
+
+UntangleStats untangle_quads(QuadMesh& mesh, const std::vector<std::uint8_t>& movable, const UntangleOptions& options) {
+  UntangleStats stats;
+  const std::size_t nn = mesh.nodes.size();
+  std::vector<std::size_t> offset(nn + 1, 0);
+  for (const auto& q : mesh.quads)
+    for (auto v : q) offset[static_cast<std::size_t>(v) + 1]++;
+  for (std::size_t i = 0; i < nn; ++i) offset[i + 1] += offset[i];
+  std::vector<std::int32_t> incident(offset.back());
+  {
+    std::vector<std::size_t> fill(offset.begin(), offset.end() - 1);
+    for (std::size_t q = 0; q < mesh.quads.size(); ++q)
+      for (auto v : mesh.quads[q]) incident[fill[static_cast<std::size_t>(v)]++] = static_cast<std::int32_t>(q);
+  }
+  auto quad_sj = [&](std::size_t q) {
+    const auto& c = mesh.quads[q];
+    return quad_min_sj(mesh.nodes[static_cast<std::size_t>(c[0])], mesh.nodes[static_cast<std::size_t>(c[1])],
+                       mesh.nodes[static_cast<std::size_t>(c[2])], mesh.nodes[static_cast<std::size_t>(c[3])]);
+  };
+  auto count_folded = [&] {
+    std::size_t n = 0;
+    for (std::size_t q = 0; q < mesh.quads.size(); ++q) n += quad_sj(q) < options.target_sj;
+    return n;
+  };
+  stats.folded_before = count_folded();
+  stats.folded_after = stats.folded_before;
+  if (stats.folded_before == 0) return stats;
+
+  std::vector<HalfPlane> hs;
+  for (int sweep = 0; sweep < options.sweeps && stats.folded_after > 0; ++sweep) {
+    // The movable nodes of folded quads and of the quads around those nodes, in node order.
+    std::vector<std::uint8_t> todo(nn, 0);
+    for (std::size_t q = 0; q < mesh.quads.size(); ++q) {
+      if (quad_sj(q) >= options.target_sj) continue;
+      for (auto v : mesh.quads[q])
+        for (std::size_t k = offset[static_cast<std::size_t>(v)]; k < offset[static_cast<std::size_t>(v) + 1]; ++k)
+          for (auto u : mesh.quads[static_cast<std::size_t>(incident[k])]) todo[static_cast<std::size_t>(u)] = 1;
+    }
+    std::size_t moved = 0;
+    for (std::size_t v = 0; v < nn; ++v) {
+      if (!todo[v] || !movable[v] || offset[v] == offset[v + 1]) continue;
+      const Vec2 origin = mesh.nodes[v];
+      // The conditions of the three corners of each quad that move with v, and a box around v's neighbours.
+      hs.clear();
+      Vec2 lo{0, 0}, hi{0, 0};
+      for (std::size_t k = offset[v]; k < offset[v + 1]; ++k) {
+        const auto& quad = mesh.quads[static_cast<std::size_t>(incident[k])];
+        int i = 0;
+        while (static_cast<std::size_t>(quad[i]) != v) ++i;
+        std::array<Vec2, 4> p;
+        for (int c = 0; c < 4; ++c) {
+          p[c] = mesh.nodes[static_cast<std::size_t>(quad[c])] - origin;
+          lo = Vec2{std::min(lo.x, p[c].x), std::min(lo.y, p[c].y)};
+          hi = Vec2{std::max(hi.x, p[c].x), std::max(hi.y, p[c].y)};
+        }
+        for (int c = 3; c <= 5; ++c) {  // corners i - 1, i, i + 1; v at index 2, 1, 0 of (prev, corner, next)
+          const int corner = (i + c) % 4;
+          HalfPlane h;
+          if (corner_condition(p[(corner + 3) % 4], p[corner], p[(corner + 1) % 4], 5 - c, h)) hs.push_back(h);
+        }
+      }
+      if (hs.empty()) continue;
+      double worst = INFINITY;
+      for (const HalfPlane& h : hs) worst = std::min(worst, h.at(Vec2{0, 0}));
+      const std::vector<Vec2> box{lo, Vec2{hi.x, lo.y}, hi, Vec2{lo.x, hi.y}};
+      const double span = std::max(hi.x - lo.x, hi.y - lo.y);
+      if (span <= 0.0) continue;
+      // Bisection for the largest t with a non-empty kernel {v : every condition >= t}; v itself has t = worst.
+      double t_lo = worst, t_hi = span;
+      for (int it = 0; it < 40 && t_hi - t_lo > 1e-9 * span; ++it) {
+        const double t = 0.5 * (t_lo + t_hi);
+        (kernel(hs, box, t).empty() ? t_hi : t_lo) = t;
+      }
+      if (t_lo <= worst + 1e-9 * span) continue;  // no better place
+      // The centre of the kernel a little inside the best level, so that v is not pushed against one corner.
+      const double t = t_lo > 0.0 ? 0.5 * t_lo : t_lo - 1e-6 * span;
+      std::vector<Vec2> poly = kernel(hs, box, std::max(t, worst));
+      if (poly.empty()) continue;
+      Vec2 best = centroid(poly);
+      double best_worst = INFINITY;
+      for (const HalfPlane& h : hs) best_worst = std::min(best_worst, h.at(best));
+      if (!(best_worst > worst)) continue;
+      mesh.nodes[v] = origin + best;
+      ++moved;
+    }
+    stats.moves += moved;
+    stats.folded_after = count_folded();
+    if (moved == 0) break;
+  }
+  return stats;
+}
+
+}  // namespace polysquare
