@@ -341,7 +341,10 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
         if (!poor[q]) continue;
         // Far outside a gate (half the SJ gate, twice the edge-ratio gate) counts as folded: the budget is for
         // quads just outside, not for near-degenerate ones a patch can mend.
-        const bool severe = !folded && !pinned[q] &&
+        // A patch is not rebuilt for a valid quad however poor: its given nodes (the input's, the neighbours'
+        // interface nodes) fix that quad's shape for any construction, and each rebuild re-maps the whole part.
+        const bool in_patch = s >= 0 && !r.stats.subregions[static_cast<std::size_t>(s)].mapped;
+        const bool severe = !folded && !pinned[q] && !in_patch &&
                             (metrics.sj[q] < 0.5 * options.min_scaled_jacobian || metrics.edge_ratio[q] > 2.0 * options.max_edge_ratio);
         if (folded || severe) {
           if (s >= 0)
@@ -350,7 +353,7 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
           if (folded) continue;
         }
         ++poor_valid;
-        if (s < 0) continue;
+        if (s < 0 || in_patch) continue;
         // Below 1 the quad fails a gate; the smaller, the further.
         const double ratio = std::min(options.min_scaled_jacobian > 0 ? metrics.sj[q] / options.min_scaled_jacobian : 1.0,
                                       options.max_edge_ratio / metrics.edge_ratio[q]);
