@@ -775,6 +775,9 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
     smooth.sweeps = std::max(smooth.sweeps, st.sweeps);
     smooth.moves += st.moves;
     smooth.curve_moves += st.curve_moves;
+    smooth.untangle.folded_before += st.untangle.folded_before;
+    smooth.untangle.folded_after += st.untangle.folded_after;
+    smooth.untangle.moves += st.untangle.moves;
   }
   const InvariantReport inv = check_invariants(mesh);
   if (!inv.ok())
@@ -844,7 +847,11 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
                     {"end_points_snapped", end_snaps.to_vertex + end_snaps.to_segment},
                     {"largest_snap", end_snaps.largest_move},
                     {"area_change", area != 0.0 ? region_area(*work) / area - 1.0 : 0.0}}},
-      {"smooth", {{"sweeps", smooth.sweeps}, {"moves", smooth.moves}, {"curve_moves", smooth.curve_moves}}},
+      {"smooth", {{"sweeps", smooth.sweeps}, {"moves", smooth.moves}, {"curve_moves", smooth.curve_moves},
+                  {"untangle", {{"target_sj", options.smooth.untangle.target_sj},
+                                {"below_target_before", smooth.untangle.folded_before},
+                                {"below_target_after", smooth.untangle.folded_after},
+                                {"moves", smooth.untangle.moves}}}}},
       {"seconds", {{"parts", seconds_parts}}},
   };
   out.region = work == &region ? region : std::move(simplified);

@@ -91,3 +91,20 @@ TEST(Coasts, FjordCoastAt400MetresIsSemiStructuredThroughTheFineBackgroundRound)
   EXPECT_LT(domain_distance(r.mesh, r.region, measure).boundary_max_relative, 1e-9);
   EXPECT_LE(domain_distance(r.mesh, region, measure).boundary_max_distance, o.size);
 }
+
+TEST(Coasts, FjordCoastAt200MetresIsSemiStructured) {
+  // The finer of the fjord's two sizes: its thin subregions fold near the shore before smoothing; untangling
+  // (smooth/untangle.h) keeps them mapped instead of sending them to patches.
+  const Region region = coast("fjord_coast");
+  MeshOptions o;
+  o.size = 200.0;
+  QualityReport q;
+  const MeshResult r = mesh_checked(region, o, q);
+  EXPECT_GE(r.report["summary"]["structured_fraction"].get<double>(), 0.95);
+  EXPECT_GE(q.regular_quad_fraction, 0.95);
+  EXPECT_LE(1000.0 * static_cast<double>(q.interior_singularities) / static_cast<double>(r.mesh.quads.size()), 20.0);
+  // The chosen mesh had folded or near-folded quads before its last smoothing, and fewer after untangling.
+  const auto& untangle = r.report["smooth"]["untangle"];
+  EXPECT_GT(untangle["below_target_before"].get<std::size_t>(), 0u);
+  EXPECT_LT(untangle["below_target_after"].get<std::size_t>(), untangle["below_target_before"].get<std::size_t>());
+}
