@@ -23,6 +23,7 @@
 #include "polysquare/io/svg.h"
 #include "polysquare/partition/partition.h"
 #include "polysquare/pipeline/check_options.h"
+#include "polysquare/pipeline/invariants.h"
 #include "polysquare/pipeline/local_frame.h"
 #include "polysquare/pipeline/mesh_region.h"
 #include "polysquare/pipeline/report.h"
@@ -347,14 +348,23 @@ int run_quality(const std::string& mesh_path, const std::string& domain_path, bo
               << " triangles beside " << quality.quads << " quads; quality figures cover the quads only\n";
   std::optional<DomainDistance> domain;
   if (!domain_path.empty()) domain = domain_distance(mesh, read_region(domain_path));
+  // Quads that overlap pass every shape figure (each quad alone is fine): the mesh is judged, then refused.
+  const QuadOverlaps overlaps = find_overlapping_quads(mesh);
   if (json) {
     nlohmann::json j = to_json(quality);
+    j["overlapping_quad_pairs"] = overlaps.pairs;
     j["finite_volume"] = to_json(fv);
     if (domain) j["domain"] = to_json(*domain);
     std::cout << j.dump(2) << "\n";
   } else {
-    std::cout << format_quality_text(quality, domain ? &*domain : nullptr) << format_finite_volume_text(fv)
-              << format_schism_text(quality.schism);
+    std::cout << format_quality_text(quality, domain ? &*domain : nullptr) << "  overlapping quad pairs "
+              << overlaps.pairs << "\n" << format_finite_volume_text(fv) << format_schism_text(quality.schism);
+  }
+  if (overlaps.pairs) {
+    std::cerr << "error: " << mesh_path << ": " << overlaps.pairs
+              << (overlaps.pairs == 1 ? " pair of quads overlaps" : " pairs of quads overlap") << ", first quads "
+              << overlaps.first_a << " and " << overlaps.first_b << " (counted from 0) at " << point_text(overlaps.at) << "\n";
+    return 2;
   }
   return require_quads && quality.triangles > 0 ? 2 : 0;
 }

@@ -1,5 +1,7 @@
 #include "polysquare/input/simplify.h"
 
+#include "polysquare/input/chord_clearance.h"
+
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -208,6 +210,10 @@ SimplifyStats simplify_region(Region& region, const SimplifyOptions& options) {
   for (std::size_t f = 0; f < region.features.size(); ++f) region.features[f].points = collect(lines[region.rings.size() + f]);
   for (const Ring& r : region.rings) stats.vertices_after += r.points.size();
   for (const FeatureCurve& f : region.features) stats.vertices_after += f.points.size();
+  // Coarsened to the size, a ring concave towards another curve closer than a chord's sagitta (an island in a
+  // hole, a part beside another) would be met by mesh edges that cross that curve: the meshes would overlap.
+  const double reach = options.chord_reach < 0.0 ? options.max_segment : options.chord_reach;
+  if (reach > 0.0) stats.chord_pins = pin_chords_clear_of_curves(region, reach).size();
   return stats;
 }
 
