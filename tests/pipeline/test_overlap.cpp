@@ -162,9 +162,8 @@ TEST(Overlap, TheFirstPairIsTheLowestAndTheCountIsExact) {
     m.quads.push_back(q);
   }
   const QuadOverlaps o = find_overlapping_quads(m);
-  // The overlap is the square [10.5, 20]^2: 10 x 10 cells of the first grid (the first column and row halved)
-  // against 10 x 10 of the second; cell (i, j) of the first meets (i, j), (i-1, j), (i, j-1), (i-1, j-1) of the
-  // second when they exist: 4 * 9 * 9 + 2 * 9 * 2 + 1 ... counted directly below.
+  // Cell (i, j) of the first grid overlaps cells (i - 10 + di, j - 10 + dj), di, dj in {-1, 0}, of the second
+  // where they exist.
   std::size_t expected = 0;
   for (int i = 10; i < 20; ++i)
     for (int j = 10; j < 20; ++j)
