@@ -17,6 +17,7 @@
 #include "polysquare/core/error.h"
 #include "polysquare/core/version.h"
 #include "polysquare/fallback/split_triangles.h"
+#include "polysquare/input/chord_clearance.h"
 #include "polysquare/input/simplify.h"
 #include "polysquare/pipeline/check_options.h"
 #include "polysquare/input/snap_points.h"
@@ -620,6 +621,12 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
     so.max_segment = options.size;   // and are coarsened to the size, not beyond
     simplify_stats = simplify_region(simplified, so);
     work = &simplified;
+  } else {
+    // Unsimplified rings are still meshed with chords: where one could cut across another curve, ring vertices
+    // become nodes (as simplify_region does last), so that parts and islands close to each other do not overlap.
+    simplified = region;
+    simplify_stats.chord_pins = pin_chords_clear_of_curves(simplified, options.size).size();
+    work = &simplified;
   }
   progress.finish("simplify");
   PolysquareMapOptions map = options.map;
@@ -844,6 +851,7 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
                     {"vertices_after", simplify_stats.vertices_after}, {"refused", simplify_stats.refused},
                     {"max_distance", simplify_stats.max_distance},
                     {"max_distance_over_size", simplify_stats.max_distance / options.size},
+                    {"chord_pins", simplify_stats.chord_pins},
                     {"end_points_snapped", end_snaps.to_vertex + end_snaps.to_segment},
                     {"largest_snap", end_snaps.largest_move},
                     {"area_change", area != 0.0 ? region_area(*work) / area - 1.0 : 0.0}}},
