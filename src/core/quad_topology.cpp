@@ -23,4 +23,17 @@ NodeValences node_valences(const QuadMesh& mesh, const std::unordered_map<std::u
   return out;
 }
 
+NodeQuads node_quads(const QuadMesh& mesh) {
+  NodeQuads n;
+  n.offset.assign(mesh.nodes.size() + 1, 0);
+  for (const auto& q : mesh.quads)
+    for (auto v : q) n.offset[static_cast<std::size_t>(v) + 1]++;
+  for (std::size_t i = 0; i + 1 < n.offset.size(); ++i) n.offset[i + 1] += n.offset[i];
+  n.quads.resize(n.offset.back());
+  std::vector<std::size_t> fill(n.offset.begin(), n.offset.end() - 1);
+  for (std::size_t q = 0; q < mesh.quads.size(); ++q)
+    for (auto v : mesh.quads[q]) n.quads[fill[static_cast<std::size_t>(v)]++] = static_cast<std::int32_t>(q);
+  return n;
+}
+
 }  // namespace polysquare

@@ -6,6 +6,8 @@
 #include <oneapi/tbb/blocked_range.h>
 #include <oneapi/tbb/parallel_for.h>
 
+#include "polysquare/core/quad_topology.h"
+
 namespace polysquare {
 namespace {
 
@@ -23,19 +25,9 @@ double quad_shape(const QuadMesh& mesh, std::size_t q) {
   return std::min(quad_min_corner_sj(mesh, q), lmax > 0 ? 3.0 * lmin / lmax : -1.0);
 }
 
-// Node -> incident quads, compressed.
-struct Incidence {
-  std::vector<std::size_t> offset;
-  std::vector<std::int32_t> quads;
-  explicit Incidence(const QuadMesh& mesh) : offset(mesh.nodes.size() + 1, 0) {
-    for (const auto& q : mesh.quads)
-      for (auto v : q) offset[static_cast<std::size_t>(v) + 1]++;
-    for (std::size_t i = 0; i + 1 < offset.size(); ++i) offset[i + 1] += offset[i];
-    quads.resize(offset.back());
-    std::vector<std::size_t> fill(offset.begin(), offset.end() - 1);
-    for (std::size_t q = 0; q < mesh.quads.size(); ++q)
-      for (auto v : mesh.quads[q]) quads[fill[v]++] = static_cast<std::int32_t>(q);
-  }
+// Node -> incident quads (core/quad_topology.h), with the measures the smoother reads around a node.
+struct Incidence : NodeQuads {
+  explicit Incidence(const QuadMesh& mesh) : NodeQuads(node_quads(mesh)) {}
   double worst(const QuadMesh& mesh, std::size_t v) const {
     double m = 1.0;
     for (std::size_t k = offset[v]; k < offset[v + 1]; ++k) m = std::min(m, quad_shape(mesh, quads[k]));

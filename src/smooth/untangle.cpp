@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "polysquare/core/geometry.h"
+#include "polysquare/core/quad_topology.h"
 
 namespace polysquare {
 namespace {
@@ -77,16 +78,9 @@ bool corner_condition(Vec2 a, Vec2 b, Vec2 c, int which, HalfPlane& h) {
 UntangleStats untangle_quads(QuadMesh& mesh, const std::vector<std::uint8_t>& movable, const UntangleOptions& options) {
   UntangleStats stats;
   const std::size_t nn = mesh.nodes.size();
-  std::vector<std::size_t> offset(nn + 1, 0);
-  for (const auto& q : mesh.quads)
-    for (auto v : q) offset[static_cast<std::size_t>(v) + 1]++;
-  for (std::size_t i = 0; i < nn; ++i) offset[i + 1] += offset[i];
-  std::vector<std::int32_t> incident(offset.back());
-  {
-    std::vector<std::size_t> fill(offset.begin(), offset.end() - 1);
-    for (std::size_t q = 0; q < mesh.quads.size(); ++q)
-      for (auto v : mesh.quads[q]) incident[fill[static_cast<std::size_t>(v)]++] = static_cast<std::int32_t>(q);
-  }
+  const NodeQuads at = node_quads(mesh);
+  const std::vector<std::size_t>& offset = at.offset;
+  const std::vector<std::int32_t>& incident = at.quads;
   auto quad_sj = [&](std::size_t q) {
     const auto& c = mesh.quads[q];
     return quad_min_sj(mesh.nodes[static_cast<std::size_t>(c[0])], mesh.nodes[static_cast<std::size_t>(c[1])],

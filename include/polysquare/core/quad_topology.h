@@ -20,4 +20,11 @@ struct NodeValences {
 /// Valences and boundary flags from the edge counts of quad_edge_counts(mesh).
 NodeValences node_valences(const QuadMesh& mesh, const std::unordered_map<std::uint64_t, int>& edge_counts);
 
+/// The quads at each node, compressed: those of node v are quads[offset[v] .. offset[v + 1]), in quad order.
+struct NodeQuads {
+  std::vector<std::size_t> offset;  ///< #nodes + 1
+  std::vector<std::int32_t> quads;
+};
+NodeQuads node_quads(const QuadMesh& mesh);
+
 }  // namespace polysquare
