@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <cmath>
 #include <csignal>
 #include <filesystem>
@@ -29,6 +30,7 @@
 #include "polysquare/pipeline/report.h"
 #include "polysquare/quality/quality.h"
 #include "terminal_progress.h"
+#include "time_limit.h"
 
 namespace {
 
@@ -45,6 +47,7 @@ struct MeshArgs {
   std::string input, output, report, picture, partition_picture, map = "ppm";
   bool binary = false, bend_interfaces = false;
   bool quiet = false, verbose = false;  ///< --quiet: errors and warnings only; --verbose: stage timings
+  double time_limit = 0.0;  ///< --time-limit: seconds of wall time before the run ends in exit 3 (0 = none)
   double depth = 0.0;  ///< constant water depth (positive down) for solver files, when depth_given
   bool depth_given = false;
   std::string bathymetry, bathymetry_positive = "up";  ///< raster of elevations (up) or depths (down)
@@ -92,6 +95,8 @@ int run_mesh(const MeshArgs& args) {
   check_mesh_options(args.options);
   if (args.depth_given && !std::isfinite(args.depth))
     throw InputError("--depth must be a finite number, got " + short_number(args.depth));
+  if (!(std::isfinite(args.time_limit) && args.time_limit >= 0))
+    throw InputError("--time-limit must be a finite number of seconds >= 0 (0 = none), got " + short_number(args.time_limit));
   check_outputs(args);  // before minutes of meshing
   const std::string out_ext = lower_extension(args.output);
   if ((args.depth_given || !args.bathymetry.empty()) && (out_ext == ".msh" || out_ext == ".vtu"))
@@ -101,7 +106,8 @@ int run_mesh(const MeshArgs& args) {
     throw InputError(args.bathymetry + ": the bathymetry raster does not exist");
   // Progress on a terminal (never in a pipe or under CI), stage timings with --verbose; quiet: warnings only.
   cli::TerminalProgress shown(args.quiet ? cli::Verbosity::quiet : args.verbose ? cli::Verbosity::verbose : cli::Verbosity::normal);
-  ProgressReporter progress(shown.callback());
+  cli::TimeLimit limit(args.time_limit, args.input, shown.callback());
+  ProgressReporter progress(limit.callback());
   std::ostringstream discarded;
   std::ostream& info = args.quiet ? discarded : std::cerr;
   InputNotes notes;
@@ -145,7 +151,7 @@ int run_mesh(const MeshArgs& args) {
   auto place = [&](const nlohmann::json& at) {
     return "(" + short_number(at[0].get<double>() + origin.x) + ", " + short_number(at[1].get<double>() + origin.y) + ")";
   };
-  options.progress = shown.callback();
+  options.progress = limit.callback();
   MeshResult result;
   try {
     result = mesh_region(local, options);
@@ -197,10 +203,18 @@ int run_mesh(const MeshArgs& args) {
   for (const std::string& w : groups.warnings) std::cerr << "warning: " << w << "\n";
   const std::string group_summary = format_groups_text(groups);
   progress.finish("quality");
+  limit.stop();  // the outputs are committed whole or not at all, never cut off between two renames
   progress.start("write");
   // Outputs are written only after the whole mesh passed its checks, and committed together: each goes to a
   // synced temporary, and all are renamed onto their targets only when every one was written.
   translate(result.mesh, origin);
+  if (const std::int64_t q = moved ? first_folded_quad(result.mesh) : -1; q >= 0) {
+    const auto& quad = result.mesh.quads[static_cast<std::size_t>(q)];
+    throw MeshingError("written back in the input's coordinates, " + short_number(std::max(std::abs(origin.x), std::abs(origin.y))) +
+                       " from the origin, quad " + std::to_string(q) + " at " + point_text(result.mesh.nodes[static_cast<std::size_t>(quad[0])]) +
+                       " folds: coordinates there are too coarse for --size " + short_number(args.options.size) +
+                       "; use a larger size or move the input nearer the origin");
+  }
   OutputBatch batch;
   const MeshWriteOptions write{args.binary,
                                args.msh_features == "lines" ? MshFeatures::lines
@@ -340,7 +354,8 @@ int run_render(const RenderArgs& args) {
 int run_quality(const std::string& mesh_path, const std::string& domain_path, bool json, bool require_quads) {
   const QuadMesh mesh = read_mesh(mesh_path);
   check_judgeable(mesh, mesh_path);
-  const QualityReport quality = compute_quality(mesh);
+  const QuadMetrics metrics = quad_metrics(mesh);
+  const QualityReport quality = compute_quality(mesh, metrics);
   const FiniteVolumeQuality fv = finite_volume_quality(mesh);
   // Shape figures cover quads only, so a mesh of triangles would otherwise read as SJ 0 and pass.
   if (quality.triangles > 0)
@@ -359,6 +374,17 @@ int run_quality(const std::string& mesh_path, const std::string& domain_path, bo
   } else {
     std::cout << format_quality_text(quality, domain ? &*domain : nullptr) << "  overlapping quad pairs "
               << overlaps.pairs << "\n" << format_finite_volume_text(fv) << format_schism_text(quality.schism);
+  }
+  // An inverted or collapsed quad (scaled Jacobian <= 0) is not a mesh a solver takes: figures, then a refusal.
+  if (quality.inverted > 0) {
+    const auto first = static_cast<std::size_t>(
+        std::find_if(metrics.sj.begin(), metrics.sj.end(), [](double v) { return !(v > 0); }) - metrics.sj.begin());
+    Vec2 centre{0, 0};
+    for (const auto v : mesh.quads[first]) centre = centre + 0.25 * mesh.nodes[static_cast<std::size_t>(v)];
+    std::cerr << "error: " << mesh_path << ": " << quality.inverted
+              << (quality.inverted == 1 ? " quad is" : " quads are") << " inverted or collapsed (scaled Jacobian <= 0), first quad "
+              << first << " (counted from 0) at " << point_text(centre) << "\n";
+    return 2;
   }
   if (overlaps.pairs) {
     std::cerr << "error: " << mesh_path << ": " << overlaps.pairs
@@ -468,6 +494,10 @@ int main(int argc, char** argv) {
                        "feature curves in MSH: nodes (a physical point group per curve; every reader takes the file), "
                        "lines (physical curves of line elements; deal.II refuses them) or none")
       ->check(CLI::IsMember({"nodes", "lines", "none"}))->capture_default_str();
+  cmd_mesh->add_option("--time-limit", mesh.time_limit,
+                       "seconds of wall time the run may take (reading, meshing, checks; not writing) before it ends "
+                       "in exit 3 naming the stage it was in, with nothing written (0 = no limit)")
+      ->capture_default_str();
   cmd_mesh->add_flag("-q,--quiet", mesh.quiet, "print errors and warnings only (no progress, no summary)");
   cmd_mesh->add_flag("-v,--verbose", mesh.verbose, "print each stage's wall time as it finishes (on stderr)");
   cmd_mesh->add_flag("--repair", mesh.input_options.repair,

@@ -60,7 +60,8 @@ std::vector<Vec2> ring(const json& arr, Context& ctx, std::size_t ring_index) {
 }
 
 void add_polygon(Region& region, const json& rings, Context& ctx, const std::string& name) {
-  if (!rings.is_array() || rings.empty()) ctx.fail("a Polygon needs at least one ring");
+  if (!rings.is_array()) ctx.fail("a Polygon's coordinates must be an array of rings, got " + rings.dump().substr(0, 80));
+  if (rings.empty()) ctx.fail("a Polygon needs at least one ring, got []");
   const int part = region.num_parts++;
   for (std::size_t r = 0; r < rings.size(); ++r)
     region.rings.push_back({ring(rings[r], ctx, r), part, r > 0, static_cast<int>(ctx.feature), name});

@@ -1,5 +1,6 @@
 #include "polysquare/pipeline/check_options.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -84,6 +85,19 @@ void check_mesh_size(const Region& region, const MeshOptions& o) {
     throw InputError(src + ": size " + short_number(o.size) + " would need about " + short_number(estimate) +
                      " quads (area " + short_number(area) + " / size^2), more than the limit of " +
                      std::to_string(o.max_quads) + " (raise --max-quads)");
+  // Far from the origin the region is meshed in a local frame, but the mesh is written back in the input's
+  // coordinates, which there step by the spacing of doubles (ulp): 0.125 at 9e14, 1.2e-4 at 1e12. A size of
+  // fewer than kMinSizeInSteps such steps would come back with its quads bent or folded (a 1 x 1 square at 9e14
+  // meshed at size 0.1 was written with 36 inverted quads), so it is refused before any work.
+  const double far = std::max({std::abs(box.lo.x), std::abs(box.hi.x), std::abs(box.lo.y), std::abs(box.hi.y)});
+  const double step = std::nextafter(far, INFINITY) - far;
+  if (!(o.size >= kMinSizeInSteps * step))
+    throw InputError(src + ": size " + short_number(o.size) + " is too fine for coordinates as large as " +
+                     short_number(far) + ", which step by " + short_number(step) +
+                     " there (double precision): the mesh written back in them would lose its shape; the size must "
+                     "be at least " + short_number(kMinSizeInSteps * step) + " (" +
+                     std::to_string(static_cast<int>(kMinSizeInSteps)) +
+                     " steps, at most 2.3e-13 times the largest coordinate), or move the input nearer the origin");
 }
 
 }  // namespace polysquare

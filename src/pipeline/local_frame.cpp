@@ -28,4 +28,15 @@ void translate(QuadMesh& mesh, Vec2 offset) {
   for (Vec2& p : mesh.nodes) p = {p.x + offset.x, p.y + offset.y};
 }
 
+std::int64_t first_folded_quad(const QuadMesh& mesh) {
+  for (std::size_t q = 0; q < mesh.quads.size(); ++q)
+    for (int k = 0; k < 4; ++k) {
+      const Vec2 p = mesh.nodes[static_cast<std::size_t>(mesh.quads[q][k])];
+      const Vec2 next = mesh.nodes[static_cast<std::size_t>(mesh.quads[q][(k + 1) % 4])];
+      const Vec2 prev = mesh.nodes[static_cast<std::size_t>(mesh.quads[q][(k + 3) % 4])];
+      if (!(cross(next - p, prev - p) > 0)) return static_cast<std::int64_t>(q);
+    }
+  return -1;
+}
+
 }  // namespace polysquare

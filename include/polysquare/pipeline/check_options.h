@@ -18,8 +18,13 @@ constexpr int kMaxThreads = 4096;
 /// threads outside [0, kMaxThreads]; parts below 0. A NaN gate would otherwise compare false and pass every mesh.
 void check_mesh_options(const MeshOptions& options);
 
+/// Smallest size, in steps of double precision (ulp) at the region's largest coordinate, that a mesh keeps when
+/// written back in the input's coordinates (an edge rounded by half a step each end turns by under 1e-3 rad).
+constexpr double kMinSizeInSteps = 1024.0;
+
 /// Throws InputError when `options.size` does not suit `region` (read and validated): larger than half the
-/// region's smaller extent, or an estimated quad count (area / size^2) above options.max_quads. Figures in the
+/// region's smaller extent, smaller than kMinSizeInSteps steps of double precision at the region's largest
+/// coordinate, or an estimated quad count (area / size^2) above options.max_quads. Figures in the
 /// messages are printed with 6 significant digits; a region whose extent or area is not a finite positive number
 /// is refused as such. The message starts with region.source.
 void check_mesh_size(const Region& region, const MeshOptions& options);

@@ -1,6 +1,8 @@
 // Meshing far from the origin: the region is moved next to the origin before meshing and the mesh moved back.
 #pragma once
 
+#include <cstdint>
+
 #include "polysquare/core/geometry.h"
 #include "polysquare/core/quad_mesh.h"
 #include "polysquare/core/region.h"
@@ -21,5 +23,11 @@ Vec2 local_origin(const Region& region);
 void translate(Region& region, Vec2 offset);
 /// Adds `offset` to every node of the mesh.
 void translate(QuadMesh& mesh, Vec2 offset);
+
+/// The index of the first quad of `mesh` with a corner that does not turn strictly counter-clockwise (a fold
+/// or a collapse), -1 when none: run on a mesh moved back from a local frame, it finds quads that the rounding
+/// of far coordinates bent out of shape (corner tests on coordinate differences, which are exact for nearby
+/// nodes whatever their magnitude).
+std::int64_t first_folded_quad(const QuadMesh& mesh);
 
 }  // namespace polysquare
