@@ -1,6 +1,7 @@
 // Topology-preserving simplification of curves finer than the target size.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "polysquare/core/error.h"
@@ -40,6 +41,40 @@ TEST(Simplify, ZeroAreaThresholdChangesNothingAndSharedVerticesStay) {
   simplify_region(r, o);
   // (5, 0.001) is nearly collinear but a feature ends there: it stays.
   EXPECT_EQ(r.rings[0].points.size(), 5u);
+}
+
+// Collinear vertices have a zero-area triangle and are removed first; the next vertex of a straight run lies on
+// the line of the removed one's triangle but not on the triangle (a segment then), so it must not block the
+// removal (it did: a square with 1,000 points per side kept all 4,000 and took 25-38 s to mesh into 100 quads).
+TEST(Simplify, CollinearRunsGoDownToTheirCornersAndAPointOnTheRunStillBlocks) {
+  Region r;
+  r.source = "test";
+  r.num_parts = 1;
+  std::vector<Vec2> pts;
+  for (int side = 0; side < 4; ++side)
+    for (int k = 0; k < 100; ++k) {
+      const double t = k / 100.0;
+      const Vec2 corners[4] = {{0, 0}, {100, 0}, {100, 100}, {0, 100}};
+      pts.push_back(corners[side] + t * (corners[(side + 1) % 4] - corners[side]));
+    }
+  r.rings.push_back({pts, 0, false, 0});
+  SimplifyOptions o;
+  o.min_area = 25.0;
+  const SimplifyStats st = simplify_region(r, o);
+  EXPECT_EQ(st.vertices_after, 4u);
+  EXPECT_EQ(st.refused, 0u);
+  ASSERT_EQ(r.rings[0].points.size(), 4u);
+  for (Vec2 p : r.rings[0].points) EXPECT_TRUE((p.x == 0 || p.x == 100) && (p.y == 0 || p.y == 100)) << p.x << " " << p.y;
+  // A vertex of another ring lying on the straight run between the kept ends still blocks the shortcut.
+  Region h;
+  h.source = "test";
+  h.num_parts = 1;
+  h.rings.push_back({{{0, 0}, {50, 0}, {100, 0}, {100, 100}, {0, 100}}, 0, false, 0});
+  h.features.push_back({{{25, 0}, {25, 50}}, false, 1});  // its end lies on the segment from (0, 0) to (50, 0)
+  SimplifyOptions ho;
+  ho.min_area = 25.0;
+  simplify_region(h, ho);
+  EXPECT_NE(std::find(h.rings[0].points.begin(), h.rings[0].points.end(), Vec2{50, 0}), h.rings[0].points.end());
 }
 
 TEST(Simplify, ReportsHowFarTheRemovedVerticesLie) {
