@@ -96,6 +96,21 @@ SimplifyStats simplify_region(Region& region, const SimplifyOptions& options) {
   Grid grid{std::max(2.0 * len / std::max<std::size_t>(1, nseg), box.diagonal() * 1e-9), box.lo, {}};
   for (std::size_t v = 0; v < pool.p.size(); ++v)
     if (pool.next[v] >= 0) grid.add(pool, static_cast<int>(v));
+  // Segments lengthen as vertices go, and a segment is listed in every cell of its box: with cells sized for the
+  // input (0.5 m along a 1.2M-vertex ring), shortcuts of the target size spanned thousands of cells each, and the
+  // grid grew to 5 GB in 90 s. So the grid is rebuilt, its cells sized for the segments then alive, each time
+  // their count halves (linear in all: n + n/2 + ...). Only the speed changes: any cell size finds every segment.
+  std::size_t segments = nseg, rebuilt_at = nseg;
+  auto rebuild_grid = [&] {
+    double alive_len = 0.0;
+    for (std::size_t v = 0; v < pool.p.size(); ++v)
+      if (pool.alive[v] && pool.next[v] >= 0) alive_len += distance(pool.p[v], pool.p[pool.next[v]]);
+    grid = Grid{std::max(2.0 * alive_len / static_cast<double>(std::max<std::size_t>(1, segments)), box.diagonal() * 1e-9),
+                box.lo, {}};
+    for (std::size_t v = 0; v < pool.p.size(); ++v)
+      if (pool.alive[v] && pool.next[v] >= 0) grid.add(pool, static_cast<int>(v));
+    rebuilt_at = segments;
+  };
 
   auto area = [&](int v) { return 0.5 * std::abs(orient2(pool.p[pool.prev[v]], pool.p[v], pool.p[pool.next[v]])); };
   using Entry = std::pair<double, int>;
@@ -183,6 +198,7 @@ SimplifyStats simplify_region(Region& region, const SimplifyOptions& options) {
     pool.prev[b] = a;
     grid.add(pool, a);
     --line_size[l];
+    if (--segments * 2 <= rebuilt_at && segments >= 64) rebuild_grid();
     for (int w : {a, b})
       if (!pool.locked[w] && pool.prev[w] >= 0 && pool.next[w] >= 0) heap.push({current[w] = area(w), w});
   }
