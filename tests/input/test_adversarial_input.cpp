@@ -2,7 +2,6 @@
 // refusals fast and plain (tests/data/adversarial/README.md lists the files and the promised outcomes).
 #include <gtest/gtest.h>
 
-#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <string>
@@ -37,11 +36,10 @@ bool has_point(const std::vector<Vec2>& pts, Vec2 p) {
 }
 }  // namespace
 
-TEST(AdversarialInput, CombsAreRefusedQuickly) {
+// How fast: bench/adversarial_corpus.py (no wall-clock assertion in tests).
+TEST(AdversarialInput, CombsAreRefusedWithTheirCrossing) {
   for (const char* f : {"comb_30000_crossing.geojson", "comb_30000_crossing_rotated.geojson"}) {
-    const auto t0 = std::chrono::steady_clock::now();
     const std::string what = refusal(adversarial(f));
-    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 5.0) << f;
     EXPECT_NE(what.find("ring 0 intersects itself at ("), std::string::npos) << what;
     EXPECT_NE(what.find(f), std::string::npos) << what;
   }
