@@ -79,7 +79,7 @@ void IntegerProgram::add_row(const std::vector<std::pair<int, double>>& terms, d
   }
 }
 
-std::optional<std::vector<double>> IntegerProgram::solve(double seconds) const {
+std::optional<std::vector<double>> IntegerProgram::solve(double seconds, double gap) const {
   const Csc m = compress(columns(), entry_row_, entry_col_, entry_value_);
   const std::size_t n = cost_.size();
   // The LP relaxation first: the quantization's matrices are network matrices apart from a few coupling and
@@ -108,6 +108,7 @@ std::optional<std::vector<double>> IntegerProgram::solve(double seconds) const {
     if (integer_[c]) Cbc_setInteger(P, static_cast<int>(c));
   Cbc_setLogLevel(P, 0);
   Cbc_setMaximumSeconds(P, seconds);
+  Cbc_setAllowableGap(P, gap);
   Cbc_solve(P);
   if (Cbc_isProvenOptimal(P)) {
     const double* x = Cbc_getColSolution(P);

@@ -24,9 +24,10 @@ class IntegerProgram {
   int rows() const { return static_cast<int>(row_lo_.size()); }
 
   /// The optimal column values: the LP relaxation's optimum when its integer columns are integral (it is then
-  /// the integer optimum too), otherwise branch-and-cut's (its best feasible point if stopped by the time limit);
-  /// nullopt when the program is infeasible or no feasible point was found within `seconds` (per solve).
-  std::optional<std::vector<double>> solve(double seconds) const;
+  /// the integer optimum too), otherwise branch-and-cut's, which stops at a point whose cost is within `gap` of
+  /// the best bound (or at its best feasible point when stopped by the time limit); nullopt when the program is
+  /// infeasible or no feasible point was found within `seconds` (per solve).
+  std::optional<std::vector<double>> solve(double seconds, double gap = 0.0) const;
 
  private:
   std::vector<double> col_lo_, col_hi_, cost_;

@@ -955,7 +955,10 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
   // One integer program for all mapped subregions. When it has no solution, the subregions that cannot close
   // alone are repaired; if they all can, subregions are added one at a time and the one that makes the program
   // infeasible is repaired (its neighbours keep their maps).
-  auto solve = [&](const std::vector<std::size_t>& members) {
+  // With `disagree` given the couplings are elastic, and the pairs of subregions whose interface counts the
+  // solution could not make equal are appended to it.
+  auto solve = [&](const std::vector<std::size_t>& members,
+                   std::vector<std::pair<std::size_t, std::size_t>>* disagree = nullptr) {
     std::vector<std::int32_t> index(n, -1);
     std::vector<Layout*> lp;
     std::vector<const std::vector<Vec2>*> dp;
@@ -996,7 +999,10 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
       for (EvenGroup& g : groups)
         if (!g.empty()) even.push_back(std::move(g));
     }
-    return quantize_layouts(lp, dp, local, options.quantize, name, even);
+    std::vector<std::size_t> broken;
+    const QuantizeStats q = quantize_layouts(lp, dp, local, options.quantize, name, even, disagree ? &broken : nullptr);
+    for (std::size_t c : broken) disagree->push_back({members[local[c].layout_a], members[local[c].layout_b]});
+    return q;
   };
   auto members_now = [&] {
     std::vector<std::size_t> m;
@@ -1022,48 +1028,80 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
     try {
       if (!members_now().empty()) st.quantize = solve(members_now());
     } catch (const MeshingError& joint) {
-      for (std::size_t p : members_now()) {
-        Layout alone = layouts[p];
+      // Elastic couplings first: one solve shows which neighbours cannot agree; of each disagreeing pair the
+      // subregion in the most disagreements (then the one with more sides) is repaired, and the rest solved
+      // again. A subregion that cannot close even alone is repaired first; the search below is the last resort
+      // (parity rows or separations that no elastic coupling relaxes).
+      bool located = false, alone_checked = false;
+      auto check_alone = [&] {
+        for (std::size_t p : members_now()) {
+          Layout alone = layouts[p];
+          try {
+            quantize_layout(alone, mapped[p].x, options.quantize, sub_name(p));
+          } catch (const MeshingError& e) {
+            failure[p] = std::string(e.what()) + " [" + std::to_string(layouts[p].segments.size()) + " sides]";
+          }
+        }
+        alone_checked = true;
+      };
+      while (!located && !members_now().empty()) {
+        std::vector<std::pair<std::size_t, std::size_t>> disagree;
         try {
-          quantize_layout(alone, mapped[p].x, options.quantize, sub_name(p));
-        } catch (const MeshingError& e) {
-          failure[p] = std::string(e.what()) + " [" + std::to_string(layouts[p].segments.size()) + " sides]";
+          st.quantize = solve(members_now(), &disagree);
+        } catch (const MeshingError&) {
+          if (alone_checked) break;
+          check_alone();
+          continue;
+        }
+        located = disagree.empty();
+        while (!disagree.empty()) {
+          std::map<std::size_t, std::size_t> blame;
+          for (const auto& [a, b] : disagree) ++blame[a], ++blame[b];
+          const std::size_t p = std::max_element(blame.begin(), blame.end(), [&](const auto& x, const auto& y) {
+                                  if (x.second != y.second) return x.second < y.second;
+                                  return layouts[x.first].segments.size() < layouts[y.first].segments.size();
+                                })->first;
+          failure[p] = sub_name(p) + ": its sides cannot take the counts its neighbours need (" + joint.what() + ")";
+          std::erase_if(disagree, [&](const auto& d) { return d.first == p || d.second == p; });
         }
       }
-      try {
-        if (!members_now().empty()) st.quantize = solve(members_now());
-      } catch (const MeshingError&) {
-        // The first subregion (in order) that makes the program infeasible is found by bisection over the rest,
-        // so c culprits among n subregions cost about c log n solves, not n.
-        auto feasible = [&](const std::vector<std::size_t>& members) {
-          try {
-            st.quantize = solve(members);
-            return true;
-          } catch (const MeshingError&) {
-            return false;
+      if (!located && !members_now().empty()) {
+        if (!alone_checked) check_alone();
+        try {
+          if (!members_now().empty()) st.quantize = solve(members_now());
+        } catch (const MeshingError&) {
+          // The first subregion (in order) that makes the program infeasible is found by bisection over the rest,
+          // so c culprits among n subregions cost about c log n solves, not n.
+          auto feasible = [&](const std::vector<std::size_t>& members) {
+            try {
+              st.quantize = solve(members);
+              return true;
+            } catch (const MeshingError&) {
+              return false;
+            }
+          };
+          std::vector<std::size_t> kept, rest = members_now();
+          while (!rest.empty()) {
+            std::vector<std::size_t> all = kept;
+            all.insert(all.end(), rest.begin(), rest.end());
+            if (feasible(all)) {
+              kept = std::move(all);
+              break;
+            }
+            std::size_t lo = 0, hi = rest.size() - 1;  // kept + rest[0..hi] is infeasible, kept alone is not
+            while (lo < hi) {
+              const std::size_t mid = (lo + hi) / 2;
+              std::vector<std::size_t> trial = kept;
+              trial.insert(trial.end(), rest.begin(), rest.begin() + static_cast<std::ptrdiff_t>(mid) + 1);
+              if (feasible(trial)) lo = mid + 1; else hi = mid;
+            }
+            const std::size_t p = rest[lo];
+            failure[p] = sub_name(p) + ": its sides cannot take the counts its neighbours need (" + joint.what() + ")";
+            kept.insert(kept.end(), rest.begin(), rest.begin() + static_cast<std::ptrdiff_t>(lo));
+            rest.erase(rest.begin(), rest.begin() + static_cast<std::ptrdiff_t>(lo) + 1);
           }
-        };
-        std::vector<std::size_t> kept, rest = members_now();
-        while (!rest.empty()) {
-          std::vector<std::size_t> all = kept;
-          all.insert(all.end(), rest.begin(), rest.end());
-          if (feasible(all)) {
-            kept = std::move(all);
-            break;
-          }
-          std::size_t lo = 0, hi = rest.size() - 1;  // kept + rest[0..hi] is infeasible, kept alone is not
-          while (lo < hi) {
-            const std::size_t mid = (lo + hi) / 2;
-            std::vector<std::size_t> trial = kept;
-            trial.insert(trial.end(), rest.begin(), rest.begin() + static_cast<std::ptrdiff_t>(mid) + 1);
-            if (feasible(trial)) lo = mid + 1; else hi = mid;
-          }
-          const std::size_t p = rest[lo];
-          failure[p] = sub_name(p) + ": its sides cannot take the counts its neighbours need (" + joint.what() + ")";
-          kept.insert(kept.end(), rest.begin(), rest.begin() + static_cast<std::ptrdiff_t>(lo));
-          rest.erase(rest.begin(), rest.begin() + static_cast<std::ptrdiff_t>(lo) + 1);
+          if (!kept.empty()) st.quantize = solve(kept);  // the last solve may have been a failed one
         }
-        if (!kept.empty()) st.quantize = solve(kept);  // the last solve may have been a failed one
       }
     }
     for (std::size_t p = 0; p < n; ++p) quantized[p] = failure[p].empty();

@@ -47,9 +47,13 @@ struct JointProblem {
   std::vector<std::array<int, 2>> ncls, col0;        // class counts and first column per layout and axis
 };
 
+// With `broken` given, the couplings are elastic: a coupling may break at a cost per element far above any
+// deviation cost, so the program has a solution whenever each layout closes alone, and the couplings the
+// optimum breaks (appended to `broken`) show which subregions cannot agree.
 void solve_joint(JointProblem& jp, const std::vector<SegmentCoupling>& couplings,
                  const std::vector<EvenGroup>& even_groups, const std::vector<Separation>& separations,
-                 const QuantizeOptions& options, const std::string& part_name, QuantizeStats& stats) {
+                 const QuantizeOptions& options, const std::string& part_name, QuantizeStats& stats,
+                 std::vector<std::size_t>* broken) {
   IntegerProgram P;
   const bool integer = !couplings.empty() || !even_groups.empty();
   constexpr double inf = IntegerProgram::inf;
@@ -107,7 +111,12 @@ void solve_joint(JointProblem& jp, const std::vector<SegmentCoupling>& couplings
     const double ss = label_sign(s.label), st = label_sign(t.label);
     const int sa = col(c.layout_a, label_axis(s.label), s.break_a), sb = col(c.layout_a, label_axis(s.label), s.break_b);
     const int ta = col(c.layout_b, label_axis(t.label), t.break_a), tb = col(c.layout_b, label_axis(t.label), t.break_b);
-    P.add_row({{sb, ss}, {sa, -ss}, {tb, -st}, {ta, st}}, 0.0, 0.0);
+    if (broken) {
+      const int e = P.add_columns(2, 0.0, inf, options.broken_coupling_cost);
+      P.add_row({{sb, ss}, {sa, -ss}, {tb, -st}, {ta, st}, {e, 1.0}, {e + 1, -1.0}}, 0.0, 0.0);
+    } else {
+      P.add_row({{sb, ss}, {sa, -ss}, {tb, -st}, {ta, st}}, 0.0, 0.0);
+    }
   }
   for (const EvenGroup& g : even_groups) {
     // sum of the counts - 2 m = 0, m integer.
@@ -124,7 +133,7 @@ void solve_joint(JointProblem& jp, const std::vector<SegmentCoupling>& couplings
   }
   for (const Separation& sep : separations)
     P.add_row({{col(sep.layout, sep.axis, sep.hi), 1.0}, {col(sep.layout, sep.axis, sep.lo), -1.0}}, 1.0, inf);
-  const std::optional<std::vector<double>> x = P.solve(options.time_limit_ms / 1000.0);
+  const std::optional<std::vector<double>> x = P.solve(options.time_limit_ms / 1000.0, options.gap);
   if (!x)
     throw MeshingError(part_name + ": quantization has no integer solution (the labelled sides cannot close "
                                    "into poly-squares without overlapping)");
@@ -147,6 +156,16 @@ void solve_joint(JointProblem& jp, const std::vector<SegmentCoupling>& couplings
     stats.segments += static_cast<int>(layout.segments.size());
     stats.variables += jp.ncls[l][0] + jp.ncls[l][1];
   }
+  if (broken)
+    for (std::size_t c = 0; c < couplings.size(); ++c) {
+      auto count = [&](std::size_t l, int k) {
+        const LayoutSegment& s = jp.layouts[l]->segments[static_cast<std::size_t>(k)];
+        const auto pa = jp.layouts[l]->lattice[s.break_a], pb = jp.layouts[l]->lattice[s.break_b];
+        return std::llabs(pb[0] - pa[0]) + std::llabs(pb[1] - pa[1]);
+      };
+      if (count(couplings[c].layout_a, couplings[c].segment_a) != count(couplings[c].layout_b, couplings[c].segment_b))
+        broken->push_back(c);
+    }
 }
 
 // The separation that holds with the largest margin in the deformed plane, between two sets of break points
@@ -180,7 +199,8 @@ bool best_separation(const Layout& layout, const std::vector<Vec2>& deformed, co
 
 QuantizeStats quantize_layouts(const std::vector<Layout*>& layouts, const std::vector<const std::vector<Vec2>*>& deformed,
                                const std::vector<SegmentCoupling>& couplings, const QuantizeOptions& options,
-                               const std::string& part_name, const std::vector<EvenGroup>& even_groups) {
+                               const std::string& part_name, const std::vector<EvenGroup>& even_groups,
+                               std::vector<std::size_t>* broken) {
   JointProblem jp;
   jp.layouts = layouts;
   jp.deformed = deformed;
@@ -195,7 +215,8 @@ QuantizeStats quantize_layouts(const std::vector<Layout*>& layouts, const std::v
   QuantizeStats stats;
   for (int round = 0;; ++round) {
     stats = QuantizeStats{};
-    solve_joint(jp, couplings, even_groups, separations, options, part_name, stats);
+    if (broken) broken->clear();
+    solve_joint(jp, couplings, even_groups, separations, options, part_name, stats, broken);
     if (round >= options.max_separation_rounds) break;
     std::size_t added = 0;
     for (std::size_t l = 0; l < layouts.size(); ++l) {

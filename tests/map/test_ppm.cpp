@@ -6,6 +6,7 @@
 #include <map>
 #include <set>
 
+#include "polysquare/core/error.h"
 #include "polysquare/input/read_region.h"
 #include "polysquare/map/piecewise_map.h"
 #include "polysquare/map/quantize.h"
@@ -106,6 +107,42 @@ TEST(InterfaceQuantization, CouplingsPropagateThroughSubregions) {
   };
   EXPECT_EQ(len(A.layout, 0), len(A.layout, 1));
   EXPECT_EQ(check_layout(A.layout), "");
+}
+
+TEST(InterfaceQuantization, ElasticCouplingsNameTheOnesThatCannotAgree) {
+  // C's right side is split in two pieces whose counts add up to its left side; coupling A's bottom both to C's
+  // left side and to C's lower right piece leaves the upper piece no element: no integer program satisfies both.
+  // The elastic program still solves, honours one coupling, and names the other (and only it) as broken.
+  RectLayout A = rectangle({0, 0}, {3, 2}), C = rectangle({0, 0}, {2, 3}, {1.5});
+  // A: 0 bottom, 1 right, 2 top, 3 left. C: 0 bottom, 1 right lower, 2 right upper, 3 top, 4 left.
+  const std::vector<SegmentCoupling> couplings{{0, 0, 1, 4}, {0, 0, 1, 1}, {0, 1, 1, 0}};
+  const auto len = [](const Layout& l, int k) {
+    const auto a = l.lattice[l.segments[k].break_a], b = l.lattice[l.segments[k].break_b];
+    return std::llabs(b[0] - a[0]) + std::llabs(b[1] - a[1]);
+  };
+  {
+    RectLayout a = A, c = C;
+    EXPECT_THROW(quantize_layouts({&a.layout, &c.layout}, {&a.deformed, &c.deformed}, couplings, QuantizeOptions{}, "AC"),
+                 MeshingError);
+  }
+  std::vector<std::size_t> broken;
+  quantize_layouts({&A.layout, &C.layout}, {&A.deformed, &C.deformed}, couplings, QuantizeOptions{}, "AC", {}, &broken);
+  ASSERT_EQ(broken.size(), 1u);
+  EXPECT_TRUE(broken[0] == 0 || broken[0] == 1) << broken[0];
+  EXPECT_EQ(check_layout(A.layout), "");
+  EXPECT_EQ(check_layout(C.layout), "");
+  for (std::size_t c = 0; c < couplings.size(); ++c) {
+    const Layout& la = couplings[c].layout_a == 0 ? A.layout : C.layout;
+    const Layout& lb = couplings[c].layout_b == 0 ? A.layout : C.layout;
+    if (c == broken[0]) EXPECT_NE(len(la, couplings[c].segment_a), len(lb, couplings[c].segment_b));
+    else EXPECT_EQ(len(la, couplings[c].segment_a), len(lb, couplings[c].segment_b)) << c;
+  }
+  // Couplings that can agree are all honoured and none is named.
+  RectLayout B = rectangle({0, 0}, {3, 2}), D = rectangle({0, 0}, {2, 3}, {1.5});
+  quantize_layouts({&B.layout, &D.layout}, {&B.deformed, &D.deformed}, {{0, 0, 1, 4}, {0, 1, 1, 0}}, QuantizeOptions{},
+                   "BD", {}, &broken);
+  EXPECT_TRUE(broken.empty());
+  EXPECT_EQ(len(B.layout, 0), len(D.layout, 4));
 }
 
 namespace {

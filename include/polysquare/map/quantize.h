@@ -15,6 +15,11 @@ struct QuantizeOptions {
                                       ///< band is soft so that tight layouts still close; quality checks judge them
   int max_separation_rounds = 20; ///< rounds of re-solving with separations between overlapping sides
   int time_limit_ms = 20000;      ///< time limit of each LP (Clp) or branch-and-cut (Cbc) solve
+  double gap = 1.0;  ///< branch-and-cut stops within this cost of the optimum: one element of deviation on a
+                     ///< side of target length 1 (proving optimality among the many near-equal parity choices
+                     ///< of a coast's joint program took up to the time limit per solve)
+  double broken_coupling_cost = 1e4;  ///< cost per element of an elastic coupling's mismatch (quantize_layouts
+                                      ///< with `broken`): above any saving in deviation, so only what cannot agree breaks
 };
 
 struct QuantizeStats {
@@ -59,9 +64,14 @@ QuantizeStats quantize_layout(Layout& layout, const std::vector<Vec2>& deformed,
 /// Quantizes several layouts (PPM subregions, each in its own frame) in one integer program whose coupled
 /// segments get equal element counts; each layout must close and keep its sides apart as in quantize_layout.
 /// Without couplings the layouts are independent and the program is the totally unimodular one above.
+/// With `broken` given, couplings are elastic (options.broken_coupling_cost per element of mismatch): the program
+/// then fails only where a layout cannot close alone (or with its even groups and separations), and `broken`
+/// receives the indices of the couplings the solution does not honour (empty when all agree). One solve locates
+/// the subregions that make a joint program infeasible.
 QuantizeStats quantize_layouts(const std::vector<Layout*>& layouts, const std::vector<const std::vector<Vec2>*>& deformed,
                                const std::vector<SegmentCoupling>& couplings, const QuantizeOptions& options,
-                               const std::string& part_name, const std::vector<EvenGroup>& even_groups = {});
+                               const std::string& part_name, const std::vector<EvenGroup>& even_groups = {},
+                               std::vector<std::size_t>* broken = nullptr);
 
 /// Checks that the quantized layout is a valid poly-square: no zero-length segment, and segments of different
 /// chains or non-adjacent segments of one chain meet only at shared break points. Returns an empty string when
