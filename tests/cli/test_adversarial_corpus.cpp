@@ -93,6 +93,10 @@ TEST_P(AdversarialCorpus, EndsAsPromised) {
   const fs::path dir = fs::temp_directory_path() / ("polysquare_corpus_" + c.name + "_" + std::to_string(::getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir / "work");
+  struct Cleanup {  // removed however the test ends (an ASSERT returns early)
+    fs::path p;
+    ~Cleanup() { std::error_code ec; fs::remove_all(p, ec); }
+  } cleanup{dir};
   const fs::path work = dir / "work";  // the case's own directory: outputs go here, nothing else may appear
   // The input: a corpus file, the scratch directory itself ({dir}), or a copy in it ({copy}) for rows that aim an
   // output at the input.
@@ -162,7 +166,6 @@ TEST_P(AdversarialCorpus, EndsAsPromised) {
     EXPECT_EQ(entries(work), before) << c.name;
   }
   if (!copy.empty()) EXPECT_EQ(slurp(copy), copy_before) << c.name << ": the input was changed";
-  fs::remove_all(dir);
 }
 
 INSTANTIATE_TEST_SUITE_P(Corpus, AdversarialCorpus, ::testing::ValuesIn(load_cases()),
