@@ -197,21 +197,14 @@ bool best_separation(const Layout& layout, const std::vector<Vec2>& deformed, co
 
 }  // namespace
 
-QuantizeStats quantize_layouts(const std::vector<Layout*>& layouts, const std::vector<const std::vector<Vec2>*>& deformed,
-                               const std::vector<SegmentCoupling>& couplings, const QuantizeOptions& options,
-                               const std::string& part_name, const std::vector<EvenGroup>& even_groups,
-                               std::vector<std::size_t>* broken) {
-  JointProblem jp;
-  jp.layouts = layouts;
-  jp.deformed = deformed;
-  jp.cls.resize(layouts.size());
-  jp.ncls.resize(layouts.size());
-  jp.col0.resize(layouts.size());
-  for (std::size_t l = 0; l < layouts.size(); ++l)
-    for (int axis = 0; axis < 2; ++axis) jp.cls[l][axis] = axis_classes(*layouts[l], axis, jp.ncls[l][axis]);
-  // Solve; where sides overlap or corners coincide, add the separation the deformed layout shows and solve
-  // again (a few rounds settle it: each round only adds constraints the deformed plane satisfies).
-  std::vector<Separation> separations;
+namespace {
+
+// Solves the program; where sides overlap or corners coincide, adds the separation the deformed layout shows and
+// solves again (a few rounds settle it: each round only adds constraints the deformed plane satisfies).
+QuantizeStats solve_with_separations(JointProblem& jp, const std::vector<SegmentCoupling>& couplings,
+                                     const std::vector<EvenGroup>& even_groups, std::vector<Separation>& separations,
+                                     const QuantizeOptions& options, const std::string& part_name,
+                                     std::vector<std::size_t>* broken) {
   QuantizeStats stats;
   for (int round = 0;; ++round) {
     stats = QuantizeStats{};
@@ -219,8 +212,8 @@ QuantizeStats quantize_layouts(const std::vector<Layout*>& layouts, const std::v
     solve_joint(jp, couplings, even_groups, separations, options, part_name, stats, broken);
     if (round >= options.max_separation_rounds) break;
     std::size_t added = 0;
-    for (std::size_t l = 0; l < layouts.size(); ++l) {
-      const Layout& layout = *layouts[l];
+    for (std::size_t l = 0; l < jp.layouts.size(); ++l) {
+      const Layout& layout = *jp.layouts[l];
       for (const LayoutConflict& c : find_conflicts(layout, 64)) {
         std::vector<int> A, B;
         if (c.seg_a >= 0) {
@@ -231,7 +224,7 @@ QuantizeStats quantize_layouts(const std::vector<Layout*>& layouts, const std::v
           B = {c.break_b};
         }
         Separation sep{static_cast<int>(l), 0, 0, 0};
-        if (best_separation(layout, *deformed[l], A, B, jp.cls[l], sep) &&
+        if (best_separation(layout, *jp.deformed[l], A, B, jp.cls[l], sep) &&
             std::find(separations.begin(), separations.end(), sep) == separations.end()) {
           separations.push_back(sep);
           ++added;
@@ -242,6 +235,55 @@ QuantizeStats quantize_layouts(const std::vector<Layout*>& layouts, const std::v
   }
   stats.separations = separations.size();
   return stats;
+}
+
+JointProblem joint_problem(const std::vector<Layout*>& layouts, const std::vector<const std::vector<Vec2>*>& deformed) {
+  JointProblem jp;
+  jp.layouts = layouts;
+  jp.deformed = deformed;
+  jp.cls.resize(layouts.size());
+  jp.ncls.resize(layouts.size());
+  jp.col0.resize(layouts.size());
+  for (std::size_t l = 0; l < layouts.size(); ++l)
+    for (int axis = 0; axis < 2; ++axis) jp.cls[l][axis] = axis_classes(*layouts[l], axis, jp.ncls[l][axis]);
+  return jp;
+}
+
+}  // namespace
+
+QuantizeStats quantize_layouts(const std::vector<Layout*>& layouts, const std::vector<const std::vector<Vec2>*>& deformed,
+                               const std::vector<SegmentCoupling>& couplings, const QuantizeOptions& options,
+                               const std::string& part_name, const std::vector<EvenGroup>& even_groups,
+                               std::vector<std::size_t>* broken) {
+  JointProblem jp = joint_problem(layouts, deformed);
+  std::vector<Separation> separations;
+  // A joint program is a mixed-integer one, each solve of it costly; each layout alone is a network program
+  // solved in milliseconds. The separations each layout needs alone start the joint program, which then
+  // mostly settles in one or two rounds instead of one per separation found.
+  if (layouts.size() > 1 && (!couplings.empty() || !even_groups.empty()))
+    for (std::size_t l = 0; l < layouts.size(); ++l) {
+      Layout alone = *layouts[l];
+      JointProblem one = joint_problem({&alone}, {deformed[l]});
+      std::vector<Separation> own;
+      try {
+        solve_with_separations(one, {}, {}, own, options, part_name, nullptr);
+      } catch (const MeshingError&) {
+        continue;  // the joint program reports it
+      }
+      for (Separation sep : own) {
+        sep.layout = static_cast<int>(l);
+        separations.push_back(sep);
+      }
+    }
+  if (separations.empty()) return solve_with_separations(jp, couplings, even_groups, separations, options, part_name, broken);
+  try {
+    std::vector<Separation> warm = separations;
+    return solve_with_separations(jp, couplings, even_groups, warm, options, part_name, broken);
+  } catch (const MeshingError&) {
+    // A separation one layout needed alone may be one the coupled layouts cannot keep: solve without them.
+    separations.clear();
+    return solve_with_separations(jp, couplings, even_groups, separations, options, part_name, broken);
+  }
 }
 
 QuantizeStats quantize_layout(Layout& layout, const std::vector<Vec2>& deformed, const QuantizeOptions& options,

@@ -55,14 +55,14 @@ TEST(Gpm, IndependentOfTheThreadCount) {
 }
 
 TEST(Gpm, FailedPartitionFallsBackToOnePolySquareAndSaysSo) {
-  // square_feature's 2-way partition leaves a subregion that cannot close as a poly-square in the global frame.
-  const MeshResult r = gpm("square_feature", 3.0, 2);
+  // key's 2-way partition leaves a subregion that cannot close as a poly-square in the global frame.
+  const MeshResult r = gpm("key", 2.0, 2);
   EXPECT_TRUE(check_invariants(r.mesh).ok());
   // The report lists both candidates of part 0: the failed 2-way GPM with its error, then the kept fallback.
   const auto& tried = r.report["candidates"][0];
   ASSERT_EQ(tried.size(), 2u);
   EXPECT_EQ(tried[0]["subregions"], 2);
-  EXPECT_NE(tried[0]["error"].get<std::string>().find("square_feature"), std::string::npos);
+  EXPECT_NE(tried[0]["error"].get<std::string>().find("key"), std::string::npos);
   EXPECT_EQ(tried[1]["subregions"], 1);
   EXPECT_TRUE(tried[1]["chosen"].get<bool>());
   EXPECT_EQ(std::set<std::int32_t>(r.mesh.quad_part.begin(), r.mesh.quad_part.end()).size(), 1u);
