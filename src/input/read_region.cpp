@@ -206,12 +206,6 @@ void validate_region(Region& region, const InputOptions& options, std::vector<st
     const double a = ring_signed_area(ring.points);
     if (a == 0.0) throw InputError(ring_name(r) + " has zero area, at " + point_text(ring.points.front()));
     if ((a > 0) == ring.hole) std::reverse(ring.points.begin(), ring.points.end());
-    // One start vertex whatever the file's (a Shapefile and a GeoJSON of one coast start their rings at different
-    // vertices): the simplification breaks ties in vertex order and the chains begin there, so the mesh would
-    // depend on it. The rightmost (then topmost) vertex, a convex corner of every ring.
-    const auto first = std::max_element(ring.points.begin(), ring.points.end(),
-                                        [](Vec2 p, Vec2 q) { return p.x < q.x || (p.x == q.x && p.y < q.y); });
-    std::rotate(ring.points.begin(), first, ring.points.end());
   }
   // Nesting: holes inside their own outer ring, parts not inside each other (outside their holes).
   std::vector<int> outer(static_cast<std::size_t>(region.num_parts), -1);

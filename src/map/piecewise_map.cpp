@@ -3,6 +3,7 @@
 #include <oneapi/tbb/parallel_for.h>
 
 #include <algorithm>
+#include <exception>
 #include <chrono>
 #include <cmath>
 #include <map>
@@ -574,20 +575,21 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-// Runs f(i) for every subregion in parallel; the first failure in subregion order is rethrown, so the error
-// does not depend on the thread count.
+// Runs f(i) for every subregion in parallel; the first failure in subregion order is rethrown as it was thrown
+// (a MeshingError fails the candidate; anything else is a bug and must not pass for one), so the error does not
+// depend on the thread count.
 template <class F>
 void for_each_subregion(std::size_t count, F&& f) {
-  std::vector<std::string> errors(count);
+  std::vector<std::exception_ptr> errors(count);
   oneapi::tbb::parallel_for(std::size_t{0}, count, [&](std::size_t i) {
     try {
       f(i);
-    } catch (const std::exception& e) {
-      errors[i] = e.what();
+    } catch (...) {
+      errors[i] = std::current_exception();
     }
   });
-  for (const auto& e : errors)
-    if (!e.empty()) throw MeshingError(e);
+  for (const std::exception_ptr& e : errors)
+    if (e) std::rethrow_exception(e);
 }
 
 }  // namespace

@@ -702,16 +702,23 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
       if (cands.back().error.empty()) best = static_cast<int>(cands.size()) - 1;
     }
     if (best < 0) {
+      // Candidates that failed for the same reason (a triangle budget no candidate fits in) are named together
+      // before it, so the message says each reason once.
+      std::vector<std::pair<std::string, std::string>> reasons;  // error -> the candidates it sank
+      for (std::size_t c = 0; c < cands.size(); ++c) {
+        const std::string label =
+            ks[c].subregions == 0 ? std::string("the split-triangle fallback")
+                                  : (ks[c].subregions == 1 ? std::string("one poly-square")
+                                                           : "with " + std::to_string(ks[c].subregions) + " subregions") +
+                                        (ks[c].bend_interfaces ? " (bent interfaces)" : "") +
+                                        (ks[c].fine ? " (fine background)" : "");
+        auto it = std::find_if(reasons.begin(), reasons.end(), [&](const auto& r) { return r.first == cands[c].error; });
+        if (it == reasons.end()) reasons.push_back({cands[c].error, label});
+        else it->second += ", " + label;
+      }
       std::string all;
-      for (std::size_t c = 0; c < cands.size(); ++c)
-        all += (c ? "; " : "") +
-               (cands.size() <= 1          ? std::string()
-                : ks[c].subregions == 0    ? std::string("the split-triangle fallback: ")
-                : (ks[c].subregions == 1   ? std::string("one poly-square")
-                                           : "with " + std::to_string(ks[c].subregions) + " subregions") +
-                      (ks[c].bend_interfaces ? " (bent interfaces)" : "") +
-                      (ks[c].fine ? " (fine background)" : "") + ": ") +
-               cands[c].error;
+      for (const auto& [error, labels] : reasons)
+        all += (all.empty() ? "" : "; ") + (cands.size() <= 1 ? std::string() : labels + ": ") + error;
       errors[k] = all;
       return;
     }

@@ -89,13 +89,14 @@ TEST(SplitRepair, SubregionsThatFailAloneAreSplitIntoPiecesThatMap) {
       }
   EXPECT_GT(split, 0);
   EXPECT_GT(mapped, 0);
-  // Without splitting, fewer quads come from poly-square maps.
+  // Splitting never loses structure (since the elastic joint quantization, the unsplit mesh of this case is as
+  // structured: 0.996 both ways).
   MeshOptions no_split = o;
   no_split.map.split_rounds = 0;
   no_split.map.joint_split_rounds = 0;
   const MeshResult u = mesh_region(region, no_split);
   const double unsplit = u.report["summary"]["structured_fraction"].get<double>();
-  EXPECT_GT(r.report["summary"]["structured_fraction"].get<double>(), unsplit);
+  EXPECT_GE(r.report["summary"]["structured_fraction"].get<double>(), unsplit);
   // Splitting only what fails in the joint map (counts a snap cannot reach) runs, and never loses structure
   // (since local patches repair poor quads in place, the unsplit mesh of this case is already 0.99 structured).
   MeshOptions joint_only = no_split;
