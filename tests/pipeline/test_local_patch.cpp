@@ -8,6 +8,7 @@
 #include "polysquare/input/read_region.h"
 #include "polysquare/pipeline/invariants.h"
 #include "polysquare/pipeline/mesh_region.h"
+#include "polysquare/quality/quality.h"
 #include "polysquare/refine/local_patch.h"
 
 using namespace polysquare;
@@ -98,9 +99,10 @@ TEST(LocalPatch, RemeshesTheNeighbourhoodOfPoorQuadsAndKeepsTheFeature) {
       for (auto v : m.quads[q]) EXPECT_LE(m.nodes[v].y, n / 2 + 1e-12);
 }
 
-TEST(LocalPatch, KeepMoreOfACoastMapped) {
-  // estuary (GSHHG) at 400 m: poor quads next to sharp shoreline vertices are repaired by local patches instead
-  // of turning their whole subregion into a patch, so the structured fraction rises.
+TEST(LocalPatch, MendPoorCornersOfACoastInPlace) {
+  // estuary (GSHHG) at 400 m: quads with a corner below SJ 0.3 next to sharp shoreline vertices are meshed again
+  // by local patches, in place: no quad is left below 0.3 and the worst one is better than without them, while
+  // their subregions stay mapped (since the elastic quantization the case is fully structured either way).
   const Region region = read_region(std::string(POLYSQUARE_DATA_DIR) + "/cases/estuary.geojson");
   MeshOptions o;
   o.size = 400.0;
@@ -110,6 +112,14 @@ TEST(LocalPatch, KeepMoreOfACoastMapped) {
   MeshOptions off = o;
   off.local_patch.enabled = false;
   const MeshResult without = mesh_region(region, off);
-  EXPECT_GT(with.report["summary"]["structured_fraction"].get<double>(),
-            without.report["summary"]["structured_fraction"].get<double>() + 0.02);
+  auto below = [](const QuadMesh& m) {
+    const QuadMetrics q = quad_metrics(m);
+    return std::count_if(q.sj.begin(), q.sj.end(), [](double s) { return s < 0.3; });
+  };
+  EXPECT_EQ(below(with.mesh), 0);
+  EXPECT_GT(below(without.mesh), 0);
+  EXPECT_GT(compute_quality(with.mesh).sj.min, compute_quality(without.mesh).sj.min);
+  EXPECT_GE(with.report["summary"]["structured_fraction"].get<double>(),
+            without.report["summary"]["structured_fraction"].get<double>() - 0.01);
+  EXPECT_EQ(with.report["summary"]["unstructured_subregions"].get<int>(), 0);
 }
