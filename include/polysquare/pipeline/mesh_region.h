@@ -39,9 +39,8 @@ struct MeshOptions {
                                  ///< best mesh is kept. K > 0: K subregions, one poly-square if that fails.
   std::size_t target_quads_per_part = 20000;  ///< subregion size for large parts in automatic mode
   double perimeter_per_subregion = 30.0;      ///< boundary length per subregion in automatic mode, in sizes
-  int max_automatic_subregions = 64;          ///< cap on the boundary-length count: the joint quantization finds
-                                              ///< an infeasible subregion by adding them one at a time (quadratic;
-                                              ///< delta_box's ~200 subregions ran past 15 minutes)
+  int max_automatic_subregions = 64;          ///< cap on the boundary-length count (each subregion adds columns
+                                              ///< and coupling rows to the part's one mixed-integer quantization)
   bool drop_small_parts = true;               ///< leave out (and report) polygon parts smaller than size^2
   std::size_t search_quads = 5'000;           ///< parts up to this many quads try every count of search_subregions
   std::vector<int> search_subregions{2, 3, 4, 5, 6, 8};
