@@ -954,9 +954,8 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
       again = true;
     }
   }
-  // One integer program for all mapped subregions. When it has no solution, the subregions that cannot close
-  // alone are repaired; if they all can, subregions are added one at a time and the one that makes the program
-  // infeasible is repaired (its neighbours keep their maps).
+  // One integer program for all mapped subregions. When it has no solution, the subregions that cannot agree
+  // with their neighbours (elastic couplings) or cannot close alone are repaired; their neighbours keep their maps.
   // With `disagree` given the couplings are elastic, and the pairs of subregions whose interface counts the
   // solution could not make equal are appended to it.
   auto solve = [&](const std::vector<std::size_t>& members,

@@ -275,12 +275,11 @@ QuantizeStats quantize_layouts(const std::vector<Layout*>& layouts, const std::v
         separations.push_back(sep);
       }
     }
-  if (separations.empty()) return solve_with_separations(jp, couplings, even_groups, separations, options, part_name, broken);
   try {
-    std::vector<Separation> warm = separations;
-    return solve_with_separations(jp, couplings, even_groups, warm, options, part_name, broken);
+    return solve_with_separations(jp, couplings, even_groups, separations, options, part_name, broken);
   } catch (const MeshingError&) {
     // A separation one layout needed alone may be one the coupled layouts cannot keep: solve without them.
+    if (separations.empty()) throw;
     separations.clear();
     return solve_with_separations(jp, couplings, even_groups, separations, options, part_name, broken);
   }
