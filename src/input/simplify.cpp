@@ -175,7 +175,7 @@ SimplifyStats simplify_region(Region& region, const SimplifyOptions& options) {
       const Vec2 u = pool.p[from] - pool.p[at], w = pool.p[to] - pool.p[at];
       return std::abs(std::atan2(cross(u, w), dot(u, w))) * 180.0 / 3.14159265358979323846;
     };
-    const bool crowded = std::min(distance(pool.p[a], pool.p[v]), distance(pool.p[v], pool.p[b])) < 0.1 * options.max_segment &&
+    const bool crowded = std::min(distance(pool.p[a], pool.p[v]), distance(pool.p[v], pool.p[b])) < options.crowded_fraction * options.max_segment &&
                          opening(pool.prev[a], a, b) >= 20.0 && opening(a, b, pool.next[b]) >= 20.0;
     if (options.max_segment > 0.0 && !crowded && distance(pool.p[a], pool.p[b]) > options.max_segment) {
       pool.locked[v] = 1;

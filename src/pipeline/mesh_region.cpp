@@ -537,31 +537,51 @@ Candidate try_candidate(const Region& region, const RegionPart& part, const Poly
   SplitStats split;
   int joint_splits = 0;
   int faces = 0;
+  // Subregions whose map the first round gave up (quantization or snap), with why: later rounds patch them from
+  // the start instead of finding them again, which took most of a round's time on a coast (each search is
+  // several joint solves); the map is deterministic, so they would fail the same way.
+  std::map<int, std::string> failed_first;
   return finish_candidate(region, part, options, std::move(summary), [&](const Repairs& repairs) {
     PolysquareMapOptions with_repairs = map;
     with_repairs.patch_subregions.insert(with_repairs.patch_subregions.end(), repairs.patches.begin(), repairs.patches.end());
+    for (const auto& [s, why] : failed_first) with_repairs.patch_subregions.push_back(s);
     with_repairs.matched_patches = repairs.matched;
     with_repairs.grown_patches = repairs.grown;
     with_repairs.triangle_partition = partition;
+    const bool first_round = !partition;
     PartMapResult r = map_part(region, part, with_repairs);
-    if (!partition && r.partition) {
+    if (first_round && r.partition) {
       partition = std::make_shared<const std::vector<std::int32_t>>(r.partition->triangle_part);
       split = r.stats.split;
       joint_splits = r.stats.joint_splits;
       faces = r.partition->faces;
+      // The reason without its "<part>: subregion s: " head and the union it was meshed in (a later round's own).
+      for (const SubregionStats& sr : r.stats.subregions) {
+        if (sr.mapped || std::find(map.patch_subregions.begin(), map.patch_subregions.end(), sr.subregion) !=
+                             map.patch_subregions.end())
+          continue;
+        const std::string head = "subregion " + std::to_string(sr.subregion) + ": ";
+        std::string why = sr.reason;
+        if (const std::size_t at = why.find(head); at != std::string::npos) why.erase(0, at + head.size());
+        if (const std::size_t at = why.find(" (meshed in the patch of"); at != std::string::npos) why.erase(at);
+        failed_first.emplace(sr.subregion, why);
+      }
     }
-    // Subregions the repair rounds turned into patches say why, not merely that a patch was asked for.
-    // The map's text says a patch was requested; what follows it (a union it joined) is kept.
-    for (int s : repairs.patches) {
+    // Subregions the repair rounds (or the first round's map) turned into patches say why, not merely that a
+    // patch was asked for. The map's text says a patch was requested; what follows it (a union it joined) is kept.
+    auto explain = [&](int s, const std::string& why) {
       if (static_cast<std::size_t>(s) >= r.stats.subregions.size() || r.stats.subregions[static_cast<std::size_t>(s)].mapped ||
           std::find(map.patch_subregions.begin(), map.patch_subregions.end(), s) != map.patch_subregions.end())
-        continue;
+        return;
       std::string& reason = r.stats.subregions[static_cast<std::size_t>(s)].reason;
       const std::string asked = "a patch was requested";
-      const std::string why = repairs.why.count(s) ? repairs.why.at(s) + " (meshed again as a patch)" : asked;
       if (const std::size_t at = reason.find(asked); at != std::string::npos) reason.replace(at, asked.size(), why);
       else reason = name_of(region, part) + ": subregion " + std::to_string(s) + ": " + why;
-    }
+    };
+    for (int s : repairs.patches)
+      explain(s, repairs.why.count(s) ? repairs.why.at(s) + " (meshed again as a patch)" : "a patch was requested");
+    if (!first_round)
+      for (const auto& [s, why] : failed_first) explain(s, why);
     r.stats.split = split;
     r.stats.joint_splits = joint_splits;
     if (r.partition) r.partition->faces = faces;  // a reused partition keeps the first round's count

@@ -17,9 +17,10 @@ struct SimplifyOptions {
                               ///< this from the new segment (region units); 0 = no bound
   double max_segment = 0.0;   ///< a removal is skipped when the new segment would be longer than this (region
                               ///< units): curves are coarsened to the target size, never beyond it, so smooth
-                              ///< arcs keep turning gently; 0 = no bound. A vertex closer than a tenth of it
-                              ///< to a neighbour is removed all the same (the shortcut is then at most 1.1 times
-                              ///< this): two mesh nodes that close leave an edge ratio no mesh can avoid
+                              ///< arcs keep turning gently; 0 = no bound (but see crowded_fraction)
+  double crowded_fraction = 0.1;  ///< a vertex closer than this fraction of max_segment to a neighbour is removed
+                                  ///< past max_segment (the shortcut is then at most 1 + this times it): two mesh
+                                  ///< nodes that close leave an edge ratio no mesh can avoid
   double chord_reach = -1.0;  ///< the simplified curves keep their topology for the mesh edges too: ring vertices
                               ///< where a chord spanning up to this much of a ring could cross another curve
                               ///< become feature points (pin_chords_clear_of_curves, input/chord_clearance.h).

@@ -50,9 +50,9 @@ struct PolysquareMapOptions {
   int joint_split_rounds = 2;  ///< PPM: times the subregions whose map still fails in the joint map (a snap the
                                ///< joint counts cannot reach, an infeasible quantization) are split and the part
                                ///< mapped again; the new partition is kept when more quads come from maps
-  int split_max_subregions = 128; ///< no split takes a part beyond this many subregions: the joint quantization's
-                                  ///< time grows with the count; twice the automatic cap leaves a part
-                                  ///< partitioned at that cap room to split its failures
+  int split_max_subregions = 256; ///< no split takes a part beyond this many subregions: the joint quantization's
+                                  ///< time grows with the count; four times the automatic cap leaves a part
+                                  ///< partitioned at that cap room for two rounds of splits
   int sides_per_split = 12; ///< a failed subregion with s poly-square sides is split into ceil(s / this) pieces
                             ///< (at least 2, at most 8)
   /// PPM: the subregion of every background triangle from an earlier map_part of the same part with the same
