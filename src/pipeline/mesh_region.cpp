@@ -541,6 +541,9 @@ Candidate try_candidate(const Region& region, const RegionPart& part, const Poly
   // the start instead of finding them again, which took most of a round's time on a coast (each search is
   // several joint solves); the map is deterministic, so they would fail the same way.
   std::map<int, std::string> failed_first;
+  auto requested = [&](int s) {  // a patch the caller asked for, which keeps the map's own text
+    return std::find(map.patch_subregions.begin(), map.patch_subregions.end(), s) != map.patch_subregions.end();
+  };
   return finish_candidate(region, part, options, std::move(summary), [&](const Repairs& repairs) {
     PolysquareMapOptions with_repairs = map;
     with_repairs.patch_subregions.insert(with_repairs.patch_subregions.end(), repairs.patches.begin(), repairs.patches.end());
@@ -557,9 +560,7 @@ Candidate try_candidate(const Region& region, const RegionPart& part, const Poly
       faces = r.partition->faces;
       // The reason without its "<part>: subregion s: " head and the union it was meshed in (a later round's own).
       for (const SubregionStats& sr : r.stats.subregions) {
-        if (sr.mapped || std::find(map.patch_subregions.begin(), map.patch_subregions.end(), sr.subregion) !=
-                             map.patch_subregions.end())
-          continue;
+        if (sr.mapped || requested(sr.subregion)) continue;
         const std::string head = "subregion " + std::to_string(sr.subregion) + ": ";
         std::string why = sr.reason;
         if (const std::size_t at = why.find(head); at != std::string::npos) why.erase(0, at + head.size());
@@ -571,7 +572,7 @@ Candidate try_candidate(const Region& region, const RegionPart& part, const Poly
     // patch was asked for. The map's text says a patch was requested; what follows it (a union it joined) is kept.
     auto explain = [&](int s, const std::string& why) {
       if (static_cast<std::size_t>(s) >= r.stats.subregions.size() || r.stats.subregions[static_cast<std::size_t>(s)].mapped ||
-          std::find(map.patch_subregions.begin(), map.patch_subregions.end(), s) != map.patch_subregions.end())
+          requested(s))
         return;
       std::string& reason = r.stats.subregions[static_cast<std::size_t>(s)].reason;
       const std::string asked = "a patch was requested";
