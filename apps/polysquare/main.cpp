@@ -461,6 +461,9 @@ int main(int argc, char** argv) {
   cmd_mesh->add_option("--simplify", mesh.options.simplify,
                        "simplify curves finer than the size first: drop vertices whose triangle area < (F*size)^2, each within size of the result (0 = off: the mesh follows every input vertex)")
       ->capture_default_str();
+  cmd_mesh->add_option("--smooth-curves", mesh.options.smooth_curves,
+                       "with --simplify: smooth stretches of curve finer than the size first, each vertex within F*size of the input, so that digitisation steps are not corners (0 = off)")
+      ->capture_default_str();
   cmd_mesh->add_option("--min-island-width", mesh.options.min_island_width,
                        "with --simplify: leave out (and report) holes, closed feature curves and feature pieces around regions narrower than F*size (0 keeps them)")
       ->capture_default_str();

@@ -41,6 +41,7 @@ void check_mesh_options(const MeshOptions& o) {
           o.refine.flat_corner_deg, "in [0, 180] degrees (180 = off)");
   require(std::isfinite(o.simplify) && o.simplify >= 0, "--simplify", "simplify", o.simplify,
           "a finite number >= 0 (0 = off)");
+  require(std::isfinite(o.smooth_curves) && o.smooth_curves >= 0, "--smooth-curves", "smooth_curves", o.smooth_curves, "a finite fraction of the size, at least 0");
   require(std::isfinite(o.min_island_width) && o.min_island_width >= 0, "--min-island-width", "min_island_width",
           o.min_island_width, "a finite fraction of the size, at least 0");
   require(std::isfinite(o.map.deform.boundary_weight) && o.map.deform.boundary_weight >= 0, "--boundary-weight",

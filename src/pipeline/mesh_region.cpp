@@ -640,6 +640,7 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
     so.min_area = (options.simplify * options.size) * (options.simplify * options.size);
     so.max_distance = options.size;  // the simplified curves stay within h of the input
     so.max_segment = options.size;   // and are coarsened to the size, not beyond
+    so.smooth_distance = options.smooth_curves * options.size;
     simplify_stats = simplify_region(simplified, so);
     work = &simplified;
   } else {
@@ -829,6 +830,10 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
     structured_quads += structured[k] * static_cast<double>(results[k]->mesh.quads.size());
     if (st.subregions.empty()) {
       ++subregion_count;
+      // One map for the whole part: what is not structured there was made by local patches.
+      if (structured[k] > 0.0)
+        local_patch_quads += static_cast<std::size_t>(
+            std::llround((1.0 - structured[k]) * static_cast<double>(results[k]->mesh.quads.size())));
       if (structured[k] == 0.0) {
         const Vec2 at = work->rings[static_cast<std::size_t>(parts[k].rings.front())].points.front();
         unstructured.push_back({{"part", st.part}, {"subregion", -1}, {"quads", results[k]->mesh.quads.size()},
@@ -875,7 +880,7 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
       {"candidates", tried},
       {"dropped_parts", dropped},
       {"dropped_curves", dropped_json(dropped_curves)},
-      {"simplify", {{"fraction_of_size", options.simplify}, {"vertices_before", simplify_stats.vertices_before},
+      {"simplify", {{"fraction_of_size", options.simplify}, {"smooth_curves_fraction_of_size", options.smooth_curves}, {"vertices_before", simplify_stats.vertices_before},
                     {"vertices_after", simplify_stats.vertices_after}, {"refused", simplify_stats.refused},
                     {"max_distance", simplify_stats.max_distance},
                     {"max_distance_over_size", simplify_stats.max_distance / options.size},

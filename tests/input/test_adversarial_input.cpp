@@ -145,6 +145,7 @@ TEST(MeshOptionsCheck, DefaultsPassAndEveryNaNIsRefusedByName) {
       {"--max-poor-fraction", [](MeshOptions& o, double v) { o.max_poor_fraction = v; }},
       {"--corner-angle", [](MeshOptions& o, double v) { o.corner_threshold_deg = v; }},
       {"--simplify", [](MeshOptions& o, double v) { o.simplify = v; }},
+      {"--smooth-curves", [](MeshOptions& o, double v) { o.smooth_curves = v; }},
       {"--min-island-width", [](MeshOptions& o, double v) { o.min_island_width = v; }},
       {"--boundary-weight", [](MeshOptions& o, double v) { o.map.deform.boundary_weight = v; }},
       {"--feature-weight", [](MeshOptions& o, double v) { o.map.deform.feature_weight = v; }},

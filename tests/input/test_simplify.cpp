@@ -108,6 +108,98 @@ TEST(Simplify, KeepsEveryInputVertexWithinTheDistanceBound) {
   EXPECT_EQ(r.rings[0].points.size(), 5u);
 }
 
+namespace {
+std::size_t corners_over(const Region& r, double degrees) {
+  std::size_t n = 0;
+  auto count = [&](const std::vector<Vec2>& p, bool closed) {
+    const std::size_t m = p.size();
+    for (std::size_t i = 0; i < m; ++i) {
+      if (!closed && (i == 0 || i + 1 == m)) continue;
+      const Vec2 u = p[i] - p[(i + m - 1) % m], w = p[(i + 1) % m] - p[i];
+      n += std::abs(std::atan2(cross(u, w), dot(u, w))) > degrees * 3.14159265358979323846 / 180.0;
+    }
+  };
+  for (const Ring& ring : r.rings) count(ring.points, true);
+  for (const FeatureCurve& c : r.features) count(c.points, c.closed);
+  return n;
+}
+double farthest_from(const std::vector<Vec2>& from, const std::vector<Vec2>& line, bool closed) {
+  double worst = 0.0;
+  for (Vec2 q : from) {
+    double d = INFINITY;
+    for (std::size_t i = 0; i + 1 < line.size() + (closed ? 1 : 0); ++i)
+      d = std::min(d, point_segment_distance(q, line[i], line[(i + 1) % line.size()]));
+    worst = std::max(worst, d);
+  }
+  return worst;
+}
+}  // namespace
+
+// delta_box's shorelines are traced in steps of about 120 m turning 45 or 90 degrees at nearly every vertex: at
+// 200 m each surviving step would be a corner of the poly-square. Smoothing first leaves a fraction of them,
+// keeps the region valid, and every input vertex within the size of its curve.
+TEST(Simplify, SmoothingTakesTheStepsOutOfATracedShorelineAndStaysWithinTheSize) {
+  const Region original = read_region(std::string(POLYSQUARE_DATA_DIR) + "/cases/delta_box.geojson");
+  SimplifyOptions o;
+  o.min_area = 100.0 * 100.0;
+  o.max_distance = o.max_segment = 200.0;
+  Region plain = original;
+  simplify_region(plain, o);
+  o.smooth_distance = 100.0;
+  Region smooth = original;
+  const SimplifyStats st = simplify_region(smooth, o);
+  const std::size_t before = corners_over(plain, 30.0), after = corners_over(smooth, 30.0);
+  EXPECT_GT(before, 1000u);
+  EXPECT_LT(after, before * 3 / 4) << before << " -> " << after;
+  EXPECT_NO_THROW(validate_region(smooth));
+  ASSERT_EQ(smooth.features.size(), original.features.size());
+  double worst = 0.0;
+  for (std::size_t k = 0; k < original.features.size(); ++k)
+    worst = std::max(worst, farthest_from(original.features[k].points, smooth.features[k].points, smooth.features[k].closed));
+  EXPECT_LE(worst, 200.0);
+  EXPECT_GE(st.max_distance, worst - 1e-9);  // the report bounds it (each vertex to the segment that replaced it)
+  EXPECT_LE(st.max_distance, 200.0);
+}
+
+// Smoothing moves zigzags only. A finely sampled circle turns gently everywhere, and a small octagonal island
+// (an islet at the size) turns one way at every vertex: smoothing would only shrink them, so they keep their
+// input points.
+TEST(Simplify, SmoothingLeavesArcsAndSmallIslandsAlone) {
+  Region r;
+  r.source = "test";
+  r.num_parts = 1;
+  std::vector<Vec2> circle, octagon;
+  for (int k = 0; k < 160; ++k) circle.push_back({40.0 * std::cos(k * 2 * M_PI / 160), 40.0 * std::sin(k * 2 * M_PI / 160)});
+  for (int k = 0; k < 8; ++k) octagon.push_back({2.0 * std::cos(k * 2 * M_PI / 8), 2.0 * std::sin(k * 2 * M_PI / 8)});
+  r.rings.push_back({circle, 0, false, 0});
+  r.rings.push_back({octagon, 0, true, 1});
+  SimplifyOptions o;
+  o.min_area = 1e-6;
+  o.max_distance = o.max_segment = 2.5;
+  o.smooth_distance = 1.25;
+  simplify_region(r, o);
+  ASSERT_EQ(r.rings[1].points.size(), 8u);
+  for (Vec2 p : r.rings[0].points) EXPECT_NE(std::find(circle.begin(), circle.end(), p), circle.end()) << p.x << " " << p.y;
+  for (Vec2 p : r.rings[1].points) EXPECT_NE(std::find(octagon.begin(), octagon.end(), p), octagon.end()) << p.x << " " << p.y;
+  // A zigzag along a straight shore (steps of 1 turning 45 degrees each way) does move, within the bound.
+  Region z;
+  z.source = "test";
+  z.num_parts = 1;
+  std::vector<Vec2> saw{{0, 0}};
+  for (int k = 1; k <= 20; ++k) saw.push_back({static_cast<double>(k), k % 2 ? 0.5 : 0.0});
+  saw.push_back({20, 10});
+  saw.push_back({0, 10});
+  z.rings.push_back({saw, 0, false, 0});
+  SimplifyOptions zo = o;
+  zo.min_area = 1e-6;
+  const SimplifyStats st = simplify_region(z, zo);
+  std::size_t moved = 0;
+  for (Vec2 p : z.rings[0].points) moved += std::find(saw.begin(), saw.end(), p) == saw.end();
+  EXPECT_GT(moved, 10u);
+  EXPECT_LE(st.max_distance, 2.5);
+  EXPECT_NO_THROW(validate_region(z));
+}
+
 TEST(NarrowIslands, InscribedWidthOfKnownShapes) {
   // A 4 x 1 rectangle holds a disk of diameter 1; an L of two 1-wide arms one touching both outer walls and the
   // inner corner (centre (c, c), c = sqrt 2 (1 - c)); a 3-4-5 right triangle its incircle, diameter 3 + 4 - 5.

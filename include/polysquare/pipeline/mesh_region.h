@@ -25,6 +25,9 @@ struct MeshOptions {
                                  ///< is below (simplify * size)^2, keeping topology and every vertex within size of
                                  ///< the simplified curve; the mesh follows the simplified curves (MeshResult::region)
                                  ///< and the report gives the largest distance moved and the area change; 0 = off
+  double smooth_curves = 0.5;    ///< with simplify on: stretches of curve finer than the size are smoothed first,
+                                 ///< each vertex kept within smooth * size of the input, so that digitisation steps
+                                 ///< (a shoreline's 45-degree turns every 120 m) are not corners; 0 = off
   double min_island_width = 1.0; ///< with simplify on: holes, closed feature loops and faces between feature
                                  ///< pieces whose largest inscribed disk is narrower than this times size hold no
                                  ///< quad of that size: the hole or loop is left out, the face opened by removing
