@@ -51,9 +51,9 @@ bool segments_touch(Vec2 a, Vec2 b, Vec2 c, Vec2 d) {
   return (d1 == 0 && on(a, b, c)) || (d2 == 0 && on(a, b, d)) || (d3 == 0 && on(c, d, a)) || (d4 == 0 && on(c, d, b));
 }
 
-// Vertices in a stretch finer than max_segment (both segments at a vertex shorter) move towards the mean of their
-// neighbours, a few passes, each move kept only if the vertex stays within smooth_distance of the input curve
-// and the moved segments touch no other curve (nor sweep over a vertex). A shoreline digitised in steps finer
+// Zigzagging vertices in a stretch finer than max_segment (both segments at a vertex shorter) move towards the mean
+// of their neighbours, a few passes, each move kept only if the vertex stays within smooth_distance of the input
+// curve and the moved segments touch no other curve, sweep over no vertex and close in on none. A shoreline digitised in steps finer
 // than the size (45-degree turns every 120 m at 200 m) then turns gently, and its steps stop being corners.
 void smooth_fine_stretches(Pool& pool, Grid& grid, const std::vector<Vec2>& input, const SimplifyOptions& options) {
   const int n = static_cast<int>(pool.p.size());

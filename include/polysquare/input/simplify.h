@@ -21,10 +21,14 @@ struct SimplifyOptions {
   double crowded_fraction = 0.1;  ///< a vertex closer than this fraction of max_segment to a neighbour is removed
                                   ///< past max_segment (the shortcut is then at most 1 + this times it): two mesh
                                   ///< nodes that close leave an edge ratio no mesh can avoid
-  double smooth_distance = 0.0;  ///< before vertices are removed, stretches finer than max_segment are smoothed:
-                                 ///< vertices move towards their neighbours' mean, at most this far from the input,
-                                 ///< so that digitisation steps stop being corners; 0 = off
-  double smooth_turn_deg = 15.0;  ///< smoothing moves a vertex only while it or a neighbour turns by more than this
+  double smooth_distance = 0.0;  ///< before vertices are removed, zigzags in stretches finer than max_segment are
+                                 ///< smoothed: their vertices move towards their neighbours' mean, each within this
+                                 ///< of the input curve (and max_distance of its own input point), never crossing or
+                                 ///< closing in on another curve, so that digitisation steps stop being corners;
+                                 ///< 0 = off
+  double smooth_turn_deg = 15.0;  ///< a zigzag: a vertex turning more than this one way beside one turning the
+                                  ///< other way; only zigzags and their neighbours move (arcs and islands, which
+                                  ///< turn one way, would only shrink)
   double chord_reach = -1.0;  ///< the simplified curves keep their topology for the mesh edges too: ring vertices
                               ///< where a chord spanning up to this much of a ring could cross another curve
                               ///< become feature points (pin_chords_clear_of_curves, input/chord_clearance.h).
