@@ -11,10 +11,10 @@
 namespace polysquare {
 namespace {
 
-// Shape measure the smoother maximizes: the worst corner scaled Jacobian, capped by 3 / edge ratio so that a
+// Shape measure the smoother maximizes: the worst corner scaled Jacobian (sj), capped by 3 / edge ratio so that a
 // quad with a collapsed edge (angles fine, one edge near zero) counts as bad too. 3 leaves edge ratios up to 3
 // alone: on letter_M it gives SJ min 0.80 with edge ratio max 3.7 (2: 0.60 / 3.3; 4: 0.87 / 4.6).
-double quad_shape(const QuadMesh& mesh, std::size_t q) {
+double quad_shape(const QuadMesh& mesh, std::size_t q, double sj) {
   const auto& quad = mesh.quads[q];
   double lmin = INFINITY, lmax = 0.0;
   for (int k = 0; k < 4; ++k) {
@@ -22,16 +22,29 @@ double quad_shape(const QuadMesh& mesh, std::size_t q) {
     lmin = std::min(lmin, l);
     lmax = std::max(lmax, l);
   }
-  return std::min(quad_min_corner_sj(mesh, q), lmax > 0 ? 3.0 * lmin / lmax : -1.0);
+  return std::min(sj, lmax > 0 ? 3.0 * lmin / lmax : -1.0);
 }
 
 // Node -> incident quads (core/quad_topology.h), with the measures the smoother reads around a node.
 struct Incidence : NodeQuads {
   explicit Incidence(const QuadMesh& mesh) : NodeQuads(node_quads(mesh)) {}
-  double worst(const QuadMesh& mesh, std::size_t v) const {
-    double m = 1.0;
-    for (std::size_t k = offset[v]; k < offset[v + 1]; ++k) m = std::min(m, quad_shape(mesh, quads[k]));
-    return m;
+  // Folded quads around v first, then the worst shape: lifting the worst of several folded quads may fold
+  // another, so a move that leaves more folded quads around the node is never better.
+  struct Score {
+    std::size_t folded;
+    double worst;
+    bool better_than(const Score& o, double eps = 0.0) const {
+      return folded != o.folded ? folded < o.folded : worst > o.worst + eps;
+    }
+  };
+  Score score(const QuadMesh& mesh, std::size_t v) const {
+    Score s{0, 1.0};
+    for (std::size_t k = offset[v]; k < offset[v + 1]; ++k) {
+      const double sj = quad_min_corner_sj(mesh, quads[k]);
+      s.folded += sj <= 0.0;
+      s.worst = std::min(s.worst, quad_shape(mesh, quads[k], sj));
+    }
+    return s;
   }
   double min_sj(const QuadMesh& mesh, std::size_t v) const {
     double m = 1.0;
@@ -182,9 +195,9 @@ SmoothStats smooth_quads(QuadMesh& mesh, const SmoothOptions& options, const Reg
       }
       mean = (1.0 / n) * mean;
       edge_of[v] = edge / n;
-      const double before = inc.worst(mesh, v);
+      const Incidence::Score before = inc.score(mesh, v);
       mesh.nodes[v] = mean;
-      if (inc.worst(mesh, v) > before) {
+      if (inc.score(mesh, v).better_than(before)) {
         moved_flag[v] = 1;
         moved_by[v] = distance(old, mean);
       } else {
@@ -247,22 +260,23 @@ SmoothStats smooth_quads(QuadMesh& mesh, const SmoothOptions& options, const Reg
     std::fill(curve_moved.begin(), curve_moved.end(), 0);
     for_each_by_colour(search_classes, [&](std::int32_t v) {
       const bool is_inner = interior[v] != 0;
-      const double before = inc.worst(mesh, v);
-      if (is_inner && before >= options.worst_threshold) return;
-      double best = before, step = 0.25 * inc.mean_edge(mesh, v);
+      const Incidence::Score before = inc.score(mesh, v);
+      if (is_inner && before.worst >= options.worst_threshold) return;
+      Incidence::Score best = before;
+      double step = 0.25 * inc.mean_edge(mesh, v);
       if (is_inner) {
         for (int level = 0; level < 12; ++level) {
           const Vec2 centre = mesh.nodes[v];
           Vec2 best_p = centre;
           for (const Vec2& d : dirs) {
             mesh.nodes[v] = centre + step * d;
-            const double w = inc.worst(mesh, v);
-            if (w > best + 1e-12) { best = w; best_p = mesh.nodes[v]; }
+            const Incidence::Score w = inc.score(mesh, v);
+            if (w.better_than(best, 1e-12)) { best = w; best_p = mesh.nodes[v]; }
           }
           mesh.nodes[v] = best_p;
           if (best_p == centre) step *= 0.5;
         }
-        moved_flag[v] = best > before;
+        moved_flag[v] = best.better_than(before);
         return;
       }
       // Along the curve, strictly between the curve neighbours (so the boundary order never changes).
@@ -302,10 +316,10 @@ SmoothStats smooth_quads(QuadMesh& mesh, const SmoothOptions& options, const Reg
             const double dev = deviation(cand);
             if (!(dev < now - 1e-12)) continue;
             mesh.nodes[v] = c.at(cand);
-            if (inc.min_sj(mesh, v) >= floor) {
+            if (inc.min_sj(mesh, v) >= floor && inc.score(mesh, v).folded <= before.folded) {
               s = cand;
               allowed = std::max(tolerance, dev);
-              best = inc.worst(mesh, v);
+              best = inc.score(mesh, v);
               repaired = true;
               break;
             }
@@ -313,7 +327,7 @@ SmoothStats smooth_quads(QuadMesh& mesh, const SmoothOptions& options, const Reg
           }
         }
       }
-      if (!repaired && before >= options.worst_threshold) return;
+      if (!repaired && before.worst >= options.worst_threshold) return;
       for (int level = 0; level < 12; ++level) {
         const Vec2 old = mesh.nodes[v];
         double best_s = s;
@@ -321,13 +335,13 @@ SmoothStats smooth_quads(QuadMesh& mesh, const SmoothOptions& options, const Reg
           if (cand <= lo + margin || cand >= hi - margin) continue;
           if (bounded && deviation(cand) > allowed) continue;
           mesh.nodes[v] = c.at(cand);
-          const double w = inc.worst(mesh, v);
-          if (w > best + 1e-12) { best = w; best_s = cand; }
+          const Incidence::Score w = inc.score(mesh, v);
+          if (w.better_than(best, 1e-12)) { best = w; best_s = cand; }
           mesh.nodes[v] = old;
         }
         if (best_s != s) { s = best_s; mesh.nodes[v] = c.at(s); } else step *= 0.5;
       }
-      if (repaired || best > before) moved_flag[v] = curve_moved[v] = 1;
+      if (repaired || best.better_than(before)) moved_flag[v] = curve_moved[v] = 1;
     });
     std::size_t moved = 0;
     for (std::size_t v = 0; v < nn; ++v) {

@@ -129,6 +129,14 @@ UntangleStats untangle_quads(QuadMesh& mesh, const std::vector<std::uint8_t>& mo
         }
       }
       if (hs.empty()) continue;
+      // Quads around v below the target: a move that leaves more of them is refused even when it lifts the worst
+      // corner (lifting one folded corner by folding another's quad spreads the tangle).
+      auto below_around = [&] {
+        std::size_t below = 0;
+        for (std::size_t k = offset[v]; k < offset[v + 1]; ++k) below += quad_sj(static_cast<std::size_t>(incident[k])) < options.target_sj;
+        return below;
+      };
+      const std::size_t below_before = below_around();
       double worst = INFINITY;
       for (const HalfPlane& h : hs) worst = std::min(worst, h.at(Vec2{0, 0}));
       const std::vector<Vec2> box{lo, Vec2{hi.x, lo.y}, hi, Vec2{lo.x, hi.y}};
@@ -150,6 +158,10 @@ UntangleStats untangle_quads(QuadMesh& mesh, const std::vector<std::uint8_t>& mo
       for (const HalfPlane& h : hs) best_worst = std::min(best_worst, h.at(best));
       if (!(best_worst > worst)) continue;
       mesh.nodes[v] = origin + best;
+      if (below_around() > below_before) {
+        mesh.nodes[v] = origin;
+        continue;
+      }
       ++moved;
     }
     stats.moves += moved;

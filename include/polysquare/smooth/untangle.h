@@ -2,8 +2,9 @@
 // subregions). Every corner's signed area is linear in each of its three nodes, so for one node the positions
 // where all corners of its quads are convex form a convex polygon (the kernel). A node of a folded quad moves to
 // the point of that polygon farthest from its edges (the largest inscribed circle's centre); where the kernel is
-// empty, to the point where the worst corner is least folded. Neither move makes the worst corner around the node
-// worse, so the sweeps cannot tangle what was not tangled.
+// empty, to the point where the worst corner is least folded. A move is kept only if it lifts the worst corner
+// around the node and leaves no more of its quads below the target: lifting the worst corner alone may fold a
+// neighbouring quad, and the tangle spreads.
 #pragma once
 
 #include <cstddef>
