@@ -17,10 +17,27 @@
 #include <string>
 #include <vector>
 
+#include <unistd.h>
+
 #include "polysquare/core/geometry.h"
 #include "polysquare/core/quad_mesh.h"
 
 namespace polysquare::test {
+
+// A per-process scratch directory under the system's temporary directory, removed when the test process ends
+// (the file-writing tests would otherwise leave one behind per run).
+inline std::filesystem::path scratch_file(const std::string& prefix, const std::string& name) {
+  struct Dir {
+    std::filesystem::path path;
+    ~Dir() {
+      std::error_code ec;
+      std::filesystem::remove_all(path, ec);
+    }
+  };
+  static const Dir dir{std::filesystem::temp_directory_path() / (prefix + std::to_string(::getpid()))};
+  std::filesystem::create_directories(dir.path);
+  return dir.path / name;
+}
 
 // ---- SCHISM hgrid.gr3, parsed from the format's description ----
 struct Gr3 {

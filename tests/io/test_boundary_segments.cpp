@@ -34,11 +34,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-fs::path temp(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("polysquare_segments_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  return dir / name;
-}
+fs::path temp(const std::string& name) { return scratch_file("polysquare_segments_", name); }
 
 std::string output_of(const std::string& cmd, int* code = nullptr, bool with_stderr = false) {
   const fs::path out = temp("cmd.out");

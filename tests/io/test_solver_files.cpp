@@ -36,11 +36,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-fs::path temp(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("polysquare_solver_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  return dir / name;
-}
+fs::path temp(const std::string& name) { return scratch_file("polysquare_solver_", name); }
 
 struct Case {
   Region region;
