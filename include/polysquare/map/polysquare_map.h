@@ -47,10 +47,11 @@ struct PolysquareMapOptions {
                                       ///< retry for a matched patch that still left a folded or poor quad
   int split_rounds = 2;      ///< PPM: times a subregion whose map fails alone is split into smaller ones before
                             ///< the joint map (split_unmappable_subregions); 0 = patch it at once
-  int joint_split_rounds = 4;  ///< PPM: times the subregions whose map still fails in the joint map (a snap the
+  int joint_split_rounds = 3;  ///< PPM: times the subregions whose map still fails in the joint map (a snap the
                                ///< joint counts cannot reach, an infeasible quantization) are split and the part
                                ///< mapped again; the new partition is kept when more quads come from maps, and
-                               ///< the rounds stop at the first that brings none
+                               ///< the rounds stop at the first that brings none (a fourth kept nothing on a
+                               ///< coast and costs a whole map of every partitioned candidate)
   int split_max_subregions = 256; ///< no split takes a part beyond this many subregions: the joint quantization's
                                   ///< time grows with the count; four times the automatic cap leaves a part
                                   ///< partitioned at that cap room for two rounds of splits
