@@ -33,23 +33,20 @@ struct Incidence : NodeQuads {
   struct Score {
     std::size_t folded;
     double worst;
+    double min_sj;  // worst corner scaled Jacobian alone (the feature repair's floor reads it)
     bool better_than(const Score& o, double eps = 0.0) const {
       return folded != o.folded ? folded < o.folded : worst > o.worst + eps;
     }
   };
   Score score(const QuadMesh& mesh, std::size_t v) const {
-    Score s{0, 1.0};
+    Score s{0, 1.0, 1.0};
     for (std::size_t k = offset[v]; k < offset[v + 1]; ++k) {
       const double sj = quad_min_corner_sj(mesh, quads[k]);
       s.folded += sj <= 0.0;
+      s.min_sj = std::min(s.min_sj, sj);
       s.worst = std::min(s.worst, quad_shape(mesh, quads[k], sj));
     }
     return s;
-  }
-  double min_sj(const QuadMesh& mesh, std::size_t v) const {
-    double m = 1.0;
-    for (std::size_t k = offset[v]; k < offset[v + 1]; ++k) m = std::min(m, quad_min_corner_sj(mesh, quads[k]));
-    return m;
   }
   double mean_edge(const QuadMesh& mesh, std::size_t v) const {
     double len = 0.0;
@@ -310,16 +307,17 @@ SmoothStats smooth_quads(QuadMesh& mesh, const SmoothOptions& options, const Reg
           }
           const double balanced = std::clamp(0.5 * (a + b), lo + margin, hi - margin);
           const Vec2 old = mesh.nodes[v];
-          const double sj_before = inc.min_sj(mesh, v), floor = std::min(sj_before, options.feature_repair_min_sj);
+          const double floor = std::min(before.min_sj, options.feature_repair_min_sj);
           for (double frac : {1.0, 0.5, 0.25}) {
             const double cand = s + frac * (balanced - s);
             const double dev = deviation(cand);
             if (!(dev < now - 1e-12)) continue;
             mesh.nodes[v] = c.at(cand);
-            if (inc.min_sj(mesh, v) >= floor && inc.score(mesh, v).folded <= before.folded) {
+            const Incidence::Score moved = inc.score(mesh, v);
+            if (moved.min_sj >= floor && moved.folded <= before.folded) {
               s = cand;
               allowed = std::max(tolerance, dev);
-              best = inc.score(mesh, v);
+              best = moved;
               repaired = true;
               break;
             }
