@@ -325,7 +325,12 @@ int run_mesh(const MeshArgs& args) {
                                  short_number(simplified->feature_max_distance) + ", feature nodes off curves max " +
                                  short_number(simplified->feature_node_max_distance) + "\n"
                            : std::string())
-            << format_finite_volume_text(fv) << format_schism_text(quality.schism);
+            << format_finite_volume_text(fv) << format_schism_text(quality.schism)
+            << (result.report["summary"].value("sj_below_0_3_pinned", std::size_t{0}) > 0
+                    ? "  of the quads below scaled Jacobian 0.3, " + result.report["summary"]["sj_below_0_3_pinned"].dump() +
+                          " lie in input corners or wedges sharper than 17.5 degrees; the others are a fraction " +
+                          short_number(result.report["summary"]["sj_below_0_3_unpinned_fraction"].get<double>()) + "\n"
+                    : std::string());
   return 0;
 }
 

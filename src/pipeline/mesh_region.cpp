@@ -319,8 +319,14 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
         c.smooth = smooth_quads(r.mesh, smooth, &region);
         return measure();
       };
-      if (measure() && options.local_patch.enabled &&
-          patch_locally(poor, options.local_patch.max_rings, options.local_patch.max_quads))
+      // The first pass also mends valid quads under local_patch.mend_below_sj where a patch does better.
+      const bool any_poor = measure();
+      std::vector<std::uint8_t> flagged = poor;
+      bool any_flagged = any_poor;
+      for (std::size_t q = 0; q < flagged.size(); ++q)
+        if (!flagged[q] && !pinned[q] && metrics.sj[q] < options.local_patch.mend_below_sj) flagged[q] = 2, any_flagged = true;
+      if (any_flagged && options.local_patch.enabled &&
+          patch_locally(flagged, options.local_patch.max_rings, options.local_patch.max_quads))
         patch_locally(poor, options.local_patch.second_rings, options.local_patch.second_max_quads);
       // Quads beside a crack (pieces that do not share their nodes) count as folded: their subregions are meshed
       // again, instead of the whole candidate failing the invariants after the last round.
@@ -848,8 +854,19 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
                                 {"meshed_by", "patch"}, {"at", {sr.at.x, sr.at.y}}, {"reason", sr.reason}});
     }
   }
+  // Quads below SJ 0.3 that no conforming mesh avoids: at an input corner, or inside a wedge between two curves,
+  // sharper than asin(0.3) (17.5 degrees) and within a size of it. Reported apart from the rest below 0.3.
+  std::size_t pinned_below_0_3 = 0;
+  {
+    const std::vector<std::uint8_t> pinned = quads_pinned_by_sharp_input(mesh, 0.3, options.size);
+    for (std::size_t q = 0; q < mesh.quads.size(); ++q) {
+      const auto& c = mesh.quads[q];
+      pinned_below_0_3 += pinned[q] && quad_min_sj(mesh.nodes[c[0]], mesh.nodes[c[1]], mesh.nodes[c[2]], mesh.nodes[c[3]]) < 0.3;
+    }
+  }
   const nlohmann::json summary = {
       {"quads", mesh.quads.size()},
+      {"sj_below_0_3_pinned", pinned_below_0_3},
       {"structured_fraction", mesh.quads.empty() ? 0.0 : structured_quads / static_cast<double>(mesh.quads.size())},
       {"subregions", subregion_count},
       {"unstructured_subregions", unstructured.size()},

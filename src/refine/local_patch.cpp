@@ -209,9 +209,18 @@ LocalPatchStats remesh_poor_quads(QuadMesh& mesh, const std::vector<std::uint8_t
         quads.push_back(q);
       }
     if (quads.empty()) continue;  // already inside another cluster's region
+    // A cluster of valid quads flagged only to be mended (2) is replaced only by a patch whose worst corner
+    // beats theirs: a patch always costs singular nodes.
+    bool mend_only = true;
+    double cluster_worst = 1.0;
+    for (std::int32_t q : quads) {
+      mend_only = mend_only && poor[static_cast<std::size_t>(q)] == 2;
+      const auto& c = mesh.quads[static_cast<std::size_t>(q)];
+      cluster_worst = std::min(cluster_worst, quad_min_sj(mesh.nodes[c[0]], mesh.nodes[c[1]], mesh.nodes[c[2]], mesh.nodes[c[3]]));
+    }
     // Rings are added until a patch builds whose worst corner reaches the target; the best one seen is kept.
     std::optional<Done> best;
-    double best_worst = 0.0;
+    double best_worst = mend_only ? cluster_worst : 0.0;
     for (int ring = 1; ring <= options.max_rings; ++ring) {
       cutter.grow(in, quads, used);
       if (quads.size() > options.max_quads) break;
@@ -220,7 +229,7 @@ LocalPatchStats remesh_poor_quads(QuadMesh& mesh, const std::vector<std::uint8_t
       QuadMesh patch;
       if (!best_patch(cutter.patch_input(r), options.size, patch)) continue;
       const double worst = worst_corner(patch);
-      if (best && worst <= best_worst) continue;
+      if ((best || mend_only) && worst <= best_worst) continue;
       // The subregion that held most of the region names the patch quads.
       std::map<std::int32_t, std::size_t> votes;
       for (std::int32_t q : r.quads) votes[mesh.quad_part.empty() ? 0 : mesh.quad_part[static_cast<std::size_t>(q)]]++;

@@ -40,6 +40,7 @@ MeshOptions raw_single_map(double size) {
   o.size = size;
   o.parts = 1;
   o.min_scaled_jacobian = 0.0;
+  o.local_patch.mend_below_sj = 0.0;  // the raw map: no local patch mends its valid quads
   o.refine.enabled = false;
   o.simplify = 0.0;  // the input's own curves
   return o;

@@ -2,6 +2,7 @@
 // not a whole-part fallback, and what was left out as narrower than the size is reported.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -46,8 +47,9 @@ TEST(Coasts, DeltaWaterAt200MetresIsSemiStructured) {
     below += sj < 0.3;
     gated += sj < o.min_scaled_jacobian;
   }
-  // The issue asks at most 0.1 % below 0.3; 0.13 % today (most at boundary nodes of flat or sharp coast corners).
-  EXPECT_LE(static_cast<double>(below), 0.003 * static_cast<double>(r.mesh.quads.size()));
+  // The issue's floor: at most 0.1 % below 0.3 (valid quads there are mended by local patches that do better).
+  EXPECT_LE(static_cast<double>(below), 0.001 * static_cast<double>(r.mesh.quads.size()));
+  EXPECT_LE(summary["sj_below_0_3_pinned"].get<std::size_t>(), below);
   EXPECT_NEAR(q.sj_below_0_3_fraction, static_cast<double>(below) / static_cast<double>(r.mesh.quads.size()), 1e-12);
   EXPECT_LE(static_cast<double>(summary["poor_quads"].get<std::size_t>()), o.max_poor_fraction * static_cast<double>(r.mesh.quads.size()));
   EXPECT_LE(gated, summary["poor_quads"].get<std::size_t>());
@@ -110,6 +112,10 @@ TEST(Coasts, FjordCoastAt200MetresIsSemiStructured) {
   EXPECT_GE(r.report["summary"]["structured_fraction"].get<double>(), 0.95);
   EXPECT_GE(q.regular_quad_fraction, 0.95);
   EXPECT_LE(1000.0 * static_cast<double>(q.interior_singularities) / static_cast<double>(r.mesh.quads.size()), 20.0);
+  // The issue's floor of 0.1 % below SJ 0.3 (5 quads of 4,701 before local patches mended valid quads too).
+  const QuadMetrics m = quad_metrics(r.mesh);
+  EXPECT_LE(static_cast<double>(std::count_if(m.sj.begin(), m.sj.end(), [](double sj) { return sj < 0.3; })),
+            0.001 * static_cast<double>(r.mesh.quads.size()));
   // The chosen mesh had folded or near-folded quads before its last smoothing, and fewer after untangling.
   const auto& untangle = r.report["smooth"]["untangle"];
   EXPECT_GT(untangle["below_target_before"].get<std::size_t>(), 0u);

@@ -19,7 +19,8 @@ MeshResult gpm(const char* name, double size, int parts, int threads = 0) {
   o.threads = threads;
   o.keep_partition = true;
   o.map.composition = MapComposition::gpm;
-  o.refine.enabled = false;  // these tests are about the map: the corner template would add interior nodes
+  o.refine.enabled = false;  // these tests are about the map: the corner template would add interior nodes,
+  o.local_patch.mend_below_sj = 0.0;  // and so would local patches mending valid quads
   return mesh_region(read_region(std::string(POLYSQUARE_DATA_DIR) + "/cases/" + name + ".geojson"), o);
 }
 }  // namespace

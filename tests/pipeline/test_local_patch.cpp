@@ -124,3 +124,37 @@ TEST(LocalPatch, MendPoorCornersOfACoastInPlace) {
             without.report["summary"]["structured_fraction"].get<double>() - 0.01);
   EXPECT_EQ(with.report["summary"]["unstructured_subregions"].get<int>(), 0);
 }
+
+TEST(LocalPatch, ValidQuadsFlaggedToMendGiveWayOnlyToABetterPatch) {
+  const int n = 12;
+  auto worst = [](const QuadMesh& m) {
+    double w = 1.0;
+    for (const auto& x : m.quads) w = std::min(w, quad_min_sj(m.nodes[x[0]], m.nodes[x[1]], m.nodes[x[2]], m.nodes[x[3]]));
+    return w;
+  };
+  LocalPatchOptions o;
+  o.size = 1.0;
+  // Square quads flagged only to be mended (2): no patch beats them, so they stay; flagged as poor (1) they go.
+  for (std::uint8_t flag : {std::uint8_t{2}, std::uint8_t{1}}) {
+    QuadMesh m = grid_with_feature(n);
+    std::vector<std::uint8_t> flagged(m.quads.size(), 0), made;
+    flagged[static_cast<std::size_t>(2 * n + 2)] = flag;
+    const LocalPatchStats st = remesh_poor_quads(m, flagged, o, made);
+    EXPECT_EQ(st.patched, flag == 2 ? 0u : 1u) << int(flag);
+    if (flag == 2) EXPECT_DOUBLE_EQ(worst(m), 1.0);
+  }
+  // Node (3, 3) pulled towards (4, 4) until a corner opens to about 165 degrees (SJ between 0.2 and 0.3): valid
+  // quads, which a patch does beat.
+  QuadMesh m = grid_with_feature(n);
+  for (double t = 0.0; t < 0.5 && worst(m) >= 0.3; t += 0.005) m.nodes[3 * (n + 1) + 3] = {3.0 + t, 3.0 + t};
+  const double before = worst(m);
+  ASSERT_GT(before, 0.2);
+  ASSERT_LT(before, 0.3);
+  std::vector<std::uint8_t> flagged = poor_quads(m, 0.3), made;
+  for (auto& f : flagged) f = f ? 2 : 0;
+  const LocalPatchStats st = remesh_poor_quads(m, flagged, o, made);
+  EXPECT_EQ(st.patched, 1u);
+  EXPECT_TRUE(check_invariants(m).ok()) << check_invariants(m).first_problem;
+  EXPECT_GT(worst(m), before);
+  EXPECT_NEAR(area(m), n * n, 1e-9);
+}
