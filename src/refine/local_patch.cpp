@@ -1,6 +1,7 @@
 #include "polysquare/refine/local_patch.h"
 
 #include <algorithm>
+#include <cmath>
 #include <map>
 #include <optional>
 #include <unordered_map>
@@ -196,7 +197,7 @@ LocalPatchStats remesh_poor_quads(QuadMesh& mesh, const std::vector<std::uint8_t
     for (std::size_t k = 0; k < cluster.size(); ++k)
       for (std::int32_t v : mesh.quads[cluster[k]])
         for (std::int32_t n : cutter.quads_at(v))
-          if (poor[n] && !seen[n]) {
+          if (poor[n] == poor[q0] && !seen[n]) {  // poor quads and quads only to be mended cluster apart
             seen[n] = 1;
             cluster.push_back(n);
           }
@@ -210,7 +211,8 @@ LocalPatchStats remesh_poor_quads(QuadMesh& mesh, const std::vector<std::uint8_t
       }
     if (quads.empty()) continue;  // already inside another cluster's region
     // A cluster of valid quads flagged only to be mended (2) is replaced only by a patch whose worst corner
-    // beats theirs: a patch always costs singular nodes.
+    // beats theirs and reaches the target: a patch always costs singular nodes, and smoothing may take back a
+    // small gain.
     bool mend_only = true;
     double cluster_worst = 1.0;
     for (std::int32_t q : quads) {
@@ -220,7 +222,7 @@ LocalPatchStats remesh_poor_quads(QuadMesh& mesh, const std::vector<std::uint8_t
     }
     // Rings are added until a patch builds whose worst corner reaches the target; the best one seen is kept.
     std::optional<Done> best;
-    double best_worst = mend_only ? cluster_worst : 0.0;
+    double best_worst = mend_only ? std::max(cluster_worst, std::nextafter(options.target_sj, 0.0)) : 0.0;
     for (int ring = 1; ring <= options.max_rings; ++ring) {
       cutter.grow(in, quads, used);
       if (quads.size() > options.max_quads) break;
