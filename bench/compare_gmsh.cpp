@@ -1,6 +1,7 @@
 // Side-by-side with Gmsh 4.8.4 (Frontal-Delaunay + Blossom, the Gmsh baseline of data/cases/PROVENANCE.md) on the bundled cases, in
 // the same run: wall time (median of --repeat runs), quads, SJ min, eta min, skew max, edge ratio max, interior
-// singularities, and ratios. Usage: compare_gmsh [--repeat N] [case:size ...]
+// singularities, and ratios. Usage: compare_gmsh [--repeat N] [case:size[:gmsh_size] ...]; with gmsh_size, Gmsh
+// meshes at that size instead (delta_water:40:200 sets polysquare at 40 m against Gmsh's ~100k quads at 200 m).
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -45,7 +46,9 @@ int main(int argc, char** argv) {
               "SJmin", "etamin", "skew", "edgeR", "intS", "time s", "", "", "", "time x", "intS x");
   for (const std::string& spec : cases) {
     const std::string name = spec.substr(0, spec.find(':'));
-    const double h = std::stod(spec.substr(spec.find(':') + 1));
+    const std::string sizes = spec.substr(spec.find(':') + 1);
+    const double h = std::stod(sizes);
+    const double gmsh_h = sizes.find(':') == std::string::npos ? h : std::stod(sizes.substr(sizes.find(':') + 1));
     const std::string input = std::string(POLYSQUARE_DATA_DIR) + "/cases/" + name + ".geojson";
     // polysquare
     std::vector<double> ours_t;
@@ -66,7 +69,7 @@ int main(int argc, char** argv) {
     }
     // Gmsh
     const fs::path geo = tmp / (name + ".geo"), msh = tmp / (name + ".msh");
-    const std::string make = std::string(POLYSQUARE_SOURCE_DIR) + "/scripts/make-gmsh-geo " + input + " " + std::to_string(h) + " " + geo.string();
+    const std::string make = std::string(POLYSQUARE_SOURCE_DIR) + "/scripts/make-gmsh-geo " + input + " " + std::to_string(gmsh_h) + " " + geo.string();
     std::vector<double> gmsh_t;
     QualityReport theirs{};
     bool gmsh_ok = std::system(make.c_str()) == 0;
@@ -77,17 +80,17 @@ int main(int argc, char** argv) {
       gmsh_t.push_back(seconds(t0));
     }
     if (gmsh_ok) theirs = compute_quality(read_mesh(msh));
-    auto row = [&](const char* tool, const QualityReport& q, double t) {
-      std::printf("%-16s %4.1f | %-9s %7zu %6.3f %6.3f %6.3f %7.2f %5zu | %7.3f", name.c_str(), h, tool, q.quads, q.sj.min,
+    auto row = [&](const char* tool, double size, const QualityReport& q, double t) {
+      std::printf("%-16s %4.1f | %-9s %7zu %6.3f %6.3f %6.3f %7.2f %5zu | %7.3f", name.c_str(), size, tool, q.quads, q.sj.min,
                   q.eta.min, q.skew.max, q.edge_ratio.max, q.interior_singularities, t);
     };
-    if (gmsh_ok) { row("gmsh", theirs, median(gmsh_t)); std::printf("  (%zu triangles left)\n", theirs.triangles); }
-    else std::printf("%-16s %4.1f | gmsh failed on this input (e.g. Blossom found no perfect matching)\n", name.c_str(), h);
+    if (gmsh_ok) { row("gmsh", gmsh_h, theirs, median(gmsh_t)); std::printf("  (%zu triangles left)\n", theirs.triangles); }
+    else std::printf("%-16s %4.1f | gmsh failed on this input (e.g. Blossom found no perfect matching)\n", name.c_str(), gmsh_h);
     if (!ours_error.empty()) {
       std::printf("%-16s %4.1f | polysquare refused: %.150s\n", name.c_str(), h, ours_error.c_str());
       continue;
     }
-    row("polysquare", ours, median(ours_t));
+    row("polysquare", h, ours, median(ours_t));
     if (gmsh_ok)
       std::printf("  %29s %8.2f %9.3f\n", "ratio polysquare/gmsh:", median(ours_t) / median(gmsh_t),
                   theirs.interior_singularities ? double(ours.interior_singularities) / double(theirs.interior_singularities) : 0.0);

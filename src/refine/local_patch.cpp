@@ -211,8 +211,7 @@ LocalPatchStats remesh_poor_quads(QuadMesh& mesh, const std::vector<std::uint8_t
       }
     if (quads.empty()) continue;  // already inside another cluster's region
     // A cluster of valid quads flagged only to be mended (2) is replaced only by a patch whose worst corner
-    // beats theirs and reaches the target: a patch always costs singular nodes, and smoothing may take back a
-    // small gain.
+    // beats theirs: a patch always costs singular nodes.
     bool mend_only = true;
     double cluster_worst = 1.0;
     for (std::int32_t q : quads) {
@@ -222,7 +221,7 @@ LocalPatchStats remesh_poor_quads(QuadMesh& mesh, const std::vector<std::uint8_t
     }
     // Rings are added until a patch builds whose worst corner reaches the target; the best one seen is kept.
     std::optional<Done> best;
-    double best_worst = mend_only ? std::max(cluster_worst, std::nextafter(options.target_sj, 0.0)) : 0.0;
+    double best_worst = mend_only ? cluster_worst : 0.0;
     for (int ring = 1; ring <= options.max_rings; ++ring) {
       cutter.grow(in, quads, used);
       if (quads.size() > options.max_quads) break;

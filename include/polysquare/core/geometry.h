@@ -43,7 +43,10 @@ inline bool sharp_turn(Vec2 prev, Vec2 at, Vec2 next, double threshold_deg) {
 /// sin of the angle from p->next to p->prev, negative when the corner is inverted, -1 for a zero-length edge.
 inline double corner_sj(Vec2 prev, Vec2 p, Vec2 next) {
   const Vec2 en = next - p, ep = prev - p;
-  const double l = norm(en) * norm(ep);
+  // One sqrt of the product of squared lengths, not two std::hypot: smoothing and the quality checks evaluate
+  // millions of corners, and hypot's overflow guard was a third of a coast's meshing time (squares of lengths
+  // up to the documented 1e15 coordinate limit stay far inside the double range).
+  const double l = std::sqrt(dot(en, en) * dot(ep, ep));
   return l > 0 ? cross(en, ep) / l : -1.0;
 }
 /// Worst corner_sj of the counter-clockwise quad a b c d (the Verdict scaled Jacobian of the quad).

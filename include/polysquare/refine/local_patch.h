@@ -22,7 +22,7 @@ struct LocalPatchOptions {
   /// patch of all rings tried is kept.
   double target_sj = 0.3;
   /// Valid quads that pass the caller's gates but have a corner below this are mended too (flagged 2 in
-  /// remesh_poor_quads), a patch kept only where its worst corner beats theirs and reaches target_sj; 0 = off.
+  /// remesh_poor_quads), a patch kept only where its worst corner beats theirs; 0 = off.
   double mend_below_sj = 0.3;
   /// A second pass for quads still poor after the first pass and smoothing, before their subregion is demoted
   /// to a patch (a patch that builds may still hold a corner under the gate): larger regions, more rings.
@@ -42,7 +42,7 @@ struct LocalPatchStats {
 };
 
 /// Meshes again the neighbourhood of every cluster of quads flagged in `poor` (#quads; 1 = poor or folded, 2 = valid,
-/// mended only when the patch's worst corner beats the cluster's and reaches target_sj): the cluster grows by rings
+/// mended only when the patch's worst corner beats the cluster's): the cluster grows by rings
 /// of edge-neighbours, never across a feature edge, until it is a disk without feature or boundary edges inside
 /// and the patch on its boundary loop builds with no folded quad (the split and the matching construction are
 /// both tried, the one with the better worst corner kept). Nodes outside the regions and every tagged edge keep
