@@ -16,13 +16,13 @@ namespace {
 // alone: on letter_M it gives SJ min 0.80 with edge ratio max 3.7 (2: 0.60 / 3.3; 4: 0.87 / 4.6).
 double quad_shape(const QuadMesh& mesh, std::size_t q, double sj) {
   const auto& quad = mesh.quads[q];
-  double lmin = INFINITY, lmax = 0.0;
+  double lmin = INFINITY, lmax = 0.0;  // squared edge lengths: one sqrt per quad, not four hypot
   for (int k = 0; k < 4; ++k) {
-    const double l = distance(mesh.nodes[quad[k]], mesh.nodes[quad[(k + 1) % 4]]);
-    lmin = std::min(lmin, l);
-    lmax = std::max(lmax, l);
+    const Vec2 e = mesh.nodes[quad[(k + 1) % 4]] - mesh.nodes[quad[k]];
+    lmin = std::min(lmin, dot(e, e));
+    lmax = std::max(lmax, dot(e, e));
   }
-  return std::min(sj, lmax > 0 ? 3.0 * lmin / lmax : -1.0);
+  return std::min(sj, lmax > 0 ? 3.0 * std::sqrt(lmin / lmax) : -1.0);
 }
 
 // Node -> incident quads (core/quad_topology.h), with the measures the smoother reads around a node.
