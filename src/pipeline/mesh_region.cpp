@@ -320,11 +320,13 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
         return measure();
       };
       // The first pass also mends valid quads under local_patch.mend_below_sj where a patch does better.
-      const bool any_poor = measure();
+      bool any_flagged = measure();
       std::vector<std::uint8_t> flagged = poor;
-      bool any_flagged = any_poor;
       for (std::size_t q = 0; q < flagged.size(); ++q)
-        if (!flagged[q] && !pinned[q] && metrics.sj[q] < options.local_patch.mend_below_sj) flagged[q] = 2, any_flagged = true;
+        if (!flagged[q] && !pinned[q] && metrics.sj[q] < options.local_patch.mend_below_sj) {
+          flagged[q] = 2;
+          any_flagged = true;
+        }
       if (any_flagged && options.local_patch.enabled &&
           patch_locally(flagged, options.local_patch.max_rings, options.local_patch.max_quads))
         patch_locally(poor, options.local_patch.second_rings, options.local_patch.second_max_quads);
@@ -856,17 +858,20 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
   }
   // Quads below SJ 0.3 that no conforming mesh avoids: at an input corner, or inside a wedge between two curves,
   // sharper than asin(0.3) (17.5 degrees) and within a size of it. Reported apart from the rest below 0.3.
-  std::size_t pinned_below_0_3 = 0;
+  std::size_t below_0_3 = 0, pinned_below_0_3 = 0;
   {
     const std::vector<std::uint8_t> pinned = quads_pinned_by_sharp_input(mesh, 0.3, options.size);
-    for (std::size_t q = 0; q < mesh.quads.size(); ++q) {
-      const auto& c = mesh.quads[q];
-      pinned_below_0_3 += pinned[q] && quad_min_sj(mesh.nodes[c[0]], mesh.nodes[c[1]], mesh.nodes[c[2]], mesh.nodes[c[3]]) < 0.3;
-    }
+    for (std::size_t q = 0; q < mesh.quads.size(); ++q)
+      if (quad_min_corner_sj(mesh, q) < 0.3) {
+        ++below_0_3;
+        pinned_below_0_3 += pinned[q];
+      }
   }
   const nlohmann::json summary = {
       {"quads", mesh.quads.size()},
       {"sj_below_0_3_pinned", pinned_below_0_3},
+      {"sj_below_0_3_unpinned_fraction",
+       mesh.quads.empty() ? 0.0 : static_cast<double>(below_0_3 - pinned_below_0_3) / static_cast<double>(mesh.quads.size())},
       {"structured_fraction", mesh.quads.empty() ? 0.0 : structured_quads / static_cast<double>(mesh.quads.size())},
       {"subregions", subregion_count},
       {"unstructured_subregions", unstructured.size()},

@@ -1,6 +1,5 @@
 #include "polysquare/pipeline/report.h"
 
-#include <algorithm>
 #include <array>
 #include <string_view>
 
@@ -25,10 +24,6 @@ void add_quality_to_report(nlohmann::json& report, const QualityReport& quality,
   summary["boundary_singularities"] = quality.boundary_singularities;
   summary["regular_quad_fraction"] = quality.regular_quad_fraction;
   summary["sj_below_0_3_fraction"] = quality.sj_below_0_3_fraction;
-  // The quads below 0.3 the input's sharp corners and wedges pin (counted by the pipeline) taken out.
-  if (summary.contains("sj_below_0_3_pinned") && quality.quads > 0)
-    summary["sj_below_0_3_unpinned_fraction"] =
-        std::max(0.0, quality.sj_below_0_3_fraction - summary["sj_below_0_3_pinned"].get<double>() / static_cast<double>(quality.quads));
 }
 
 std::string report_text(const nlohmann::json& report) {
