@@ -137,13 +137,32 @@ std::vector<std::vector<std::int32_t>> colour_classes(const QuadMesh& mesh, cons
 
 // Runs `step(v)` for every node, colour by colour, the nodes of a colour in parallel.
 template <typename F>
-void for_each_by_colour(const std::vector<std::vector<std::int32_t>>& classes, F step) {
-  for (const auto& cls : classes)
+void for_each_by_colour(const std::vector<std::vector<std::int32_t>>& classes, std::int64_t& clock, F step) {
+  for (const auto& cls : classes) {
+    ++clock;
     oneapi::tbb::parallel_for(oneapi::tbb::blocked_range<std::size_t>(0, cls.size(), 256),
                               [&](const oneapi::tbb::blocked_range<std::size_t>& r) {
                                 for (std::size_t i = r.begin(); i != r.end(); ++i) step(cls[i]);
                               });
+  }
 }
+
+// Gauss-Seidel bookkeeping, in colour steps of for_each_by_colour's clock: when each node last moved and when a
+// sweep last visited it. A node whose quads did not change since its last visit would decide the same again (its
+// move reads nothing else), so it is skipped: same mesh, a fraction of the work once most nodes have settled.
+struct Visits {
+  std::vector<std::int64_t> moved, visited;
+  explicit Visits(std::size_t nn) : moved(nn, -1), visited(nn, -1) {}
+  // True when no node of v's quads (v itself too, if `self`) moved since v's last visit.
+  bool settled(const QuadMesh& mesh, const Incidence& inc, std::int32_t v, bool self) const {
+    const std::int64_t seen = visited[v];
+    if (seen < 0) return false;
+    for (std::size_t k = inc.offset[v]; k < inc.offset[v + 1]; ++k)
+      for (std::int32_t w : mesh.quads[inc.quads[k]])
+        if ((self || w != v) && moved[w] >= seen) return false;
+    return true;
+  }
+};
 
 // A node that slides: its curve and its two neighbours along the curve.
 struct Slider {
@@ -173,8 +192,10 @@ SmoothStats smooth_quads(QuadMesh& mesh, const SmoothOptions& options, const Reg
   // Per-node results of a sweep, reduced in node order afterwards so that the stopping test is deterministic.
   std::vector<double> moved_by(nn, 0.0), edge_of(nn, 0.0);
   std::vector<std::uint8_t> moved_flag(nn, 0);
+  std::int64_t clock = 0;
+  Visits lap(nn);
   for (int sweep = 0; sweep < options.iterations; ++sweep) {
-    for_each_by_colour(interior_classes, [&](std::int32_t v) {
+    for_each_by_colour(interior_classes, clock, [&](std::int32_t v) {
       std::int32_t nbrs[32];
       int n = 0;
       for (std::size_t k = inc.offset[v]; k < inc.offset[v + 1]; ++k) {
@@ -192,11 +213,17 @@ SmoothStats smooth_quads(QuadMesh& mesh, const SmoothOptions& options, const Reg
       }
       mean = (1.0 / n) * mean;
       edge_of[v] = edge / n;
+      moved_flag[v] = 0;
+      moved_by[v] = 0.0;
+      // Its neighbours unmoved, v is at their mean already or was refused it.
+      if (lap.settled(mesh, inc, v, false)) return;
+      lap.visited[v] = clock;
       const Incidence::Score before = inc.score(mesh, v);
       mesh.nodes[v] = mean;
       if (inc.score(mesh, v).better_than(before)) {
         moved_flag[v] = 1;
         moved_by[v] = distance(old, mean);
+        lap.moved[v] = clock;
       } else {
         mesh.nodes[v] = old;
         moved_flag[v] = 0;
@@ -252,10 +279,12 @@ SmoothStats smooth_quads(QuadMesh& mesh, const SmoothOptions& options, const Reg
   for (std::size_t v = 0; v < nn; ++v) searchable[v] = interior[v] || (kinds && !curves.empty() && slides(v));
   const auto search_classes = colour_classes(mesh, inc, searchable);
   std::vector<std::uint8_t> curve_moved(nn, 0);
+  Visits search(nn);
+  search.moved = lap.moved;
   for (int sweep = 0; sweep < options.worst_sweeps; ++sweep) {
     std::fill(moved_flag.begin(), moved_flag.end(), 0);
     std::fill(curve_moved.begin(), curve_moved.end(), 0);
-    for_each_by_colour(search_classes, [&](std::int32_t v) {
+    auto search_node = [&](std::int32_t v) {
       const bool is_inner = interior[v] != 0;
       const Incidence::Score before = inc.score(mesh, v);
       if (is_inner && before.worst >= options.worst_threshold) return;
@@ -340,6 +369,14 @@ SmoothStats smooth_quads(QuadMesh& mesh, const SmoothOptions& options, const Reg
         if (best_s != s) { s = best_s; mesh.nodes[v] = c.at(s); } else step *= 0.5;
       }
       if (repaired || best.better_than(before)) moved_flag[v] = curve_moved[v] = 1;
+    };
+    for_each_by_colour(search_classes, clock, [&](std::int32_t v) {
+      // The search from an unchanged neighbourhood finds what it found last time: nothing, or v moved.
+      if (search.settled(mesh, inc, v, true)) return;
+      search.visited[v] = clock;
+      const Vec2 start = mesh.nodes[v];
+      search_node(v);
+      if (!(mesh.nodes[v] == start)) search.moved[v] = clock;
     });
     std::size_t moved = 0;
     for (std::size_t v = 0; v < nn; ++v) {
