@@ -8,8 +8,11 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstring>
 #include <deque>
 #include <limits>
+#include <map>
+#include <mutex>
 
 namespace polysquare {
 namespace {
@@ -277,7 +280,94 @@ int minimize(const Energy& energy, const DeformProblem& pr, std::vector<Vec2>& x
   return it;
 }
 
+// Two independent 64-bit lanes over the 64-bit words of everything a solve reads: the memo's key.
+struct Digest {
+  std::uint64_t a = 0x9e3779b97f4a7c15ull, b = 0x6a09e667f3bcc909ull;
+  void word(std::uint64_t w) {
+    a = (a ^ w) * 0xff51afd7ed558ccdull;
+    a ^= a >> 33;
+    b = (b + w) * 0xc4ceb9fe1a85ec53ull;
+    b ^= b >> 29;
+    b = (b << 21) | (b >> 43);
+  }
+  void real(double v) {
+    std::uint64_t w;
+    std::memcpy(&w, &v, sizeof w);
+    word(w);
+  }
+  template <typename T>
+  void raw(const std::vector<T>& v) {  // types without padding only
+    word(v.size());
+    const auto* bytes = reinterpret_cast<const unsigned char*>(v.data());
+    const std::size_t n = v.size() * sizeof(T);
+    std::size_t i = 0;
+    for (; i + 8 <= n; i += 8) {
+      std::uint64_t w;
+      std::memcpy(&w, bytes + i, 8);
+      word(w);
+    }
+    std::uint64_t tail = 0;
+    std::memcpy(&tail, bytes + i, n - i);
+    word(tail);
+  }
+  void problem(const DeformProblem& p, const DeformOptions& o, const std::vector<Vec2>& x) {
+    for (double v : {o.amips_alpha, o.amips_s, o.relative_tolerance}) real(v);
+    word(static_cast<std::uint64_t>(o.max_iterations));
+    word(static_cast<std::uint64_t>(o.lbfgs_memory));
+    raw(o.eps_schedule);
+    raw(p.rest);
+    raw(p.triangles);
+    word(p.aligned.size());
+    for (const AlignedEdge& e : p.aligned) {  // field by field: the struct has padding
+      word(static_cast<std::uint64_t>(static_cast<std::uint32_t>(e.a)) << 32 | static_cast<std::uint32_t>(e.b));
+      real(e.weight);
+      word(static_cast<std::uint64_t>(e.label + 1));
+    }
+    raw(p.fixed);
+    raw(x);
+  }
+  DeformMemo::Key key() const { return {a, b}; }
+};
+
 }  // namespace
+
+struct DeformMemo::Impl {
+  struct Entry {
+    std::vector<Vec2> x;
+    DeformStats stats;
+    bool ok = false;
+  };
+  mutable std::mutex mutex;
+  std::map<Key, Entry> entries;
+  std::size_t max_bytes = 0, bytes = 0;
+  mutable std::size_t hits = 0;
+};
+
+DeformMemo::DeformMemo(std::size_t max_bytes) : impl_(std::make_unique<Impl>()) { impl_->max_bytes = max_bytes; }
+DeformMemo::~DeformMemo() = default;
+
+bool DeformMemo::find(const Key& key, std::vector<Vec2>& x, DeformStats& stats, bool& ok) const {
+  const std::lock_guard<std::mutex> lock(impl_->mutex);
+  const auto it = impl_->entries.find(key);
+  if (it == impl_->entries.end()) return false;
+  x = it->second.x;
+  stats = it->second.stats;
+  ok = it->second.ok;
+  ++impl_->hits;
+  return true;
+}
+
+void DeformMemo::store(const Key& key, const std::vector<Vec2>& x, const DeformStats& stats, bool ok) {
+  const std::lock_guard<std::mutex> lock(impl_->mutex);
+  const std::size_t b = x.size() * sizeof(Vec2);
+  if (impl_->bytes + b > impl_->max_bytes) return;
+  if (impl_->entries.try_emplace(key, Impl::Entry{x, stats, ok}).second) impl_->bytes += b;
+}
+
+std::size_t DeformMemo::hits() const {
+  const std::lock_guard<std::mutex> lock(impl_->mutex);
+  return impl_->hits;
+}
 
 double min_signed_area(const std::vector<std::array<std::int32_t, 3>>& triangles, const std::vector<Vec2>& x) {
   double m = kInf;
@@ -286,8 +376,17 @@ double min_signed_area(const std::vector<std::array<std::int32_t, 3>>& triangles
 }
 
 DeformStats deform_to_polysquare(const DeformProblem& problem, const DeformOptions& options, std::vector<Vec2>& x) {
-  Energy energy(problem, options);
   DeformStats stats;
+  DeformMemo::Key key{};
+  if (options.memo) {
+    Digest d;
+    d.word(1);  // which solve
+    d.problem(problem, options, x);
+    key = d.key();
+    bool ok = false;
+    if (options.memo->find(key, x, stats, ok)) return stats;
+  }
+  Energy energy(problem, options);
   energy.eps = options.eps_schedule.empty() ? 0.01 : options.eps_schedule.back();
   stats.energy_before = energy.eval(x, nullptr, &stats.alignment_before);
   for (double eps : options.eps_schedule) {
@@ -296,12 +395,39 @@ DeformStats deform_to_polysquare(const DeformProblem& problem, const DeformOptio
                                  options.lbfgs_memory);
   }
   stats.energy_after = energy.eval(x, nullptr, &stats.alignment_after);
+  if (options.memo) options.memo->store(key, x, stats, true);
   return stats;
 }
+
+namespace {
+bool move_along_path(const DeformProblem& problem, const DeformOptions& options,
+                     const std::vector<std::uint8_t>& target_mask, const std::vector<Vec2>& targets,
+                     std::vector<Vec2>& x);
+}  // namespace
 
 bool move_constrained_vertices(const DeformProblem& problem, const DeformOptions& options,
                                const std::vector<std::uint8_t>& target_mask, const std::vector<Vec2>& targets,
                                std::vector<Vec2>& x) {
+  if (!options.memo) return move_along_path(problem, options, target_mask, targets, x);
+  Digest d;
+  d.word(2);  // which solve
+  d.problem(problem, options, x);
+  d.raw(target_mask);
+  d.raw(targets);
+  const DeformMemo::Key key = d.key();
+  DeformStats unused;
+  bool ok = false;
+  if (options.memo->find(key, x, unused, ok)) return ok;
+  ok = move_along_path(problem, options, target_mask, targets, x);
+  options.memo->store(key, x, unused, ok);
+  return ok;
+}
+
+namespace {
+
+bool move_along_path(const DeformProblem& problem, const DeformOptions& options,
+                     const std::vector<std::uint8_t>& target_mask, const std::vector<Vec2>& targets,
+                     std::vector<Vec2>& x) {
   const std::size_t n = x.size();
   // Harmonic (uniform graph Laplacian) extension of the constrained displacement to the free vertices, so a
   // step moves the interior along with the boundary instead of crushing the first ring of triangles.
@@ -378,5 +504,7 @@ bool move_constrained_vertices(const DeformProblem& problem, const DeformOptions
   minimize(energy, inner, x, options.max_iterations, options.relative_tolerance, options.lbfgs_memory);
   return min_signed_area(problem.triangles, x) > 0.0;
 }
+
+}  // namespace
 
 }  // namespace polysquare

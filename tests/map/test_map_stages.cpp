@@ -65,6 +65,46 @@ TEST(Deformation, ConstrainedMoveReachesTargetsAndStaysValid) {
   EXPECT_NEAR(x[0].y, -1.0, 0.2);
 }
 
+TEST(Deformation, MemoAnswersOnlyTheSameProblem) {
+  // A memo returns a stored solve only for exactly the same problem, options and start; anything else solves.
+  DeformProblem p;
+  p.rest = {{0, 0}, {1, 0.3}, {0.2, 1}, {1.3, 1.2}};
+  p.triangles = {{0, 1, 2}, {1, 3, 2}};
+  p.aligned = {{0, 1, 5.0}, {1, 3, 5.0}, {3, 2, 5.0}, {2, 0, 5.0}};
+  std::vector<Vec2> plain = p.rest;
+  const DeformStats solved = deform_to_polysquare(p, DeformOptions{}, plain);
+  DeformOptions o;
+  o.memo = std::make_shared<DeformMemo>();
+  std::vector<Vec2> first = p.rest, again = p.rest;
+  deform_to_polysquare(p, o, first);
+  EXPECT_EQ(o.memo->hits(), 0u);
+  const DeformStats reused = deform_to_polysquare(p, o, again);
+  EXPECT_EQ(o.memo->hits(), 1u);
+  EXPECT_EQ(again, plain);  // bit for bit what a solve without the memo gives
+  EXPECT_EQ(reused.iterations, solved.iterations);
+  // One weight, one option, one start coordinate changed: three new solves.
+  DeformProblem q = p;
+  q.aligned[2].weight = 4.0;
+  std::vector<Vec2> x = p.rest;
+  deform_to_polysquare(q, o, x);
+  DeformOptions o2 = o;
+  o2.eps_schedule = {0.1, 0.01};
+  x = p.rest;
+  deform_to_polysquare(p, o2, x);
+  x = p.rest;
+  x[3].x += 1e-9;
+  deform_to_polysquare(p, o, x);
+  EXPECT_EQ(o.memo->hits(), 1u);
+  // The constrained move is remembered apart from the free solve, with its outcome.
+  std::vector<std::uint8_t> mask(4, 1);
+  const std::vector<Vec2> targets = {{0, 0}, {1, 0}, {0, 1}, {1, 1}};
+  std::vector<Vec2> m1 = p.rest, m2 = p.rest;
+  ASSERT_TRUE(move_constrained_vertices(p, o, mask, targets, m1));
+  ASSERT_TRUE(move_constrained_vertices(p, o, mask, targets, m2));
+  EXPECT_EQ(o.memo->hits(), 2u);
+  EXPECT_EQ(m1, m2);
+}
+
 namespace {
 // A layout of an L-shaped poly-square: 6 break points, sides labelled CCW, targets slightly off integers.
 Layout l_shape(std::vector<Vec2>& deformed) {

@@ -3,11 +3,14 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "polysquare/core/geometry.h"
 
 namespace polysquare {
+
+class DeformMemo;
 
 struct DeformOptions {
   double amips_alpha = 0.5;      ///< AMIPS balance of angle (alpha) against area (1 - alpha) distortion; paper: 0.5
@@ -21,6 +24,9 @@ struct DeformOptions {
   double relative_tolerance = 1e-6;  ///< stop when the energy decrease per iteration stays below this fraction
                                      ///< (letter_M: 784 iterations, SJ min 0.86; 1e-8: 2567 iterations, 0.80)
   int lbfgs_memory = 8;          ///< L-BFGS history length
+  /// Results of solved problems, shared by the copies of these options within one run (the pipeline sets it;
+  /// null = none): a repair round re-maps every subregion of a part, most of them exactly as before.
+  std::shared_ptr<DeformMemo> memo;
 };
 
 /// An edge whose deformed direction is pulled towards a coordinate axis (boundary or feature edge).
@@ -47,6 +53,26 @@ struct DeformStats {
   double energy_after = 0.0;
   double alignment_before = 0.0;  ///< E^B + E^F part (with the last eps), before and after
   double alignment_after = 0.0;
+};
+
+/// Solved deformations by a 128-bit digest of everything a solve reads (problem, options, start positions,
+/// targets), so that an identical problem is solved once per run; solves are deterministic, so a reused result
+/// is the one a new solve would give. Thread-safe. Past `max_bytes` of stored positions it stops storing.
+class DeformMemo {
+ public:
+  using Key = std::array<std::uint64_t, 2>;
+  explicit DeformMemo(std::size_t max_bytes = std::size_t{256} << 20);
+  ~DeformMemo();
+  DeformMemo(const DeformMemo&) = delete;
+  DeformMemo& operator=(const DeformMemo&) = delete;
+  /// The stored result of `key` into x, stats and ok; false when there is none.
+  bool find(const Key& key, std::vector<Vec2>& x, DeformStats& stats, bool& ok) const;
+  void store(const Key& key, const std::vector<Vec2>& x, const DeformStats& stats, bool ok);
+  std::size_t hits() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
 };
 
 /// Minimizes E^D (AMIPS, area-weighted) + weighted alignment terms from `x` (which must be un-inverted),
