@@ -1182,6 +1182,57 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
       if (p >= 0 && static_cast<std::size_t>(p) < n && is_patch[static_cast<std::size_t>(p)] &&
           patch_error[static_cast<std::size_t>(p)].empty())
         patch_error[static_cast<std::size_t>(p)] = sub_name(static_cast<std::size_t>(p)) + ": its patch left a folded or poor quad";
+    // First the least growth: a failed patch takes in one neighbouring group, the smallest that lets it build
+    // (a union over every neighbour, below, reached 1,400 quads on a coast where one neighbour was enough).
+    if (options.patch_growth > 0) {
+      std::set<std::int32_t> failed;
+      for (std::size_t p = 0; p < n; ++p)
+        if (!patch_error[p].empty()) failed.insert(group[p]);
+      for (std::int32_t r : failed) {
+        if (std::none_of(group.begin(), group.end(), [&](std::int32_t g) { return g == r; })) continue;  // taken in
+        if (patch_error[static_cast<std::size_t>(r)].empty()) continue;
+        std::map<std::int32_t, std::size_t> neighbours;  // group -> its triangles
+        for (std::size_t p = 0; p < n; ++p)
+          if (group[p] == r)
+            for (const TriChain& ch : subs[p].mesh.chains)
+              if (ch.interface >= 0 && group[static_cast<std::size_t>(ch.interface)] != r)
+                neighbours.emplace(group[static_cast<std::size_t>(ch.interface)], 0);
+        for (std::size_t p = 0; p < n; ++p)
+          if (auto it = neighbours.find(group[p]); it != neighbours.end()) it->second += subs[p].mesh.triangles.size();
+        std::vector<std::pair<std::size_t, std::int32_t>> smallest_first;
+        for (const auto& [q, size] : neighbours) smallest_first.push_back({size, q});
+        std::sort(smallest_first.begin(), smallest_first.end());
+        for (const auto& [size, q] : smallest_first) {
+          const std::int32_t m = std::min(r, q);
+          std::vector<std::int32_t> trial = group;
+          for (std::int32_t& g : trial)
+            if (g == r || g == q) g = m;
+          const GroupedPartition gp = group_partition(tri, triangle_part, trial, {m});
+          std::vector<std::uint8_t> patch_now(n, 0);
+          for (std::size_t p = 0; p < n; ++p)
+            patch_now[static_cast<std::size_t>(trial[p])] |= is_patch[p] || trial[p] == m;
+          try {
+            build_patch(static_cast<std::size_t>(m),
+                        cut_subregion(tri, gp.tp, gp.topology, m, gp.members[static_cast<std::size_t>(m)], name),
+                        patch_now, PatchMethod::automatic);
+          } catch (const MeshingError&) {
+            continue;
+          }
+          grown_because[static_cast<std::size_t>(m)] = patch_error[static_cast<std::size_t>(r)];
+          for (std::size_t p = 0; p < n; ++p)
+            if (trial[p] == m) {
+              is_patch[p] = 1;
+              patch_error[p].clear();
+              if (p != static_cast<std::size_t>(m)) {
+                meshes[p] = {};
+                side_nodes[p] = 0;
+              }
+            }
+          group = std::move(trial);
+          break;
+        }
+      }
+    }
     for (int grow = 0; grow < options.patch_growth; ++grow) {
       std::set<std::int32_t> failed;
       for (std::size_t p = 0; p < n; ++p)

@@ -11,6 +11,7 @@
 #include "polysquare/core/error.h"
 #include "polysquare/fallback/patch.h"
 #include "polysquare/input/read_region.h"
+#include "polysquare/map/polysquare_map.h"
 #include "polysquare/pipeline/invariants.h"
 #include "polysquare/pipeline/mesh_region.h"
 #include "polysquare/quality/quality.h"
@@ -206,6 +207,28 @@ TEST(LocalRepair, ASubregionMadeToFailIsPatchedAndOnlyIt) {
   const DomainDistance d = domain_distance(r.mesh, r.region);
   EXPECT_LT(d.boundary_max_relative, 1e-9);
   EXPECT_EQ(d.sharp_vertices_missing, 0u);
+}
+
+TEST(LocalRepair, AGrownPatchTakesInOneNeighbourFirst) {
+  // letter_M in 4 subregions, subregion 0 (two neighbours) a patch that must grow (as after a failed build): it
+  // takes in the one neighbour that lets it build, the smallest, not both; the last subregion keeps its map.
+  const Region region = load("letter_M");
+  PolysquareMapOptions o;
+  o.size = 2.0;
+  o.partition.parts = 4;
+  o.patch_subregions = {0};
+  o.grown_patches = {0};
+  const PartMapResult r = map_part(region, split_into_parts(region)[0], o);
+  ASSERT_EQ(r.stats.subregions.size(), 4u);
+  int patched = 0, taken_in = 0;
+  for (const SubregionStats& s : r.stats.subregions) {
+    patched += !s.mapped;
+    taken_in += s.reason.find("meshed in the patch of subregion") != std::string::npos;
+  }
+  EXPECT_EQ(patched, 2);
+  EXPECT_EQ(taken_in, 1);
+  QuadMesh m = r.mesh;
+  EXPECT_TRUE(check_invariants(m).ok()) << check_invariants(m).first_problem;
 }
 
 TEST(LocalRepair, AnUnrepairedMeshIsFullyStructured) {
