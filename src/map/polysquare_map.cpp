@@ -187,19 +187,20 @@ PartMapResult map_part(const Region& region, const RegionPart& part, const Polys
       }
       return all > 0 ? static_cast<double>(mapped) / static_cast<double>(all) : 0.0;
     };
-    for (int round = 0; !reuse && round < options.joint_split_rounds && !st.failed_maps.empty(); ++round) {
+    // Splits the listed subregions and maps the part again; true when that was kept.
+    auto split_round = [&](const std::vector<std::pair<int, int>>& listed) {
       std::vector<std::int32_t> tp = triangle_part;
       int split = 0;
-      const int parts = split_listed_subregions(tri, tp, result.partition->parts, st.failed_maps, options, name, split);
-      if (split == 0) break;
+      const int parts = split_listed_subregions(tri, tp, result.partition->parts, listed, options, name, split);
+      if (split == 0) return false;
       PartMapStats trial = st;
       QuadMesh mesh;
       try {
         mesh = map_piecewise(tri, tp, parts, options, name, trial);
       } catch (const MeshingError&) {
-        break;  // a patch of the new partition cannot be built: keep the last one
+        return false;  // a patch of the new partition cannot be built: keep the last one
       }
-      if (mapped_fraction(trial) <= mapped_fraction(st)) break;
+      if (mapped_fraction(trial) <= mapped_fraction(st)) return false;
       trial.joint_splits = st.joint_splits + 1;
       st = std::move(trial);
       result.mesh = std::move(mesh);
@@ -210,6 +211,17 @@ PartMapResult map_part(const Region& region, const RegionPart& part, const Polys
         result.background = tri;
         st.separators = add_separator_chains(result.background, triangle_part);
       }
+      return true;
+    };
+    for (int round = 0; !reuse && round < options.joint_split_rounds && !st.failed_maps.empty(); ++round) {
+      if (split_round(st.failed_maps)) continue;
+      // Splitting every failed subregion moved failures elsewhere: the one with the most quads alone.
+      if (st.failed_maps.size() < 2) break;
+      std::pair<int, int> largest = st.failed_maps.front();
+      for (const auto& f : st.failed_maps)
+        if (st.subregions[static_cast<std::size_t>(f.first)].quads > st.subregions[static_cast<std::size_t>(largest.first)].quads)
+          largest = f;
+      if (!split_round({largest})) break;
     }
     st.quads = result.mesh.quads.size();
     return result;
