@@ -213,7 +213,7 @@ double dotv(const std::vector<Vec2>& a, const std::vector<Vec2>& b) {
 // L-BFGS with an inversion-free backtracking line search. Returns the iteration count.
 int minimize(const Energy& energy, const DeformProblem& pr, std::vector<Vec2>& x, int max_iter, double rtol, int memory) {
   const std::size_t n = x.size();
-  std::vector<Vec2> g(n), g_new(n), p(n), x_new(n);
+  std::vector<Vec2> g(n), g_new(n), p(n), x_new(n), s_new(n), y_new(n);
   double f = energy.eval(x, &g);
   if (!std::isfinite(f)) return 0;
   std::deque<std::vector<Vec2>> S, Y;
@@ -263,12 +263,21 @@ int minimize(const Energy& energy, const DeformProblem& pr, std::vector<Vec2>& x
       S.clear(); Y.clear(); rho.clear();
       continue;
     }
-    std::vector<Vec2> s(n), y(n);
-    for (std::size_t v = 0; v < n; ++v) { s[v] = x_new[v] - x[v]; y[v] = g_new[v] - g[v]; }
-    const double sy = dotv(s, y);
+    for (std::size_t v = 0; v < n; ++v) { s_new[v] = x_new[v] - x[v]; y_new[v] = g_new[v] - g[v]; }
+    const double sy = dotv(s_new, y_new);
     if (sy > 1e-300) {
-      S.push_back(std::move(s)); Y.push_back(std::move(y)); rho.push_back(1.0 / sy);
-      if (static_cast<int>(S.size()) > memory) { S.pop_front(); Y.pop_front(); rho.pop_front(); }
+      // A full history hands its oldest pair's storage to the next step: no allocation per iteration.
+      std::vector<Vec2> free_s, free_y;
+      S.push_back(std::move(s_new)); Y.push_back(std::move(y_new)); rho.push_back(1.0 / sy);
+      if (static_cast<int>(S.size()) > memory) {
+        free_s = std::move(S.front());
+        free_y = std::move(Y.front());
+        S.pop_front(); Y.pop_front(); rho.pop_front();
+      }
+      s_new = std::move(free_s);
+      y_new = std::move(free_y);
+      s_new.resize(n);
+      y_new.resize(n);
     }
     const double decrease = f - f_new;
     x.swap(x_new);
