@@ -185,6 +185,7 @@ double max_feasible_step(const DeformProblem& pr, const std::vector<Vec2>& x, co
     const Vec2 da = p[t[1]] - p[t[0]], db = p[t[2]] - p[t[0]];
     // area(s) = c + s*bb + s^2*aa
     const double c = cross(a, b), bb = cross(a, db) + cross(da, b), aa = cross(da, db);
+    if (c > 0 && bb >= 0 && aa >= 0) continue;  // every term stays >= 0 for s > 0: no root (and no sqrt)
     double root = kInf;
     if (std::abs(aa) < 1e-300) {
       if (bb < 0) root = -c / bb;
