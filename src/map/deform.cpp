@@ -317,7 +317,7 @@ struct Digest {
       word(w);
     }
     std::uint64_t tail = 0;
-    std::memcpy(&tail, bytes + i, n - i);
+    if (n > i) std::memcpy(&tail, bytes + i, n - i);  // an empty vector's data() may be null
     word(tail);
   }
   void problem(const DeformProblem& p, const DeformOptions& o, const std::vector<Vec2>& x) {
