@@ -14,6 +14,9 @@ namespace {
 // Shape measure the smoother maximizes: the worst corner scaled Jacobian (sj), capped by 3 / edge ratio so that a
 // quad with a collapsed edge (angles fine, one edge near zero) counts as bad too. 3 leaves edge ratios up to 3
 // alone: on letter_M it gives SJ min 0.80 with edge ratio max 3.7 (2: 0.60 / 3.3; 4: 0.87 / 4.6).
+// 3 / edge ratio from the squared shortest and longest edges (-1 for a quad with no length).
+double edge_ratio_cap(double lmin, double lmax) { return lmax > 0 ? 3.0 * std::sqrt(lmin / lmax) : -1.0; }
+
 double quad_shape(const QuadMesh& mesh, std::size_t q, double sj) {
   const auto& quad = mesh.quads[q];
   double lmin = INFINITY, lmax = 0.0;  // squared edge lengths: one sqrt per quad, not four hypot
@@ -22,7 +25,7 @@ double quad_shape(const QuadMesh& mesh, std::size_t q, double sj) {
     lmin = std::min(lmin, dot(e, e));
     lmax = std::max(lmax, dot(e, e));
   }
-  return std::min(sj, lmax > 0 ? 3.0 * std::sqrt(lmin / lmax) : -1.0);
+  return std::min(sj, edge_ratio_cap(lmin, lmax));
 }
 
 // Node -> incident quads (core/quad_topology.h), with the measures the smoother reads around a node.
@@ -171,7 +174,7 @@ struct Star {
       const double lmax = std::max({q.far_lmax, dot(ea, ea), dot(ec, ec)});
       s.folded += sj <= 0.0;
       s.min_sj = std::min(s.min_sj, sj);
-      s.worst = std::min(s.worst, std::min(sj, lmax > 0 ? 3.0 * std::sqrt(lmin / lmax) : -1.0));
+      s.worst = std::min(s.worst, std::min(sj, edge_ratio_cap(lmin, lmax)));
     }
     return s;
   }
