@@ -154,12 +154,15 @@ std::vector<std::vector<CandidateSpec>> candidate_rounds(const Region& region, c
     // adds singular nodes, and its subregions' maps cost as much again.
     const bool partitioned = automatic > 1 && quads / automatic >= 16.0;
     if (partitioned && convoluted) add({automatic});
-    add({1});
+    const bool single_beside = !(partitioned && convoluted) || quads <= static_cast<double>(options.single_map_quads);
+    if (single_beside) add({1});
     // A retry round, meshed only when every candidate before it failed: the same subregions without splitting
-    // (a split can leave a piece whose repair folds, where the unsplit subregion's patch holds).
-    if (partitioned && convoluted && options.map.split_rounds > 0) {
+    // (a split can leave a piece whose repair folds, where the unsplit subregion's patch holds), and the one
+    // poly-square of a part too large to try it beside the partition.
+    if (partitioned && convoluted && (options.map.split_rounds > 0 || !single_beside)) {
       rounds.emplace_back();
-      add({automatic, false, false});
+      if (options.map.split_rounds > 0) add({automatic, false, false});
+      if (!single_beside) add({1, false, false});
     }
     if (partitioned && !convoluted) {
       rounds.emplace_back();

@@ -79,3 +79,36 @@ TEST(HardGeometry, CombAndIslandsAreMeshed) {
     EXPECT_EQ(q.interior_singularities, 0u) << name;
   }
 }
+
+TEST(HardGeometry, ALargeConvolutedPartTriesOnePolySquareBesideItsPartitionOnlyUpToSingleMapQuads) {
+  // comb_50 at 0.5 (about 20,000 quads, its boundary convoluted): one poly-square beside the partition, and it
+  // wins (no singular node). With single_map_quads below its size the one poly-square is not meshed, since the
+  // partition succeeds: the part is meshed one way.
+  const fs::path path = fs::path(POLYSQUARE_TEST_DATA_DIR) / "hard" / "comb_50.geojson";
+  const Region region = read_region(path);
+  auto tried = [&](std::size_t single_map_quads, std::size_t& singles, bool& single_chosen) {
+    MeshOptions options;
+    options.size = 0.5;
+    options.single_map_quads = single_map_quads;
+    const MeshResult r = mesh_region(region, options);
+    EXPECT_TRUE(check_invariants(r.mesh).ok());
+    singles = 0;
+    single_chosen = false;
+    std::size_t all = 0;
+    for (const auto& part : r.report["candidates"])
+      for (const auto& c : part) {
+        ++all;
+        if (c.value("subregions", 0) != 1) continue;
+        ++singles;
+        single_chosen = single_chosen || c.value("chosen", false);
+      }
+    return all;
+  };
+  std::size_t singles = 0;
+  bool chosen = false;
+  EXPECT_EQ(tried(MeshOptions{}.single_map_quads, singles, chosen), 2u);
+  EXPECT_EQ(singles, 1u);
+  EXPECT_TRUE(chosen);
+  EXPECT_EQ(tried(10'000, singles, chosen), 1u);
+  EXPECT_EQ(singles, 0u);
+}

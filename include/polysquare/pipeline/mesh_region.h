@@ -37,13 +37,18 @@ struct MeshOptions {
   int parts = 0;                 ///< subregions per polygon part. 0 = automatic: a part above search_quads quads
                                  ///< is meshed one way, with max(its quads / target_quads_per_part, its boundary
                                  ///< length / (perimeter_per_subregion * size)) subregions (feature curves count
-                                 ///< twice), plus one poly-square when its boundary is not convoluted; smaller
+                                 ///< twice), plus one poly-square (see single_map_quads); smaller
                                  ///< parts also try one poly-square and the counts of search_subregions, and the
                                  ///< best mesh is kept. K > 0: K subregions, one poly-square if that fails.
   std::size_t target_quads_per_part = 20000;  ///< subregion size for large parts in automatic mode
   double perimeter_per_subregion = 30.0;      ///< boundary length per subregion in automatic mode, in sizes
   int max_automatic_subregions = 64;          ///< cap on the boundary-length count (each subregion adds columns
                                               ///< and coupling rows to the part's one mixed-integer quantization)
+  std::size_t single_map_quads = 100'000;     ///< automatic mode: a part above search_quads quads with a
+                                              ///< convoluted boundary is meshed as one poly-square beside its
+                                              ///< partition up to this many quads; a larger one only when its
+                                              ///< partition fails (one map must close every side of the part at
+                                              ///< once; on coasts it failed every time beyond this, after 10-16 s)
   bool drop_small_parts = true;               ///< leave out (and report) polygon parts smaller than size^2
   std::size_t search_quads = 5'000;           ///< parts up to this many quads try every count of search_subregions
   std::vector<int> search_subregions{2, 3, 4, 5, 6, 8};
