@@ -1,5 +1,5 @@
-// A small sparse (mixed-integer) linear program and its solution with COIN-OR: the LP relaxation by Clp, and
-// Cbc's branch-and-cut only when that is fractional. Internal to the map module (quantization).
+// A small sparse (mixed-integer) linear program and its solution with COIN-OR: the LP relaxation by Clp, a dive
+// from it when that is fractional, and Cbc's branch-and-cut only when the dive is not good enough. Internal to the map module (quantization).
 #pragma once
 
 #include <optional>
@@ -24,10 +24,12 @@ class IntegerProgram {
   int rows() const { return static_cast<int>(row_lo_.size()); }
 
   /// The optimal column values: the LP relaxation's optimum when its integer columns are integral (it is then
-  /// the integer optimum too), otherwise branch-and-cut's, which stops at a point whose cost is within `gap` of
-  /// the best bound (or at its best feasible point when stopped by the time limit); nullopt when the program is
-  /// infeasible or no feasible point was found within `seconds` (per solve).
-  std::optional<std::vector<double>> solve(double seconds, double gap = 0.0) const;
+  /// the integer optimum too); otherwise a dive from it (fractional columns fixed one by one, the LP re-solved
+  /// from its last basis) when that ends within `dive_gap` of the LP's cost; otherwise branch-and-cut's, started
+  /// from the dive's point, which stops at a point whose cost is within `gap` of the best bound (or at its best
+  /// feasible point when stopped by the time limit); nullopt when the program is infeasible or no feasible point
+  /// was found within `seconds` (per solve).
+  std::optional<std::vector<double>> solve(double seconds, double gap = 0.0, double dive_gap = 0.0) const;
 
  private:
   std::vector<double> col_lo_, col_hi_, cost_;

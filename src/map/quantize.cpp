@@ -133,7 +133,7 @@ void solve_joint(JointProblem& jp, const std::vector<SegmentCoupling>& couplings
   }
   for (const Separation& sep : separations)
     P.add_row({{col(sep.layout, sep.axis, sep.hi), 1.0}, {col(sep.layout, sep.axis, sep.lo), -1.0}}, 1.0, inf);
-  const std::optional<std::vector<double>> x = P.solve(options.time_limit_ms / 1000.0, options.gap);
+  const std::optional<std::vector<double>> x = P.solve(options.time_limit_ms / 1000.0, options.gap, options.dive_gap);
   if (!x)
     throw MeshingError(part_name + ": quantization has no integer solution (the labelled sides cannot close "
                                    "into poly-squares without overlapping)");
