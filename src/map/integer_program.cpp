@@ -79,23 +79,82 @@ void IntegerProgram::add_row(const std::vector<std::pair<int, double>>& terms, d
   }
 }
 
-std::optional<std::vector<double>> IntegerProgram::solve(double seconds, double gap, double dive_gap) const {
-  const Csc m = compress(columns(), entry_row_, entry_col_, entry_value_);
+struct IntegerProgram::Lp {
+  std::unique_ptr<Clp_Simplex, void (*)(Clp_Simplex*)> model{Clp_newModel(), Clp_deleteModel};
+  int columns = 0, rows = 0;  // the program's size when it was loaded or last extended
+  std::size_t entries = 0;
+};
+
+IntegerProgram::IntegerProgram() = default;
+IntegerProgram::~IntegerProgram() = default;
+IntegerProgram::IntegerProgram(IntegerProgram&&) noexcept = default;
+IntegerProgram& IntegerProgram::operator=(IntegerProgram&&) noexcept = default;
+
+bool IntegerProgram::solve_relaxation(double seconds) {
+  Clp_Simplex* model = nullptr;
+  if (lp_ && lp_->columns == columns()) {
+    // Rows added since the last solve join its model, the bounds a dive fixed are restored, and the dual
+    // simplex starts from the last basis (still dual feasible: only rows were added).
+    model = lp_->model.get();
+    const std::size_t from = lp_->entries;
+    if (rows() > lp_->rows) {
+      std::vector<std::pair<int, double>> row;
+      std::vector<CoinBigIndex> starts{0};
+      std::vector<int> index;
+      std::vector<double> value;
+      for (std::size_t e = from; e <= entry_row_.size(); ++e) {
+        if (e == entry_row_.size() || (e > from && entry_row_[e] != entry_row_[e - 1])) {
+          std::sort(row.begin(), row.end());
+          for (std::size_t k = 0; k < row.size(); ++k) {
+            if (k > 0 && row[k].first == row[k - 1].first) value.back() += row[k].second;
+            else index.push_back(row[k].first), value.push_back(row[k].second);
+          }
+          starts.push_back(static_cast<CoinBigIndex>(index.size()));
+          row.clear();
+        }
+        if (e < entry_row_.size()) row.push_back({entry_col_[e], entry_value_[e]});
+      }
+      const int added = rows() - lp_->rows;
+      if (static_cast<int>(starts.size()) - 1 != added) return false;  // a new row without entries: rebuild
+      Clp_addRows(model, added, row_lo_.data() + lp_->rows, row_hi_.data() + lp_->rows, starts.data(), index.data(), value.data());
+    }
+    Clp_chgColumnLower(model, col_lo_.data());
+    Clp_chgColumnUpper(model, col_hi_.data());
+    Clp_setMaximumSeconds(model, seconds);
+    Clp_dual(model, 0);
+  } else {
+    lp_ = std::make_unique<Lp>();
+    model = lp_->model.get();
+    const Csc m = compress(columns(), entry_row_, entry_col_, entry_value_);
+    Clp_setLogLevel(model, 0);
+    Clp_loadProblem(model, columns(), rows(), m.start.data(), m.index.data(), m.value.data(), col_lo_.data(),
+                    col_hi_.data(), cost_.data(), row_lo_.data(), row_hi_.data());
+    Clp_setMaximumSeconds(model, seconds);
+    // The primal simplex: on the small cases its choice among equal-cost optima gave the same meshes as the
+    // GLPK primal simplex used before (turtle_shell SJ min 0.72; the dual simplex's choice 0.69).
+    Clp_primal(model, 0);
+  }
+  lp_->columns = columns();
+  lp_->rows = rows();
+  lp_->entries = entry_row_.size();
+  return Clp_status(model) == 0;  // 0: optimal
+}
+
+std::optional<std::vector<double>> IntegerProgram::solve(double seconds, double gap, double dive_gap) {
   const std::size_t n = cost_.size();
   // The LP relaxation first: the quantization's matrices are network matrices apart from a few coupling and
   // parity rows, so its optimum is often integral already (then it is the integer optimum too), and Clp finds
-  // it in a fraction of branch-and-cut's time. An infeasible relaxation means an infeasible program.
-  std::unique_ptr<Clp_Simplex, void (*)(Clp_Simplex*)> lp(Clp_newModel(), Clp_deleteModel);
-  Clp_setLogLevel(lp.get(), 0);
-  Clp_loadProblem(lp.get(), columns(), rows(), m.start.data(), m.index.data(), m.value.data(), col_lo_.data(),
-                  col_hi_.data(), cost_.data(), row_lo_.data(), row_hi_.data());
-  Clp_setMaximumSeconds(lp.get(), seconds);
-  // The primal simplex: on the small cases its choice among equal-cost optima gave the same meshes as the
-  // GLPK primal simplex used before (turtle_shell SJ min 0.72; the dual simplex's choice 0.69).
-  Clp_primal(lp.get(), 0);
-  if (Clp_status(lp.get()) != 0) return std::nullopt;  // 0: optimal
+  // it in a fraction of branch-and-cut's time. An infeasible relaxation means an infeasible program; a warm
+  // start that does not end optimal is repeated from scratch before that is said.
+  const bool warm = lp_ != nullptr;
+  if (!solve_relaxation(seconds)) {
+    if (!warm) return std::nullopt;
+    lp_.reset();
+    if (!solve_relaxation(seconds)) return std::nullopt;
+  }
+  Clp_Simplex* const lp = lp_->model.get();
   auto fractional = [&] {  // the integer column nearest an integer without being one, or -1
-    const double* x = Clp_getColSolution(lp.get());
+    const double* x = Clp_getColSolution(lp);
     int best = -1;
     double off_best = 1.0;
     for (std::size_t c = 0; c < n; ++c) {
@@ -109,31 +168,32 @@ std::optional<std::vector<double>> IntegerProgram::solve(double seconds, double 
     return best;
   };
   if (fractional() < 0) {
-    const double* x = Clp_getColSolution(lp.get());
+    const double* x = Clp_getColSolution(lp);
     return std::vector<double>(x, x + n);
   }
   // A dive: the quantization's coupled programs are network programs but for a few rows, and fixing one
   // fractional column (to its nearest integer, else the other side) and re-solving by the dual simplex from the
   // last basis mostly makes the whole solution integral within a few steps, at a cost near the LP's; a fraction
   // of branch-and-cut's time on coasts' joint programs.
-  const double bound = Clp_objectiveValue(lp.get());
+  const double bound = Clp_objectiveValue(lp);
   std::optional<std::vector<double>> dived;
   for (int c; (c = fractional()) >= 0;) {
-    double* lo = Clp_columnLower(lp.get());
-    double* hi = Clp_columnUpper(lp.get());
-    const double v = Clp_getColSolution(lp.get())[c], near = std::round(v);
+    double* lo = Clp_columnLower(lp);
+    double* hi = Clp_columnUpper(lp);
+    const double v = Clp_getColSolution(lp)[c], near = std::round(v);
     lo[c] = hi[c] = near;
-    Clp_dual(lp.get(), 0);
-    if (Clp_status(lp.get()) == 0) continue;
+    Clp_dual(lp, 0);
+    if (Clp_status(lp) == 0) continue;
     lo[c] = hi[c] = v > near ? near + 1.0 : near - 1.0;
-    Clp_dual(lp.get(), 0);
-    if (Clp_status(lp.get()) != 0) break;
+    Clp_dual(lp, 0);
+    if (Clp_status(lp) != 0) break;
   }
-  if (Clp_status(lp.get()) == 0 && fractional() < 0) {
-    const double* x = Clp_getColSolution(lp.get());
+  if (Clp_status(lp) == 0 && fractional() < 0) {
+    const double* x = Clp_getColSolution(lp);
     dived = std::vector<double>(x, x + n);
-    if (Clp_objectiveValue(lp.get()) <= bound + dive_gap) return dived;
+    if (Clp_objectiveValue(lp) <= bound + dive_gap) return dived;
   }
+  const Csc m = compress(columns(), entry_row_, entry_col_, entry_value_);
   const std::lock_guard<std::mutex> lock(cbc_mutex);
   std::unique_ptr<Cbc_Model, void (*)(Cbc_Model*)> mip(Cbc_newModel(), Cbc_deleteModel);
   Cbc_Model* P = mip.get();

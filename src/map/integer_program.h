@@ -2,6 +2,7 @@
 // from it when that is fractional, and Cbc's branch-and-cut only when the dive is not good enough. Internal to the map module (quantization).
 #pragma once
 
+#include <memory>
 #include <optional>
 #include <utility>
 #include <vector>
@@ -29,9 +30,18 @@ class IntegerProgram {
   /// from the dive's point, which stops at a point whose cost is within `gap` of the best bound (or at its best
   /// feasible point when stopped by the time limit); nullopt when the program is infeasible or no feasible point
   /// was found within `seconds` (per solve).
-  std::optional<std::vector<double>> solve(double seconds, double gap = 0.0, double dive_gap = 0.0) const;
+  /// Solving again after rows were added starts from the last solve's LP basis (the dual simplex).
+  std::optional<std::vector<double>> solve(double seconds, double gap = 0.0, double dive_gap = 0.0);
+
+  IntegerProgram();
+  ~IntegerProgram();
+  IntegerProgram(IntegerProgram&&) noexcept;
+  IntegerProgram& operator=(IntegerProgram&&) noexcept;
 
  private:
+  struct Lp;  // the LP relaxation's model as the last solve left it
+  bool solve_relaxation(double seconds);
+  std::unique_ptr<Lp> lp_;
   std::vector<double> col_lo_, col_hi_, cost_;
   std::vector<char> integer_;
   std::vector<double> row_lo_, row_hi_;

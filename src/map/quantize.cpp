@@ -50,10 +50,9 @@ struct JointProblem {
 // With `broken` given, the couplings are elastic: a coupling may break at a cost per element far above any
 // deviation cost, so the program has a solution whenever each layout closes alone, and the couplings the
 // optimum breaks (appended to `broken`) show which subregions cannot agree.
-void solve_joint(JointProblem& jp, const std::vector<SegmentCoupling>& couplings,
-                 const std::vector<EvenGroup>& even_groups, const std::vector<Separation>& separations,
-                 const QuantizeOptions& options, const std::string& part_name, QuantizeStats& stats,
-                 std::vector<std::size_t>* broken) {
+IntegerProgram joint_program(JointProblem& jp, const std::vector<SegmentCoupling>& couplings,
+                             const std::vector<EvenGroup>& even_groups, const QuantizeOptions& options,
+                             const std::string& part_name, bool elastic) {
   IntegerProgram P;
   const bool integer = !couplings.empty() || !even_groups.empty();
   constexpr double inf = IntegerProgram::inf;
@@ -111,7 +110,7 @@ void solve_joint(JointProblem& jp, const std::vector<SegmentCoupling>& couplings
     const double ss = label_sign(s.label), st = label_sign(t.label);
     const int sa = col(c.layout_a, label_axis(s.label), s.break_a), sb = col(c.layout_a, label_axis(s.label), s.break_b);
     const int ta = col(c.layout_b, label_axis(t.label), t.break_a), tb = col(c.layout_b, label_axis(t.label), t.break_b);
-    if (broken) {
+    if (elastic) {
       const int e = P.add_columns(2, 0.0, inf, options.broken_coupling_cost);
       P.add_row({{sb, ss}, {sa, -ss}, {tb, -st}, {ta, st}, {e, 1.0}, {e + 1, -1.0}}, 0.0, 0.0);
     } else {
@@ -131,9 +130,23 @@ void solve_joint(JointProblem& jp, const std::vector<SegmentCoupling>& couplings
     }
     P.add_row(terms, 0.0, 0.0);
   }
-  for (const Separation& sep : separations)
-    P.add_row({{col(sep.layout, sep.axis, sep.hi), 1.0}, {col(sep.layout, sep.axis, sep.lo), -1.0}}, 1.0, inf);
-  const std::optional<std::vector<double>> x = P.solve(options.time_limit_ms / 1000.0, options.gap, options.dive_gap);
+  return P;
+}
+
+// Adds the separations from `first` on to the program, solves it and reads the lattice of every layout.
+void solve_joint(JointProblem& jp, IntegerProgram& P, const std::vector<SegmentCoupling>& couplings,
+                 const std::vector<Separation>& separations, std::size_t first, const QuantizeOptions& options,
+                 const std::string& part_name, QuantizeStats& stats, std::vector<std::size_t>* broken) {
+  auto col = [&](std::size_t l, int axis, int b) { return jp.col0[l][axis] + jp.cls[l][axis][b]; };
+  for (std::size_t k = first; k < separations.size(); ++k) {
+    const Separation& sep = separations[k];
+    P.add_row({{col(static_cast<std::size_t>(sep.layout), sep.axis, sep.hi), 1.0},
+               {col(static_cast<std::size_t>(sep.layout), sep.axis, sep.lo), -1.0}}, 1.0, IntegerProgram::inf);
+  }
+  std::size_t sides = 0;
+  for (const Layout* layout : jp.layouts) sides += layout->segments.size();
+  const double dive_gap = options.dive_gap * std::max(1.0, static_cast<double>(sides) / 1000.0);
+  const std::optional<std::vector<double>> x = P.solve(options.time_limit_ms / 1000.0, options.gap, dive_gap);
   if (!x)
     throw MeshingError(part_name + ": quantization has no integer solution (the labelled sides cannot close "
                                    "into poly-squares without overlapping)");
@@ -206,11 +219,16 @@ QuantizeStats solve_with_separations(JointProblem& jp, const std::vector<Segment
                                      const QuantizeOptions& options, const std::string& part_name,
                                      std::vector<std::size_t>* broken) {
   QuantizeStats stats;
-  for (int round = 0;; ++round) {
+  int round = 0;
+  // One program for all rounds: a round adds its separations as rows, and the solver starts from the last
+  // round's basis.
+  IntegerProgram P = joint_program(jp, couplings, even_groups, options, part_name, broken != nullptr);
+  for (std::size_t in_program = 0;; ) {
     stats = QuantizeStats{};
     if (broken) broken->clear();
-    solve_joint(jp, couplings, even_groups, separations, options, part_name, stats, broken);
-    if (round >= options.max_separation_rounds) break;
+    solve_joint(jp, P, couplings, separations, in_program, options, part_name, stats, broken);
+    in_program = separations.size();
+    if (++round > options.max_separation_rounds) break;
     std::size_t added = 0;
     for (std::size_t l = 0; l < jp.layouts.size(); ++l) {
       const Layout& layout = *jp.layouts[l];

@@ -20,6 +20,19 @@ IntegerProgram half_integral(bool integer) {
   return p;
 }
 
+// A difference-constraint program (a network matrix, as the quantization's): x1 - x0 >= 3, x2 - x1 >= 2,
+// pulled towards x0 = 0 and x2 as small as possible; every vertex is integral.
+IntegerProgram difference_chain() {
+  IntegerProgram p;
+  const int x = p.add_columns(3, -100.0, 100.0, 0.0, true);
+  p.add_row({{x + 1, 1.0}, {x, -1.0}}, 3.0, IntegerProgram::inf);
+  p.add_row({{x + 2, 1.0}, {x + 1, -1.0}}, 2.0, IntegerProgram::inf);
+  p.add_row({{x, 1.0}}, 0.0, 0.0);
+  const int u = p.add_columns(1, -100.0, 100.0, 1.0);
+  p.add_row({{u, 1.0}, {x + 2, -1.0}}, 0.0, 0.0);
+  return p;
+}
+
 }  // namespace
 
 TEST(IntegerProgram, AFractionalRelaxationIsBranchedToTheIntegerOptimum) {
@@ -33,18 +46,9 @@ TEST(IntegerProgram, AFractionalRelaxationIsBranchedToTheIntegerOptimum) {
 }
 
 TEST(IntegerProgram, AnIntegralRelaxationIsTheAnswer) {
-  // A difference-constraint program (a network matrix, as the quantization's): x1 - x0 >= 3, x2 - x1 >= 2,
-  // pulled towards x0 = 0 and x2 as small as possible; every vertex is integral.
-  IntegerProgram p;
-  const int x = p.add_columns(3, -100.0, 100.0, 0.0, true);
-  p.add_row({{x + 1, 1.0}, {x, -1.0}}, 3.0, IntegerProgram::inf);
-  p.add_row({{x + 2, 1.0}, {x + 1, -1.0}}, 2.0, IntegerProgram::inf);
-  p.add_row({{x, 1.0}}, 0.0, 0.0);
-  const int u = p.add_columns(1, -100.0, 100.0, 1.0);
-  p.add_row({{u, 1.0}, {x + 2, -1.0}}, 0.0, 0.0);
-  const auto s = p.solve(10.0);
+  const auto s = difference_chain().solve(10.0);
   ASSERT_TRUE(s);
-  EXPECT_NEAR((*s)[static_cast<std::size_t>(x + 2)], 5.0, 1e-9);
+  EXPECT_NEAR((*s)[2], 5.0, 1e-9);
 }
 
 TEST(IntegerProgram, ColumnsNamedTwiceInARowAreSummed) {
@@ -108,4 +112,23 @@ TEST(IntegerProgram, ADiveIsKeptOnlyWithinItsGapOfTheRelaxation) {
   }
   EXPECT_GT(worse, 0);
   EXPECT_LT(worse, 200);
+}
+
+TEST(IntegerProgram, RowsAddedAfterASolveAreSolvedFromItsBasis) {
+  // The quantization adds separation rows between rounds: the re-solve must answer the program with them, as a
+  // fresh solve does, and say so when they make it infeasible.
+  IntegerProgram p = difference_chain();
+  ASSERT_TRUE(p.solve(10.0));
+  p.add_row({{2, 1.0}, {1, -1.0}}, 4.0, IntegerProgram::inf);  // x2 - x1 >= 4 cuts the last optimum off
+  p.add_row({{1, 1.0}, {1, 1.0}, {0, -1.0}}, 8.0, IntegerProgram::inf);  // 2 x1 - x0 >= 8: x1 >= 4
+  const auto again = p.solve(10.0);
+  IntegerProgram fresh = difference_chain();
+  fresh.add_row({{2, 1.0}, {1, -1.0}}, 4.0, IntegerProgram::inf);
+  fresh.add_row({{1, 2.0}, {0, -1.0}}, 8.0, IntegerProgram::inf);
+  const auto expected = fresh.solve(10.0);
+  ASSERT_TRUE(again && expected);
+  EXPECT_NEAR((*again)[2], 8.0, 1e-9);
+  for (std::size_t c = 0; c < 4; ++c) EXPECT_NEAR((*again)[c], (*expected)[c], 1e-9);
+  p.add_row({{2, 1.0}}, -IntegerProgram::inf, 5.0);  // x2 <= 5 contradicts x2 >= 8
+  EXPECT_FALSE(p.solve(10.0));
 }

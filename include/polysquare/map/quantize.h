@@ -19,8 +19,8 @@ struct QuantizeOptions {
                      ///< side of target length 1 (proving optimality among the many near-equal parity choices
                      ///< of a coast's joint program took up to the time limit per solve)
   double dive_gap = 5.0;  ///< a fractional LP optimum is dived from (columns fixed one by one), and the dive's
-                         ///< point kept when its cost is within this of the LP's (five elements of deviation
-                         ///< on unit sides, over a coast part's thousands of sides); else branch-and-cut
+                         ///< point kept when its cost is within this of the LP's per 1000 sides of the program
+                         ///< (at least this: five elements of deviation on unit sides); else branch-and-cut
   double broken_coupling_cost = 1e4;  ///< cost per element of an elastic coupling's mismatch (quantize_layouts
                                       ///< with `broken`): above any saving in deviation, so only what cannot agree breaks
 };
