@@ -96,27 +96,16 @@ bool IntegerProgram::solve_relaxation(double seconds) {
     // Rows added since the last solve join its model, the bounds a dive fixed are restored, and the dual
     // simplex starts from the last basis (still dual feasible: only rows were added).
     model = lp_->model.get();
-    const std::size_t from = lp_->entries;
     if (rows() > lp_->rows) {
-      std::vector<std::pair<int, double>> row;
-      std::vector<CoinBigIndex> starts{0};
-      std::vector<int> index;
-      std::vector<double> value;
-      for (std::size_t e = from; e <= entry_row_.size(); ++e) {
-        if (e == entry_row_.size() || (e > from && entry_row_[e] != entry_row_[e - 1])) {
-          std::sort(row.begin(), row.end());
-          for (std::size_t k = 0; k < row.size(); ++k) {
-            if (k > 0 && row[k].first == row[k - 1].first) value.back() += row[k].second;
-            else index.push_back(row[k].first), value.push_back(row[k].second);
-          }
-          starts.push_back(static_cast<CoinBigIndex>(index.size()));
-          row.clear();
-        }
-        if (e < entry_row_.size()) row.push_back({entry_col_[e], entry_value_[e]});
-      }
-      const int added = rows() - lp_->rows;
-      if (static_cast<int>(starts.size()) - 1 != added) return false;  // a new row without entries: rebuild
-      Clp_addRows(model, added, row_lo_.data() + lp_->rows, row_hi_.data() + lp_->rows, starts.data(), index.data(), value.data());
+      // The new rows' entries (row by row since the last solve), compressed as compress() does columns: the
+      // matrix of the added rows, transposed.
+      const auto from = static_cast<std::ptrdiff_t>(lp_->entries);
+      std::vector<int> row(entry_row_.begin() + from, entry_row_.end());
+      for (int& r : row) r -= lp_->rows;
+      const Csc added = compress(rows() - lp_->rows, std::vector<int>(entry_col_.begin() + from, entry_col_.end()), row,
+                                 std::vector<double>(entry_value_.begin() + from, entry_value_.end()));
+      Clp_addRows(model, rows() - lp_->rows, row_lo_.data() + lp_->rows, row_hi_.data() + lp_->rows, added.start.data(),
+                  added.index.data(), added.value.data());
     }
     Clp_chgColumnLower(model, col_lo_.data());
     Clp_chgColumnUpper(model, col_hi_.data());

@@ -1,5 +1,6 @@
 // A small sparse (mixed-integer) linear program and its solution with COIN-OR: the LP relaxation by Clp, a dive
-// from it when that is fractional, and Cbc's branch-and-cut only when the dive is not good enough. Internal to the map module (quantization).
+// from it when that is fractional, and Cbc's branch-and-cut only when the dive is not good enough. Internal to
+// the map module (quantization).
 #pragma once
 
 #include <memory>

@@ -45,6 +45,8 @@ struct JointProblem {
   std::vector<const std::vector<Vec2>*> deformed;
   std::vector<std::array<std::vector<int>, 2>> cls;  // per layout, per axis: class of each break point
   std::vector<std::array<int, 2>> ncls, col0;        // class counts and first column per layout and axis
+  // The program's column of break point b's coordinate along `axis` in layout l.
+  int col(std::size_t l, int axis, int b) const { return col0[l][axis] + cls[l][axis][b]; }
 };
 
 // With `broken` given, the couplings are elastic: a coupling may break at a cost per element far above any
@@ -56,7 +58,6 @@ IntegerProgram joint_program(JointProblem& jp, const std::vector<SegmentCoupling
   IntegerProgram P;
   const bool integer = !couplings.empty() || !even_groups.empty();
   constexpr double inf = IntegerProgram::inf;
-  auto col = [&](std::size_t l, int axis, int b) { return jp.col0[l][axis] + jp.cls[l][axis][b]; };
   // Class coordinate columns with the weak pull of each class towards its mean deformed coordinate (anchors
   // pieces, such as interior features, that no segment ties to the boundary).
   for (std::size_t l = 0; l < jp.layouts.size(); ++l) {
@@ -83,7 +84,7 @@ IntegerProgram joint_program(JointProblem& jp, const std::vector<SegmentCoupling
     for (std::size_t k = 0; k < layout.segments.size(); ++k) {
       const LayoutSegment& s = layout.segments[k];
       const int axis = label_axis(s.label);
-      const int xa = col(l, axis, s.break_a), xb = col(l, axis, s.break_b);
+      const int xa = jp.col(l, axis, s.break_a), xb = jp.col(l, axis, s.break_b);
       if (xa == xb)
         throw MeshingError(part_name + ": quantization is infeasible: a side of the poly-square (chain " +
                            std::to_string(s.chain) + ") would have zero length");
@@ -108,8 +109,8 @@ IntegerProgram joint_program(JointProblem& jp, const std::vector<SegmentCoupling
     const LayoutSegment& s = jp.layouts[c.layout_a]->segments[c.segment_a];
     const LayoutSegment& t = jp.layouts[c.layout_b]->segments[c.segment_b];
     const double ss = label_sign(s.label), st = label_sign(t.label);
-    const int sa = col(c.layout_a, label_axis(s.label), s.break_a), sb = col(c.layout_a, label_axis(s.label), s.break_b);
-    const int ta = col(c.layout_b, label_axis(t.label), t.break_a), tb = col(c.layout_b, label_axis(t.label), t.break_b);
+    const int sa = jp.col(c.layout_a, label_axis(s.label), s.break_a), sb = jp.col(c.layout_a, label_axis(s.label), s.break_b);
+    const int ta = jp.col(c.layout_b, label_axis(t.label), t.break_a), tb = jp.col(c.layout_b, label_axis(t.label), t.break_b);
     if (elastic) {
       const int e = P.add_columns(2, 0.0, inf, options.broken_coupling_cost);
       P.add_row({{sb, ss}, {sa, -ss}, {tb, -st}, {ta, st}, {e, 1.0}, {e + 1, -1.0}}, 0.0, 0.0);
@@ -125,8 +126,8 @@ IntegerProgram joint_program(JointProblem& jp, const std::vector<SegmentCoupling
       const LayoutSegment& s = jp.layouts[l]->segments[static_cast<std::size_t>(k)];
       const double sg = label_sign(s.label);
       const int axis = label_axis(s.label);
-      terms.push_back({col(l, axis, s.break_b), sg});
-      terms.push_back({col(l, axis, s.break_a), -sg});
+      terms.push_back({jp.col(l, axis, s.break_b), sg});
+      terms.push_back({jp.col(l, axis, s.break_a), -sg});
     }
     P.add_row(terms, 0.0, 0.0);
   }
@@ -137,11 +138,10 @@ IntegerProgram joint_program(JointProblem& jp, const std::vector<SegmentCoupling
 void solve_joint(JointProblem& jp, IntegerProgram& P, const std::vector<SegmentCoupling>& couplings,
                  const std::vector<Separation>& separations, std::size_t first, const QuantizeOptions& options,
                  const std::string& part_name, QuantizeStats& stats, std::vector<std::size_t>* broken) {
-  auto col = [&](std::size_t l, int axis, int b) { return jp.col0[l][axis] + jp.cls[l][axis][b]; };
   for (std::size_t k = first; k < separations.size(); ++k) {
     const Separation& sep = separations[k];
-    P.add_row({{col(static_cast<std::size_t>(sep.layout), sep.axis, sep.hi), 1.0},
-               {col(static_cast<std::size_t>(sep.layout), sep.axis, sep.lo), -1.0}}, 1.0, IntegerProgram::inf);
+    P.add_row({{jp.col(static_cast<std::size_t>(sep.layout), sep.axis, sep.hi), 1.0},
+               {jp.col(static_cast<std::size_t>(sep.layout), sep.axis, sep.lo), -1.0}}, 1.0, IntegerProgram::inf);
   }
   std::size_t sides = 0;
   for (const Layout* layout : jp.layouts) sides += layout->segments.size();
@@ -156,7 +156,7 @@ void solve_joint(JointProblem& jp, IntegerProgram& P, const std::vector<SegmentC
     layout.lattice.resize(nb);
     for (std::size_t b = 0; b < nb; ++b)
       for (int axis = 0; axis < 2; ++axis) {
-        const double v = (*x)[static_cast<std::size_t>(col(l, axis, static_cast<int>(b)))];
+        const double v = (*x)[static_cast<std::size_t>(jp.col(l, axis, static_cast<int>(b)))];
         if (std::abs(v - std::round(v)) > 1e-6)
           throw MeshingError(part_name + ": quantization returned a fractional coordinate " + std::to_string(v));
         layout.lattice[b][static_cast<std::size_t>(axis)] = std::llround(v);
