@@ -124,6 +124,14 @@ PartMapResult map_part(const Region& region, const RegionPart& part, const Polys
   topt.max_triangles = options.max_triangles;
   TriMesh tri = triangulate_part(region, part, topt);
   st.seconds_triangulate = seconds_since(t0);
+  // Deforming costs triangles x iterations; past this many triangles per quad every map of the part would spend
+  // minutes on detail the quads cannot show.
+  const double quads = area / (h * h);
+  if (tri.triangles.size() > 4096 && static_cast<double>(tri.triangles.size()) > options.max_triangles_per_quad * quads)
+    throw MeshingError(name + ": its background triangulation has " + std::to_string(tri.triangles.size()) +
+                       " triangles for about " + std::to_string(static_cast<long long>(std::ceil(quads))) +
+                       " quads (more than " + std::to_string(static_cast<int>(options.max_triangles_per_quad)) +
+                       " per quad): curves or corners finer than the size throughout, no map is tried");
 
   // GPM (paper Sec. 5.1): the subregions' separators become chains of the one global map, so shared separator
   // vertices are identical on both sides by construction (eq. 12) and one quantization serves all subregions.

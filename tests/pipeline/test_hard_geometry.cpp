@@ -112,3 +112,24 @@ TEST(HardGeometry, ALargeConvolutedPartTriesOnePolySquareBesideItsPartitionOnlyU
   EXPECT_EQ(tried(10'000, singles, chosen), 1u);
   EXPECT_EQ(singles, 0u);
 }
+
+TEST(HardGeometry, APartFinerThanTheSizeThroughoutIsMeshedByTheFallbackWithoutMaps) {
+  // 64 spikes, each 0.5 h wide at its base and 20 h long: about 33,000 background triangles for 393 quads.
+  // Deforming them is what every map candidate would do for minutes; past max_triangles_per_quad none is tried.
+  const fs::path path = fs::path(POLYSQUARE_TEST_DATA_DIR) / "adversarial" / "star_64_spikes.geojson";
+  const Region region = read_region(path);
+  MeshOptions options;
+  options.size = 2;
+  const MeshResult r = mesh_region(region, options);
+  EXPECT_TRUE(check_invariants(r.mesh).ok());
+  EXPECT_EQ(compute_quality(r.mesh).inverted, 0u);
+  EXPECT_EQ(r.report["summary"]["structured_fraction"].get<double>(), 0.0);
+  std::size_t maps = 0;
+  for (const auto& part : r.report["candidates"])
+    for (const auto& c : part) {
+      if (c.value("chosen", false)) continue;  // the fallback
+      ++maps;
+      EXPECT_NE(c.value("error", std::string()).find("per quad"), std::string::npos) << c.dump();
+    }
+  EXPECT_GT(maps, 0u);
+}

@@ -33,6 +33,10 @@ struct PolysquareMapOptions {
                                         ///< grading keeps the triangle count near perimeter / h
   double triangle_shape_bound = 0.125;  ///< CGAL shape bound (0.125 = 20.7 degree minimum angle)
   std::size_t max_triangles = 20'000'000;  ///< refuse larger background triangulations
+  double max_triangles_per_quad = 32.0;  ///< refuse a map whose background triangulation (past 4096 triangles)
+                                         ///< has more triangles than this per quad of the part's area / h^2:
+                                         ///< curves or angles finer than h throughout (needles, spike stars);
+                                         ///< the bundled cases stay below 10; the fallback meshes such parts
   bool preorient = true;           ///< rotate by the eq. 11 optimum before deforming
   PartitionOptions partition{.parts = 1};  ///< subregions of the part (GPM); parts = 1: one poly-square
   int separator_straightening = 0;   ///< smoothing sweeps over the separators zig-zag (0 = keep triangle edges; 20
