@@ -132,6 +132,12 @@ PartMapResult map_part(const Region& region, const RegionPart& part, const Polys
                        " triangles for about " + std::to_string(static_cast<long long>(std::ceil(quads))) +
                        " quads (more than " + std::to_string(static_cast<int>(options.max_triangles_per_quad)) +
                        " per quad): curves or corners finer than the size throughout, no map is tried");
+  const std::size_t points = tri.feature_point_vertices.size();
+  if (points > 64 && static_cast<double>(points) * options.min_quads_per_feature_point > quads)
+    throw MeshingError(name + ": " + std::to_string(points) + " feature points for about " +
+                       std::to_string(static_cast<long long>(std::ceil(quads))) + " quads (fewer than " +
+                       std::to_string(static_cast<int>(options.min_quads_per_feature_point)) +
+                       " quads per point): too dense for a regular grid between them, no map is tried");
 
   // GPM (paper Sec. 5.1): the subregions' separators become chains of the one global map, so shared separator
   // vertices are identical on both sides by construction (eq. 12) and one quantization serves all subregions.

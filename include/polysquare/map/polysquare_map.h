@@ -37,6 +37,10 @@ struct PolysquareMapOptions {
                                          ///< has more triangles than this per quad of the part's area / h^2:
                                          ///< curves or angles finer than h throughout (needles, spike stars);
                                          ///< the bundled cases stay below 10; the fallback meshes such parts
+  double min_quads_per_feature_point = 16.0;  ///< refuse a map of a part (with more than 64 feature points)
+                                              ///< whose feature points are denser than one per this many quads:
+                                              ///< points about 4 h apart leave no regular grid between them, and
+                                              ///< keeping each off the others' lattice nodes is a search without end
   bool preorient = true;           ///< rotate by the eq. 11 optimum before deforming
   PartitionOptions partition{.parts = 1};  ///< subregions of the part (GPM); parts = 1: one poly-square
   int separator_straightening = 0;   ///< smoothing sweeps over the separators zig-zag (0 = keep triangle edges; 20
