@@ -210,6 +210,10 @@ TEST(NarrowIslands, InscribedWidthOfKnownShapes) {
   // Clockwise rings give the same answer; the early stop returns as soon as `enough` is reached.
   EXPECT_NEAR(inscribed_width({{0, 1}, {4, 1}, {4, 0}, {0, 0}}, 1e-4), 1.0, 1e-3);
   EXPECT_GE(inscribed_width({{0, 0}, {40, 0}, {40, 40}, {0, 40}}, 1e-4, 2.0), 2.0);
+  // Narrower than `enough`: within enough / 10, below it, whatever the tolerance asked (a 100,000 x 1 channel).
+  const double channel = inscribed_width({{0, 0}, {1e5, 0}, {1e5, 1}, {0, 1}}, 1e-4, 2.0);
+  EXPECT_LT(channel, 2.0);
+  EXPECT_NEAR(channel, 1.0, 0.2);
 }
 
 TEST(NarrowIslands, NarrowHolesAndLoopsGoWideOnesAndTouchedOnesStay) {

@@ -85,7 +85,8 @@ std::vector<DroppedCurve> collapse_narrow_faces(Region& region, double min_width
 std::vector<DroppedCurve> open_narrow_wedges(Region& region, double min_width, double max_angle_deg = 20.0);
 
 /// Diameter of the largest disk inside the simple polygon `ring` (either orientation), found to within
-/// `tolerance`; the search stops as soon as a disk of diameter `enough` is found (0: no early stop).
+/// `tolerance`; the search stops as soon as a disk of diameter `enough` is found (0: no early stop), and a
+/// polygon narrower than `enough` gets a diameter at most max(tolerance, enough / 10) below its own.
 double inscribed_width(const std::vector<Vec2>& ring, double tolerance, double enough = 0.0);
 
 /// Simplifies every ring and feature curve in place. Ring vertices where a feature ends, feature end points,
