@@ -48,6 +48,7 @@ struct MeshArgs {
   bool binary = false, bend_interfaces = false;
   bool quiet = false, verbose = false;  ///< --quiet: errors and warnings only; --verbose: stage timings
   double time_limit = 0.0;  ///< --time-limit: seconds of wall time before the run ends in exit 3 (0 = none)
+  double read_time_limit = 120.0;  ///< --read-time-limit: seconds reading the input may take (0 = none)
   double depth = 0.0;  ///< constant water depth (positive down) for solver files, when depth_given
   bool depth_given = false;
   std::string bathymetry, bathymetry_positive = "up";  ///< raster of elevations (up) or depths (down)
@@ -97,6 +98,9 @@ int run_mesh(const MeshArgs& args) {
     throw InputError("--depth must be a finite number, got " + short_number(args.depth));
   if (!(std::isfinite(args.time_limit) && args.time_limit >= 0))
     throw InputError("--time-limit must be a finite number of seconds >= 0 (0 = none), got " + short_number(args.time_limit));
+  if (!(std::isfinite(args.read_time_limit) && args.read_time_limit >= 0))
+    throw InputError("--read-time-limit must be a finite number of seconds >= 0 (0 = none), got " +
+                     short_number(args.read_time_limit));
   check_outputs(args);  // before minutes of meshing
   const std::string out_ext = lower_extension(args.output);
   if ((args.depth_given || !args.bathymetry.empty()) && (out_ext == ".msh" || out_ext == ".vtu"))
@@ -106,7 +110,7 @@ int run_mesh(const MeshArgs& args) {
     throw InputError(args.bathymetry + ": the bathymetry raster does not exist");
   // Progress on a terminal (never in a pipe or under CI), stage timings with --verbose; quiet: warnings only.
   cli::TerminalProgress shown(args.quiet ? cli::Verbosity::quiet : args.verbose ? cli::Verbosity::verbose : cli::Verbosity::normal);
-  cli::TimeLimit limit(args.time_limit, args.input, shown.callback());
+  cli::TimeLimit limit(args.time_limit, args.read_time_limit, args.input, shown.callback());
   ProgressReporter progress(limit.callback());
   std::ostringstream discarded;
   std::ostream& info = args.quiet ? discarded : std::cerr;
@@ -505,6 +509,10 @@ int main(int argc, char** argv) {
   cmd_mesh->add_option("--time-limit", mesh.time_limit,
                        "seconds of wall time the run may take (reading, meshing, checks; not writing) before it ends "
                        "in exit 3 naming the stage it was in, with nothing written (0 = no limit)")
+      ->capture_default_str();
+  cmd_mesh->add_option("--read-time-limit", mesh.read_time_limit,
+                       "seconds reading the input may take before the run ends in exit 3 (a reader stuck in a "
+                       "malformed file: GDAL 3.6's DXF driver can loop for ever; 0 = no limit)")
       ->capture_default_str();
   cmd_mesh->add_flag("-q,--quiet", mesh.quiet, "print errors and warnings only (no progress, no summary)");
   cmd_mesh->add_flag("-v,--verbose", mesh.verbose, "print each stage's wall time as it finishes (on stderr)");

@@ -10,9 +10,13 @@
 
 namespace polysquare::cli {
 
-TimeLimit::TimeLimit(double seconds, std::string input, ProgressCallback next)
-    : seconds_(seconds), input_(std::move(input)), next_(std::move(next)) {
-  if (seconds_ > 0) watcher_ = std::thread([this] { watch(); });
+namespace {
+constexpr const char* kReading = "read input";
+}
+
+TimeLimit::TimeLimit(double seconds, double read_seconds, std::string input, ProgressCallback next)
+    : seconds_(seconds), read_seconds_(read_seconds), input_(std::move(input)), next_(std::move(next)) {
+  if (seconds_ > 0 || read_seconds_ > 0) watcher_ = std::thread([this] { watch(); });
 }
 
 void TimeLimit::stop() {
@@ -30,17 +34,39 @@ void TimeLimit::on_event(const ProgressEvent& e) {
     if (e.kind == ProgressEvent::Kind::started) stage_ = e.stage, done_ = 0, total_ = 0;
     if (e.kind == ProgressEvent::Kind::advanced && e.stage == stage_) done_ = e.done, total_ = e.total;
   }
+  if (e.kind == ProgressEvent::Kind::started) wake_.notify_all();  // the reading bound ends with its stage
   if (next_) next_(e);
 }
 
 void TimeLimit::watch() {
+  using Clock = std::chrono::steady_clock;
   std::unique_lock<std::mutex> lock(mutex_);
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds_);
-  if (wake_.wait_until(lock, deadline, [this] { return stop_; })) return;
+  const auto start = Clock::now();
+  auto after = [&](double s) { return start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s)); };
+  const auto deadline = seconds_ > 0 ? after(seconds_) : Clock::time_point::max();
+  const auto read_deadline = read_seconds_ > 0 ? after(read_seconds_) : Clock::time_point::max();  // reading starts now
+  bool read_timeout = false;
+  for (;;) {
+    const bool reading = stage_ == kReading && read_deadline < deadline;
+    const auto until = reading ? read_deadline : deadline;
+    auto done = [&] { return stop_ || (reading && stage_ != kReading); };
+    if (until == Clock::time_point::max()) {
+      wake_.wait(lock, done);
+    } else if (!wake_.wait_until(lock, until, done)) {
+      read_timeout = reading;
+      break;
+    }
+    if (stop_) return;
+  }
   // Out of time: one line, the run's temporaries removed, exit 3 without unwinding the busy worker threads.
-  std::string line = std::string(interactive_terminal(stderr) ? "\r\033[K" : "") + "error: " + input_ + ": did not finish within " + short_number(seconds_) +
-                     " s (--time-limit): in stage \"" + stage_ + "\"";
-  if (total_ > 0) line += ", " + std::to_string(done_) + " of " + std::to_string(total_) + " polygon parts done";
+  std::string line = std::string(interactive_terminal(stderr) ? "\r\033[K" : "") + "error: " + input_ + ": ";
+  if (read_timeout) {
+    line += "reading did not finish within " + short_number(read_seconds_) +
+            " s (--read-time-limit): its reader is stuck in the file or the file is far too large";
+  } else {
+    line += "did not finish within " + short_number(seconds_) + " s (--time-limit): in stage \"" + stage_ + "\"";
+    if (total_ > 0) line += ", " + std::to_string(done_) + " of " + std::to_string(total_) + " polygon parts done";
+  }
   line += "; nothing written\n";
   std::fputs(line.c_str(), stderr);
   std::fflush(stderr);

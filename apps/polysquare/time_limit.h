@@ -17,10 +17,11 @@ namespace polysquare::cli {
 /// "error: INPUT: did not finish within S s (--time-limit): in stage NAME, D of T items done; nothing written",
 /// removes the run's pending temporaries (io/atomic_file.h) and ends the process with exit code 3. Outputs are
 /// committed only after meshing, so nothing half-written is left. A safety net for every stage at once; the
-/// stages' own budgets (triangle counts, LP time limits) end earlier and say more.
+/// stages' own budgets (triangle counts, LP time limits) end earlier and say more. Reading the input has a bound
+/// of its own, `read_seconds` (0: none), since a reader stuck in a malformed file (a GDAL driver) has no other.
 class TimeLimit {
  public:
-  TimeLimit(double seconds, std::string input, ProgressCallback next);
+  TimeLimit(double seconds, double read_seconds, std::string input, ProgressCallback next);
   ~TimeLimit() { stop(); }
   /// Stops watching (before the outputs are committed: a run is never cut between two renames).
   void stop();
@@ -32,7 +33,7 @@ class TimeLimit {
  private:
   void on_event(const ProgressEvent& e);
   void watch();
-  double seconds_;
+  double seconds_, read_seconds_;
   std::string input_;
   ProgressCallback next_;
   std::mutex mutex_;
