@@ -164,8 +164,34 @@ struct Star {
       quads.push_back(s);
     }
   }
-  Incidence::Score at(Vec2 p) const {
-    Incidence::Score s{0, 1.0, 1.0};
+  // The score with v at p, into s, when it is better than `best` (Score::better_than with eps). A trial stops at
+  // the first quad that shows it cannot be: the folded count only grows and the worst corner only falls as quads
+  // are added. Most trials of the pattern search fail, most of them at the first quad.
+  bool better_at(Vec2 p, const Incidence::Score& best, double eps, Incidence::Score& s) const {
+    s = {0, 1.0, 1.0};
+    if (best.folded == 0 && best.worst > 0.0) {
+      // Nothing folded to beat: every corner and edge ratio must clear best.worst (> 0), so the first one that
+      // does not ends the trial (one corner at a time; the same values as below).
+      const double floor = best.worst + eps;
+      for (const Quad& q : quads) {
+        if (q.far_corner <= floor) return false;
+        const double c1 = corner_sj(q.c, p, q.a);
+        if (c1 <= floor) return false;
+        const double c2 = corner_sj(p, q.a, q.b);
+        if (c2 <= floor) return false;
+        const double c3 = corner_sj(q.b, q.c, p);
+        if (c3 <= floor) return false;
+        const double sj = std::min(std::min(c1, c2), std::min(q.far_corner, c3));
+        const Vec2 ea = q.a - p, ec = p - q.c;
+        const double lmin = std::min({q.far_lmin, dot(ea, ea), dot(ec, ec)});
+        const double lmax = std::max({q.far_lmax, dot(ea, ea), dot(ec, ec)});
+        const double shape = std::min(sj, edge_ratio_cap(lmin, lmax));
+        if (shape <= floor) return false;
+        s.min_sj = std::min(s.min_sj, sj);
+        s.worst = std::min(s.worst, shape);
+      }
+      return true;
+    }
     for (const Quad& q : quads) {
       const double sj = std::min(std::min(corner_sj(q.c, p, q.a), corner_sj(p, q.a, q.b)),
                                  std::min(q.far_corner, corner_sj(q.b, q.c, p)));
@@ -175,8 +201,9 @@ struct Star {
       s.folded += sj <= 0.0;
       s.min_sj = std::min(s.min_sj, sj);
       s.worst = std::min(s.worst, std::min(sj, edge_ratio_cap(lmin, lmax)));
+      if (s.folded > best.folded || (s.folded == best.folded && !(s.worst > best.worst + eps))) return false;
     }
-    return s;
+    return s.better_than(best, eps);
   }
 };
 
@@ -341,8 +368,8 @@ SmoothStats smooth_quads(QuadMesh& mesh, const SmoothOptions& options, const Reg
           Vec2 best_p = centre;
           for (const Vec2& d : dirs) {
             const Vec2 p = centre + step * d;
-            const Incidence::Score w = star.at(p);
-            if (w.better_than(best, 1e-12)) { best = w; best_p = p; }
+            Incidence::Score w;
+            if (star.better_at(p, best, 1e-12, w)) { best = w; best_p = p; }
           }
           mesh.nodes[v] = best_p;
           if (best_p == centre) step *= 0.5;
@@ -405,8 +432,8 @@ SmoothStats smooth_quads(QuadMesh& mesh, const SmoothOptions& options, const Reg
         for (double cand : {s - step, s + step}) {
           if (cand <= lo + margin || cand >= hi - margin) continue;
           if (bounded && deviation(cand) > allowed) continue;
-          const Incidence::Score w = star.at(c.at(cand));
-          if (w.better_than(best, 1e-12)) { best = w; best_s = cand; }
+          Incidence::Score w;
+          if (star.better_at(c.at(cand), best, 1e-12, w)) { best = w; best_s = cand; }
         }
         if (best_s != s) { s = best_s; mesh.nodes[v] = c.at(s); } else step *= 0.5;
       }
