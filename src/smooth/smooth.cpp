@@ -108,8 +108,9 @@ struct Curve {
       const Vec2 d = pts[i] - pts[i - 1];
       const double l2 = dot(d, d);
       const double t = l2 > 0 ? std::clamp(dot(p - pts[i - 1], d) / l2, 0.0, 1.0) : 0.0;
-      const double dist = distance(p, pts[i - 1] + t * d);
-      if (dist < best) { best = dist; s = cum[i - 1] + t * (cum[i] - cum[i - 1]); }
+      const Vec2 e = p - (pts[i - 1] + t * d);
+      const double dist2 = dot(e, e);  // squared: the nearest is the same, without a hypot per segment
+      if (dist2 < best) { best = dist2; s = cum[i - 1] + t * (cum[i] - cum[i - 1]); }
     }
     return s;
   }
