@@ -167,42 +167,29 @@ struct Star {
   }
   // The score with v at p, into s, when it is better than `best` (Score::better_than with eps). A trial stops at
   // the first quad that shows it cannot be: the folded count only grows and the worst corner only falls as quads
-  // are added. Most trials of the pattern search fail, most of them at the first quad.
+  // are added; with nothing folded to beat, every corner and edge ratio must clear best.worst (> 0), so the first
+  // one that does not ends it. Most trials of the pattern search fail, most of them at once.
   bool better_at(Vec2 p, const Incidence::Score& best, double eps, Incidence::Score& s) const {
     s = {0, 1.0, 1.0};
-    if (best.folded == 0 && best.worst > 0.0) {
-      // Nothing folded to beat: every corner and edge ratio must clear best.worst (> 0), so the first one that
-      // does not ends the trial (one corner at a time; the same values as below).
-      const double floor = best.worst + eps;
-      for (const Quad& q : quads) {
-        if (q.far_corner <= floor) return false;
-        const double c1 = corner_sj(q.c, p, q.a);
-        if (c1 <= floor) return false;
-        const double c2 = corner_sj(p, q.a, q.b);
-        if (c2 <= floor) return false;
-        const double c3 = corner_sj(q.b, q.c, p);
-        if (c3 <= floor) return false;
-        const double sj = std::min(std::min(c1, c2), std::min(q.far_corner, c3));
-        const Vec2 ea = q.a - p, ec = p - q.c;
-        const double lmin = std::min({q.far_lmin, dot(ea, ea), dot(ec, ec)});
-        const double lmax = std::max({q.far_lmax, dot(ea, ea), dot(ec, ec)});
-        const double shape = std::min(sj, edge_ratio_cap(lmin, lmax));
-        if (shape <= floor) return false;
-        s.min_sj = std::min(s.min_sj, sj);
-        s.worst = std::min(s.worst, shape);
-      }
-      return true;
-    }
+    const double floor = best.worst + eps;
+    const bool each = best.folded == 0 && best.worst > 0.0;
+    auto fails = [&](double value) { return each && value <= floor; };
     for (const Quad& q : quads) {
-      const double sj = std::min(std::min(corner_sj(q.c, p, q.a), corner_sj(p, q.a, q.b)),
-                                 std::min(q.far_corner, corner_sj(q.b, q.c, p)));
+      if (fails(q.far_corner)) return false;
+      const double c1 = corner_sj(q.c, p, q.a);
+      if (fails(c1)) return false;
+      const double c2 = corner_sj(p, q.a, q.b);
+      if (fails(c2)) return false;
+      const double c3 = corner_sj(q.b, q.c, p);
+      if (fails(c3)) return false;
+      const double sj = std::min(std::min(c1, c2), std::min(q.far_corner, c3));
       const Vec2 ea = q.a - p, ec = p - q.c;
       const double lmin = std::min({q.far_lmin, dot(ea, ea), dot(ec, ec)});
       const double lmax = std::max({q.far_lmax, dot(ea, ea), dot(ec, ec)});
       s.folded += sj <= 0.0;
       s.min_sj = std::min(s.min_sj, sj);
       s.worst = std::min(s.worst, std::min(sj, edge_ratio_cap(lmin, lmax)));
-      if (s.folded > best.folded || (s.folded == best.folded && !(s.worst > best.worst + eps))) return false;
+      if (s.folded > best.folded || (s.folded == best.folded && !(s.worst > floor))) return false;
     }
     return s.better_than(best, eps);
   }
