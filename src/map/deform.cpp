@@ -31,6 +31,10 @@ struct Energy {
   double expo_rest;        // exponent of AMIPS at a rigid motion
   double eps = 0.1;
   bool with_alignment = true;
+  // Soft position constraints: anchor_weight * sum |x_v - anchor_v|^2 over the flagged vertices (none when null).
+  const std::vector<Vec2>* anchor = nullptr;
+  const std::vector<std::uint8_t>* anchor_mask = nullptr;
+  double anchor_weight = 0.0;
   std::vector<RestTriangle> rest;
   std::vector<double> edge_scale;  // rest length / total rest length of aligned edges
   std::vector<double> rest_length; // rest length of each aligned edge
@@ -169,6 +173,13 @@ struct Energy {
         (*grad)[ed.a] = (*grad)[ed.a] - g;
       }
     }
+    if (anchor)
+      for (std::size_t v = 0; v < x.size(); ++v) {
+        if (!(*anchor_mask)[v]) continue;
+        const Vec2 d = x[v] - (*anchor)[v];
+        align += anchor_weight * dot(d, d);
+        if (grad) (*grad)[v] = (*grad)[v] + (2.0 * anchor_weight) * d;
+      }
     if (alignment_part) *alignment_part = align;
     if (grad && !problem.fixed.empty())
       for (std::size_t v = 0; v < grad->size(); ++v)
@@ -421,6 +432,7 @@ bool move_constrained_vertices(const DeformProblem& problem, const DeformOptions
   if (!options.memo) return move_along_path(problem, options, target_mask, targets, x);
   Digest d;
   d.word(2);  // which solve
+  d.word(options.pull_when_path_fails ? 1 : 0);
   d.problem(problem, options, x);
   d.raw(target_mask);
   d.raw(targets);
@@ -435,9 +447,43 @@ bool move_constrained_vertices(const DeformProblem& problem, const DeformOptions
 
 namespace {
 
+bool straight_path(const DeformProblem& problem, const DeformOptions& options,
+                   const std::vector<std::uint8_t>& target_mask, const std::vector<Vec2>& targets,
+                   std::vector<Vec2>& x);
+
+// The constrained vertices are first pulled towards their targets by springs of growing stiffness, the
+// barrier keeping every triangle valid: unlike the straight path, each vertex may take its own way round.
+void pull_towards(const DeformProblem& problem, const DeformOptions& options,
+                  const std::vector<std::uint8_t>& target_mask, const std::vector<Vec2>& targets,
+                  std::vector<Vec2>& x) {
+  DeformProblem free_problem = problem;
+  free_problem.aligned.clear();
+  Energy energy(free_problem, options);
+  energy.with_alignment = false;
+  energy.anchor = &targets;
+  energy.anchor_mask = &target_mask;
+  const double constrained = static_cast<double>(std::max<std::size_t>(
+      1, static_cast<std::size_t>(std::count(target_mask.begin(), target_mask.end(), std::uint8_t{1}))));
+  for (double w = 1.0; w <= 1e8; w *= 10.0) {
+    energy.anchor_weight = w / constrained;
+    minimize(energy, free_problem, x, 300, 1e-9, options.lbfgs_memory);
+  }
+}
+
 bool move_along_path(const DeformProblem& problem, const DeformOptions& options,
                      const std::vector<std::uint8_t>& target_mask, const std::vector<Vec2>& targets,
                      std::vector<Vec2>& x) {
+  const std::vector<Vec2> start = x;
+  if (straight_path(problem, options, target_mask, targets, x)) return true;
+  if (!options.pull_when_path_fails) return false;
+  x = start;
+  pull_towards(problem, options, target_mask, targets, x);
+  return straight_path(problem, options, target_mask, targets, x);
+}
+
+bool straight_path(const DeformProblem& problem, const DeformOptions& options,
+                   const std::vector<std::uint8_t>& target_mask, const std::vector<Vec2>& targets,
+                   std::vector<Vec2>& x) {
   const std::size_t n = x.size();
   // Harmonic (uniform graph Laplacian) extension of the constrained displacement to the free vertices, so a
   // step moves the interior along with the boundary instead of crushing the first ring of triangles.

@@ -237,6 +237,21 @@ PartMapResult map_part(const Region& region, const RegionPart& part, const Polys
           largest = f;
       if (!split_round({largest})) break;
     }
+    // Last, the snaps no split could make are pulled to their targets (a distorted map, still structured).
+    if (options.pull_failed_snaps && !st.failed_maps.empty()) {
+      PolysquareMapOptions pulled = options;
+      pulled.deform.pull_when_path_fails = true;
+      PartMapStats trial = st;
+      try {
+        QuadMesh mesh = map_piecewise(tri, triangle_part, result.partition->parts, pulled, name, trial);
+        if (mapped_fraction(trial) > mapped_fraction(st)) {
+          st = std::move(trial);
+          result.mesh = std::move(mesh);
+        }
+      } catch (const MeshingError&) {
+        // a patch of the pulled map cannot be built: the last map stays
+      }
+    }
     st.quads = result.mesh.quads.size();
     return result;
   }

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <map>
 #include <numbers>
 
 #include "polysquare/core/error.h"
@@ -63,6 +64,72 @@ TEST(Deformation, ConstrainedMoveReachesTargetsAndStaysValid) {
   EXPECT_GT(min_signed_area(p.triangles, x), 0.0);
   EXPECT_NEAR(x[0].x, 3.0, 0.2);
   EXPECT_NEAR(x[0].y, -1.0, 0.2);
+}
+
+TEST(Deformation, ConstrainedMoveAroundAReflexCornerIsPulledWhereTheStraightPathFolds) {
+  // An L-shaped grid (reflex corner at (1, 1)) whose boundary nodes slide 1.2 along the boundary: the straight
+  // path takes the nodes near the reflex corner across the notch and folds triangles; pulled by springs, each
+  // node goes its own way round and the move succeeds.
+  const int n = 8;  // cells per unit
+  DeformProblem p;
+  std::map<std::pair<int, int>, std::int32_t> id;
+  for (int j = 0; j <= 2 * n; ++j)
+    for (int i = 0; i <= 2 * n; ++i)
+      if (!(i > n && j > n)) {
+        id[{i, j}] = static_cast<std::int32_t>(p.rest.size());
+        p.rest.push_back({static_cast<double>(i) / n, static_cast<double>(j) / n});
+      }
+  for (int j = 0; j < 2 * n; ++j)
+    for (int i = 0; i < 2 * n; ++i) {
+      if (i >= n && j >= n) continue;
+      const std::int32_t a = id[{i, j}], b = id[{i + 1, j}], c = id[{i + 1, j + 1}], d = id[{i, j + 1}];
+      // The two convex corners whose cell would otherwise hold a triangle of three boundary nodes.
+      if ((i == 2 * n - 1 && j == 0) || (i == 0 && j == 2 * n - 1)) {
+        p.triangles.push_back({a, b, d});
+        p.triangles.push_back({b, c, d});
+      } else {
+        p.triangles.push_back({a, b, c});
+        p.triangles.push_back({a, c, d});
+      }
+    }
+  const std::vector<Vec2> loop = {{0, 0}, {2, 0}, {2, 1}, {1, 1}, {1, 2}, {0, 2}};
+  const double perimeter = 8.0;
+  auto arc_of = [&](Vec2 q) {  // arc length of a boundary point, -1 inside
+    double s = 0.0;
+    for (std::size_t k = 0; k < loop.size(); ++k) {
+      const Vec2 a = loop[k], b = loop[(k + 1) % loop.size()];
+      const double len = distance(a, b), t = dot(q - a, b - a) / (len * len);
+      if (t >= -1e-12 && t <= 1 + 1e-12 && distance(q, a + t * (b - a)) < 1e-12) return s + t * len;
+      s += len;
+    }
+    return -1.0;
+  };
+  auto point_at = [&](double s) {
+    s = std::fmod(s, perimeter);
+    for (std::size_t k = 0; k < loop.size(); ++k) {
+      const Vec2 a = loop[k], b = loop[(k + 1) % loop.size()];
+      const double len = distance(a, b);
+      if (s <= len) return a + (s / len) * (b - a);
+      s -= len;
+    }
+    return loop.front();
+  };
+  std::vector<std::uint8_t> mask(p.rest.size(), 0);
+  std::vector<Vec2> targets = p.rest;
+  for (std::size_t v = 0; v < p.rest.size(); ++v)
+    if (const double s = arc_of(p.rest[v]); s >= 0.0) {
+      mask[v] = 1;
+      targets[v] = point_at(s + 1.2);
+    }
+  std::vector<Vec2> straight = p.rest;
+  EXPECT_FALSE(move_constrained_vertices(p, DeformOptions{}, mask, targets, straight));
+  DeformOptions pull;
+  pull.pull_when_path_fails = true;
+  std::vector<Vec2> x = p.rest;
+  ASSERT_TRUE(move_constrained_vertices(p, pull, mask, targets, x));
+  for (std::size_t v = 0; v < x.size(); ++v)
+    if (mask[v]) EXPECT_EQ(x[v], targets[v]);
+  EXPECT_GT(min_signed_area(p.triangles, x), 0.0);
 }
 
 TEST(Deformation, MemoAnswersOnlyTheSameProblem) {

@@ -24,6 +24,9 @@ struct DeformOptions {
   double relative_tolerance = 1e-6;  ///< stop when the energy decrease per iteration stays below this fraction
                                      ///< (letter_M: 784 iterations, SJ min 0.86; 1e-8: 2567 iterations, 0.80)
   int lbfgs_memory = 8;          ///< L-BFGS history length
+  /// move_constrained_vertices: when the straight path from the deformed to the target positions inverts a
+  /// triangle, pull the constrained vertices to their targets by stiffening springs first, then try again.
+  bool pull_when_path_fails = false;
   /// Results of solved problems, shared by the copies of these options within one run (the pipeline sets it;
   /// null = none): a repair round re-maps every subregion of a part, most of them exactly as before.
   std::shared_ptr<DeformMemo> memo;

@@ -60,6 +60,10 @@ struct PolysquareMapOptions {
                                ///< mapped again; the new partition is kept when more quads come from maps, and
                                ///< the rounds stop at the first that brings none (a fourth kept nothing on a
                                ///< coast and costs a whole map of every partitioned candidate)
+  bool pull_failed_snaps = true;  ///< PPM: after the split rounds, the part is mapped once more with snaps that
+                                  ///< a straight path cannot make pulled to their targets by stiffening springs
+                                  ///< (DeformOptions::pull_when_path_fails), kept when more quads are structured;
+                                  ///< last because a pulled map is more distorted than its split pieces' maps
   int split_max_subregions = 512; ///< no split takes a part beyond this many subregions: the joint quantization's
                                   ///< time grows with the count (delta_box 100 m: 322 subregions, 0.94 of its quads
                                   ///< mapped; at a cap of 256, 0.84)
