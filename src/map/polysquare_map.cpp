@@ -189,7 +189,11 @@ PartMapResult map_part(const Region& region, const RegionPart& part, const Polys
 
   t0 = std::chrono::steady_clock::now();
   if (options.composition == MapComposition::ppm && result.partition) {
-    result.mesh = map_piecewise(tri, triangle_part, result.partition->parts, options, name, st);
+    // The snaps no split could make are pulled to their targets (a distorted map, still structured) in the
+    // part's last map: at once for a reused partition (repair rounds split nothing), else after the splits.
+    PolysquareMapOptions pulled = options;
+    pulled.deform.pull_when_path_fails = options.pull_failed_snaps;
+    result.mesh = map_piecewise(tri, triangle_part, result.partition->parts, reuse ? pulled : options, name, st);
     // Failures the joint map found (counts a subregion's snap cannot reach, an infeasible quantization) are
     // repaired where they are: those subregions are split and the part is mapped again, kept when more of its
     // quads come from maps. A reused partition is final (repair rounds name its subregions).
@@ -237,10 +241,7 @@ PartMapResult map_part(const Region& region, const RegionPart& part, const Polys
           largest = f;
       if (!split_round({largest})) break;
     }
-    // Last, the snaps no split could make are pulled to their targets (a distorted map, still structured).
-    if (options.pull_failed_snaps && !st.failed_maps.empty()) {
-      PolysquareMapOptions pulled = options;
-      pulled.deform.pull_when_path_fails = true;
+    if (!reuse && options.pull_failed_snaps && !st.failed_maps.empty()) {
       PartMapStats trial = st;
       try {
         QuadMesh mesh = map_piecewise(tri, triangle_part, result.partition->parts, pulled, name, trial);
