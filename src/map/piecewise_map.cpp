@@ -20,6 +20,7 @@
 #include "polysquare/map/layout.h"
 #include "polysquare/map/quantize.h"
 #include "polysquare/partition/partition.h"
+#include "map/interface_turns.h"
 
 namespace polysquare {
 namespace {
@@ -952,6 +953,20 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
       failure[ps.first] = sub_name(ps.first) + ": its interface at " + at_text(tri.vertices[std::get<0>(key)]) +
                           " is split differently by its neighbour";
       again = true;
+    } else {
+      // Two convex corners where an interface turns: the smaller side is repaired instead.
+      std::vector<const Layout*> mapped_layouts(n, nullptr);
+      for (std::size_t p = 0; p < n; ++p)
+        if (failure[p].empty()) mapped_layouts[p] = &layouts[p];
+      if (const auto both = convex_on_both_sides(mapped_layouts, couplings)) {
+        const std::size_t p = subs[both->a].mesh.triangles.size() <= subs[both->b].mesh.triangles.size() ? both->a : both->b;
+        const LayoutSegment& s = layouts[both->a].segments[static_cast<std::size_t>(both->segment_a_next)];
+        const std::int32_t v = layouts[both->a].break_vertex[static_cast<std::size_t>(s.break_a)];
+        failure[p] = sub_name(p) + ": its interface with subregion " + std::to_string(p == both->a ? both->b : both->a) +
+                     " turns at " + at_text(subs[both->a].mesh.vertices[static_cast<std::size_t>(v)]) +
+                     " with a convex corner on both sides";
+        again = true;
+      }
     }
   }
   // One integer program for all mapped subregions. When it has no solution, the subregions that cannot agree
