@@ -302,8 +302,8 @@ void even_faces(const TriMesh& m, std::vector<std::vector<Piece>>& loops, std::v
 // patch splits in pairs). Ring pieces absorb the parity: the split construction needs an even count between two
 // anchors (ends of inner features), the matching one only an even count in all.
 PatchInput patch_input(const Subregion& sub, const std::vector<std::uint8_t>& is_patch,
-                       const std::map<SideKey, long long>& side_count, double h, double corner_deg,
-                       const std::string& where) {
+                       const std::map<SideKey, long long>& side_count, const std::vector<std::uint8_t>& junction,
+                       double h, double corner_deg, const std::string& where) {
   const TriMesh& m = sub.mesh;
   const std::vector<std::uint8_t> corner = corner_vertices(m, m.vertices, corner_deg);
   auto gv = [&](std::int32_t v) { return sub.global_vertex[static_cast<std::size_t>(v)]; };
@@ -336,7 +336,9 @@ PatchInput patch_input(const Subregion& sub, const std::vector<std::uint8_t>& is
       verts.push_back(verts.front());
     }
     // Counts of an interface come from the quantization when its other side was quantized (the neighbour is
-    // mapped, or was patched only after quantization); otherwise both patches take an even count.
+    // mapped, or was patched only after quantization); otherwise both patches take an even count. Between two
+    // patches no piece passes a junction of the partition (a vertex of three or more subregions): a union of
+    // patches has one chain where its neighbour has one per member, and both must cut it alike (else a crack).
     const bool mapped_side = ch.interface >= 0 && !is_patch[static_cast<std::size_t>(ch.interface)];
     const bool interface = ch.interface >= 0;
     std::vector<Piece> out;
@@ -345,13 +347,16 @@ PatchInput patch_input(const Subregion& sub, const std::vector<std::uint8_t>& is
       std::size_t j = i + 1;
       long long count = -1;
       if (interface) {
-        for (; j < verts.size(); ++j) {
+        std::size_t end = verts.size() - 1;
+        if (!mapped_side)
+          for (end = i + 1; end + 1 < verts.size() && !junction[static_cast<std::size_t>(gv(verts[end]))];) ++end;
+        for (; j <= end; ++j) {
           const std::int32_t a = gv(verts[i]), b = gv(verts[j]);
           const SideKey key{std::min(a, b), std::max(a, b), a < b ? gv(verts[i + 1]) : gv(verts[j - 1])};
           if (auto it = side_count.find(key); it != side_count.end()) { count = it->second; break; }
         }
         if (count < 0 && !mapped_side) {
-          j = verts.size() - 1;  // neither side quantized: one piece, an even count
+          j = end;  // no quantized side up to the next junction: one piece, an even count
         } else if (count < 0)
           throw MeshingError(where + ": no element count for its interface with subregion " +
                              std::to_string(ch.interface) + " at " + at_text(m.vertices[verts[i]]));
@@ -931,6 +936,19 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
     const std::int32_t a = gv(0), b = gv(count);
     return SideKey{std::min(a, b), std::max(a, b), a < b ? gv(1) : gv(count - 1)};
   };
+  // Vertices where three or more subregions meet: the ends of every interface between two of them.
+  std::vector<std::uint8_t> junction(tri.vertices.size(), 0);
+  {
+    std::vector<std::int32_t> first(tri.vertices.size(), -1), second(tri.vertices.size(), -1);
+    for (std::size_t t = 0; t < tri.triangles.size(); ++t)
+      for (std::int32_t v : tri.triangles[t]) {
+        const auto u = static_cast<std::size_t>(v);
+        const std::int32_t part = triangle_part[t];
+        if (first[u] < 0 || first[u] == part) first[u] = part;
+        else if (second[u] < 0 || second[u] == part) second[u] = part;
+        else junction[u] = 1;
+      }
+  }
   std::vector<SegmentCoupling> couplings;
   for (bool again = true; again;) {
     again = false;
@@ -1166,7 +1184,7 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
     // Builds the patch of subregion (or union) `sub`, numbered p, on the nodes of its quantized neighbours.
     auto build_patch = [&](std::size_t p, const Subregion& sub, const std::vector<std::uint8_t>& patch_now,
                            PatchMethod method) {
-      const PatchInput in = patch_input(sub, patch_now, side_count, options.size, options.layout.corner_threshold_deg,
+      const PatchInput in = patch_input(sub, patch_now, side_count, junction, options.size, options.layout.corner_threshold_deg,
                                         sub_name(p));
       PatchOptions po;
       po.size = options.size;

@@ -231,6 +231,37 @@ TEST(LocalRepair, AGrownPatchTakesInOneNeighbourFirst) {
   EXPECT_TRUE(check_invariants(m).ok()) << check_invariants(m).first_problem;
 }
 
+TEST(LocalRepair, APatchBesideAGrownPatchSharesItsNodes) {
+  // A square in 9 subregions; one patch grows over a neighbour while another patch borders it. The union has one
+  // chain where the other patch has one per member of the union: both must cut it at the junction of the three
+  // subregions and count it alike, or their nodes differ there (a crack).
+  Region region;
+  region.rings.push_back({{{0, 0}, {60, 0}, {60, 60}, {0, 60}}, 0, false, 0, ""});
+  region.num_parts = 1;
+  region.source = "square";
+  int unions = 0;
+  for (int grown = 0; grown < 9; ++grown)
+    for (int other = 0; other < 9; ++other) {
+      if (other == grown) continue;
+      PolysquareMapOptions o;
+      o.size = 3.0;
+      o.partition.parts = 9;
+      o.patch_subregions = {grown, other};
+      o.grown_patches = {grown};
+      const PartMapResult r = map_part(region, split_into_parts(region)[0], o);
+      bool taken_in = false;
+      for (const SubregionStats& st : r.stats.subregions)
+        taken_in = taken_in || st.reason.find("meshed in the patch of subregion") != std::string::npos;
+      unions += taken_in;
+      // Before smoothing a patch may hold flat quads; what must hold is the topology: every edge in two quads or
+      // on the boundary.
+      const InvariantReport inv = check_invariants(r.mesh);
+      EXPECT_EQ(inv.non_manifold_edges, 0u) << grown << " grown, " << other << " patched";
+      EXPECT_EQ(inv.untagged_boundary_edges, 0u) << grown << " grown, " << other << " patched";
+    }
+  EXPECT_GT(unions, 0);
+}
+
 TEST(LocalRepair, AnUnrepairedMeshIsFullyStructured) {
   // The same case without a forced patch: every subregion mapped, structured fraction 1.
   const Region region = load("letter_M");
