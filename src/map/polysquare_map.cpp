@@ -193,7 +193,19 @@ PartMapResult map_part(const Region& region, const RegionPart& part, const Polys
     // part's last map: at once for a reused partition (repair rounds split nothing), else after the splits.
     PolysquareMapOptions pulled = options;
     pulled.deform.pull_when_path_fails = options.pull_failed_snaps;
-    result.mesh = map_piecewise(tri, triangle_part, result.partition->parts, reuse ? pulled : options, name, st);
+    int joint_maps = 0;
+    double seconds_joint_maps = 0.0;
+    auto joint_map = [&](const std::vector<std::int32_t>& tp, int parts, const PolysquareMapOptions& o, PartMapStats& s) {
+      const auto t = std::chrono::steady_clock::now();
+      ++joint_maps;
+      struct Add {  // counted when the map throws too
+        double& total;
+        std::chrono::steady_clock::time_point t;
+        ~Add() { total += seconds_since(t); }
+      } add{seconds_joint_maps, t};
+      return map_piecewise(tri, tp, parts, o, name, s);
+    };
+    result.mesh = joint_map(triangle_part, result.partition->parts, reuse ? pulled : options, st);
     // Failures the joint map found (counts a subregion's snap cannot reach, an infeasible quantization) are
     // repaired where they are: those subregions are split and the part is mapped again, kept when more of its
     // quads come from maps. A reused partition is final (repair rounds name its subregions).
@@ -214,7 +226,7 @@ PartMapResult map_part(const Region& region, const RegionPart& part, const Polys
       PartMapStats trial = st;
       QuadMesh mesh;
       try {
-        mesh = map_piecewise(tri, tp, parts, options, name, trial);
+        mesh = joint_map(tp, parts, options, trial);
       } catch (const MeshingError&) {
         return false;  // a patch of the new partition cannot be built: keep the last one
       }
@@ -244,7 +256,7 @@ PartMapResult map_part(const Region& region, const RegionPart& part, const Polys
     if (!reuse && options.pull_failed_snaps && !st.failed_maps.empty()) {
       PartMapStats trial = st;
       try {
-        QuadMesh mesh = map_piecewise(tri, triangle_part, result.partition->parts, pulled, name, trial);
+        QuadMesh mesh = joint_map(triangle_part, result.partition->parts, pulled, trial);
         if (mapped_fraction(trial) > mapped_fraction(st)) {
           st = std::move(trial);
           result.mesh = std::move(mesh);
@@ -254,6 +266,8 @@ PartMapResult map_part(const Region& region, const RegionPart& part, const Polys
       }
     }
     st.quads = result.mesh.quads.size();
+    st.joint_maps = joint_maps;
+    st.seconds_joint_maps = seconds_joint_maps;
     return result;
   }
   MappedMesh mm = deform_mesh(tri, options, false);

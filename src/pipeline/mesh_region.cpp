@@ -63,7 +63,9 @@ nlohmann::json part_json(const PartMapStats& s) {
                        {"deform", s.seconds_deform},
                        {"quantize", s.seconds_quantize},
                        {"snap", s.seconds_snap},
-                       {"extract", s.seconds_extract}}}};
+                       {"extract", s.seconds_extract},
+                       {"joint_maps", s.seconds_joint_maps}}},
+          {"joint_maps", s.joint_maps}};
 }
 
 nlohmann::json dropped_json(const std::vector<DroppedCurve>& curves) {
@@ -270,30 +272,47 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
       return " in subregion " + std::to_string(s) +
              (r.stats.subregions[static_cast<std::size_t>(s)].mapped ? " (mapped)" : " (patch)");
     };
+    // Where the candidate's time goes, summed over its repair rounds (the report's `stage_seconds`).
+    double t_map = 0.0, t_first_map = 0.0, t_refine = 0.0, t_smooth = 0.0, t_local = 0.0, t_measure = 0.0;
+    nlohmann::json first_map;  // the first round's map: partition, split rounds, joint maps
+    auto timed = [](double& total, auto&& f) {
+      const auto t0 = std::chrono::steady_clock::now();
+      f();
+      total += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    };
     for (int round = 0;; ++round) {
-      r = make_mesh(repairs);
-      const RefineStats refined = refine_flat_corners(r.mesh, options.refine);
+      timed(t_map, [&] { r = make_mesh(repairs); });
+      if (round == 0) {
+        t_first_map = t_map;
+        first_map = {{"partition", r.stats.seconds_partition}, {"split_rounds", r.stats.split.seconds},
+                     {"joint_maps", r.stats.joint_maps}, {"joint_maps_seconds", r.stats.seconds_joint_maps}};
+      }
+      RefineStats refined;
+      timed(t_refine, [&] { refined = refine_flat_corners(r.mesh, options.refine); });
       if (r.stats.split.tested > 0 || r.stats.joint_splits > 0)
         c.summary["split"] = {{"rounds", r.stats.split.rounds}, {"subregions_split", r.stats.split.split},
                               {"maps_tried", r.stats.split.tested}, {"pieces_mapped", r.stats.split.pieces_mapped},
                               {"seconds", r.stats.split.seconds}, {"after_joint_map", r.stats.joint_splits}};
       c.summary["flat_corners"] = refined.flat_corners;
       c.summary["flat_corners_collapsed"] = refined.collapsed;
-      const RefineStats loops = pillow_feature_loops(r.mesh, options.refine);
+      RefineStats loops;
+      timed(t_refine, [&] { loops = pillow_feature_loops(r.mesh, options.refine); });
       if (loops.feature_loops > 0) {
         c.summary["feature_loops_flat"] = loops.feature_loops;
         c.summary["feature_loops_pillowed"] = loops.pillowed;
       }
       SmoothOptions smooth = options.smooth;
       smooth.feature_tolerance = options.feature_tolerance * options.size;
-      c.smooth = smooth_quads(r.mesh, smooth, &region);
+      timed(t_smooth, [&] { c.smooth = smooth_quads(r.mesh, smooth, &region); });
       InvariantReport inv;
       // Folded quads, and unpinned ones outside the SJ or edge-ratio gate. The gates judge the quads the mesher controls: quads
       // pinned by an input corner sharper than the SJ gate are only counted (no conforming mesh does better).
       std::vector<std::uint8_t> poor;
       auto measure = [&] {
+        const auto t0 = std::chrono::steady_clock::now();
         metrics = quad_metrics(r.mesh);
         pinned = quads_pinned_by_sharp_input(r.mesh, options.min_scaled_jacobian, options.size);
+        t_measure += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         poor.assign(metrics.sj.size(), 0);
         bool any = false;
         for (std::size_t q = 0; q < metrics.sj.size(); ++q) {
@@ -313,13 +332,14 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
         lp.size = options.size;
         lp.max_rings = rings;
         lp.max_quads = max_quads;
-        const LocalPatchStats done = remesh_poor_quads(r.mesh, flagged, lp, local_patched);
+        LocalPatchStats done;
+        timed(t_local, [&] { done = remesh_poor_quads(r.mesh, flagged, lp, local_patched); });
         local_stats.clusters += done.clusters;
         local_stats.patched += done.patched;
         local_stats.quads_added += done.quads_added;
         local_stats.quads_removed += done.quads_removed;
         if (done.patched == 0) return true;  // the flagged quads are as they were
-        c.smooth = smooth_quads(r.mesh, smooth, &region);
+        timed(t_smooth, [&] { c.smooth = smooth_quads(r.mesh, smooth, &region); });
         return measure();
       };
       // The first pass also mends valid quads under local_patch.mend_below_sj where a patch does better.
@@ -434,6 +454,9 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
                            ")");
       break;
     }
+    c.summary["stage_seconds"] = {{"map", t_first_map}, {"map_of", first_map}, {"repair_maps", t_map - t_first_map},
+                                  {"refine", t_refine}, {"smooth", t_smooth}, {"local_patches", t_local},
+                                  {"measure", t_measure}};
     const QualityReport q = compute_quality(r.mesh, metrics);
     c.min_sj = q.sj.min;
     c.max_edge_ratio = q.edge_ratio.max;

@@ -121,6 +121,8 @@ struct PartMapStats {
   int joint_splits = 0;                    ///< PPM: rounds that split failed subregions after the joint map
   double seconds_partition = 0;
   double seconds_triangulate = 0, seconds_deform = 0, seconds_quantize = 0, seconds_snap = 0, seconds_extract = 0;
+  int joint_maps = 0;             ///< PPM: joint maps of the part (first, split rounds, pulled snaps), kept or not
+  double seconds_joint_maps = 0;  ///< PPM: their time together (the seconds_* above are the kept map's only)
 };
 
 struct PartMapResult {
