@@ -273,6 +273,34 @@ TEST(LocalRepair, AnUnrepairedMeshIsFullyStructured) {
   EXPECT_EQ(r.report["summary"]["unstructured_subregions"].get<int>(), 0);
 }
 
+TEST(LocalRepair, TheReportSaysWhereACandidatesTimeWent) {
+  // letter_M in 4 subregions, subregion 1 forced to a patch: the chosen candidate's stage times are each >= 0 and
+  // add up to no more than its wall time; its part was mapped jointly at least once.
+  const Region region = load("letter_M");
+  MeshOptions o;
+  o.size = 2.0;
+  o.parts = 4;
+  o.map.patch_subregions = {1};
+  const MeshResult r = mesh_region(region, o);
+  bool found = false;
+  for (const auto& c : r.report["candidates"][0]) {
+    if (!c.contains("chosen")) continue;
+    found = true;
+    const auto& st = c["stage_seconds"];
+    double sum = 0.0;
+    for (const char* k : {"map", "repair_maps", "refine", "smooth", "local_patches", "measure"}) {
+      ASSERT_TRUE(st.contains(k)) << k;
+      EXPECT_GE(st[k].get<double>(), 0.0) << k;
+      sum += st[k].get<double>();
+    }
+    EXPECT_LE(sum, c["seconds"].get<double>() + 1e-6);
+    EXPECT_GE(st["map_of"]["joint_maps"].get<int>(), 1);
+    EXPECT_LE(st["map_of"]["joint_maps_seconds"].get<double>(), st["map"].get<double>() + 1e-6);
+  }
+  EXPECT_TRUE(found);
+  EXPECT_GE(r.report["parts"][0]["joint_maps"].get<int>(), 1);
+}
+
 TEST(LocalRepair, NewCoastsHoldTheInvariantsAndTheSummaryAccountsForEveryQuad) {
   // Two coasts nobody tuned the mesher to (GSHHG, data/cases/PROVENANCE.md), one poly-square per part at 400 m:
   // every invariant holds, the boundary lies on the input, and the summary's structured fraction matches the
