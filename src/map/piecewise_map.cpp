@@ -349,7 +349,10 @@ PatchInput patch_input(const Subregion& sub, const std::vector<std::uint8_t>& is
       if (interface) {
         std::size_t end = verts.size() - 1;
         if (!mapped_side)
-          for (end = i + 1; end + 1 < verts.size() && !junction[static_cast<std::size_t>(gv(verts[end]))];) ++end;
+          for (end = i + 1; end + 1 < verts.size(); ++end) {
+            const std::int32_t g = gv(verts[end]);
+            if (g >= 0 && static_cast<std::size_t>(g) < junction.size() && junction[static_cast<std::size_t>(g)]) break;
+          }
         for (; j <= end; ++j) {
           const std::int32_t a = gv(verts[i]), b = gv(verts[j]);
           const SideKey key{std::min(a, b), std::max(a, b), a < b ? gv(verts[i + 1]) : gv(verts[j - 1])};
