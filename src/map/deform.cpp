@@ -456,26 +456,24 @@ bool straight_path(const DeformProblem& problem, const DeformOptions& options,
 void pull_towards(const DeformProblem& problem, const DeformOptions& options,
                   const std::vector<std::uint8_t>& target_mask, const std::vector<Vec2>& targets,
                   std::vector<Vec2>& x) {
-  DeformProblem free_problem = problem;
-  free_problem.aligned.clear();
-  Energy energy(free_problem, options);
-  energy.with_alignment = false;
+  Energy energy(problem, options);
+  energy.with_alignment = false;  // AMIPS and the springs only; every vertex but problem.fixed moves
   energy.anchor = &targets;
   energy.anchor_mask = &target_mask;
   const double constrained = static_cast<double>(std::max<std::size_t>(
       1, static_cast<std::size_t>(std::count(target_mask.begin(), target_mask.end(), std::uint8_t{1}))));
   for (double w = 1.0; w <= 1e8; w *= 10.0) {
     energy.anchor_weight = w / constrained;
-    minimize(energy, free_problem, x, 300, 1e-9, options.lbfgs_memory);
+    minimize(energy, problem, x, 300, 1e-9, options.lbfgs_memory);
   }
 }
 
 bool move_along_path(const DeformProblem& problem, const DeformOptions& options,
                      const std::vector<std::uint8_t>& target_mask, const std::vector<Vec2>& targets,
                      std::vector<Vec2>& x) {
+  if (!options.pull_when_path_fails) return straight_path(problem, options, target_mask, targets, x);
   const std::vector<Vec2> start = x;
   if (straight_path(problem, options, target_mask, targets, x)) return true;
-  if (!options.pull_when_path_fails) return false;
   x = start;
   pull_towards(problem, options, target_mask, targets, x);
   return straight_path(problem, options, target_mask, targets, x);

@@ -70,6 +70,11 @@ PartitionTopology topology(const TriMesh& tri, const std::vector<std::int32_t>& 
   return g;
 }
 
+// Where a subregion's chains end: vertices on three or more curves (rings, features, separators), feature points.
+bool ends_chains(const PartitionTopology& g, std::int32_t v) {
+  return g.curves[static_cast<std::size_t>(v)] >= 3 || g.point[static_cast<std::size_t>(v)];
+}
+
 Subregion cut_subregion(const TriMesh& tri, const std::vector<std::int32_t>& tp, const PartitionTopology& g, int p,
                         const std::vector<std::int32_t>& triangles, const std::string& name) {
   Subregion sub;
@@ -109,7 +114,7 @@ Subregion cut_subregion(const TriMesh& tri, const std::vector<std::int32_t>& tp,
                            "; its boundary is not one simple loop there");
     }
   }
-  auto cut_at = [&](std::int32_t v) { return g.curves[v] >= 3 || g.point[v]; };
+  auto cut_at = [&](std::int32_t v) { return ends_chains(g, v); };
   auto add_chain = [&](const std::vector<std::int32_t>& verts, bool closed, const Across& across) {
     TriChain ch;
     if (across.neighbour < 0) {
@@ -302,7 +307,7 @@ void even_faces(const TriMesh& m, std::vector<std::vector<Piece>>& loops, std::v
 // patch splits in pairs). Ring pieces absorb the parity: the split construction needs an even count between two
 // anchors (ends of inner features), the matching one only an even count in all.
 PatchInput patch_input(const Subregion& sub, const std::vector<std::uint8_t>& is_patch,
-                       const std::map<SideKey, long long>& side_count, const std::vector<std::uint8_t>& junction,
+                       const std::map<SideKey, long long>& side_count, const std::vector<std::uint8_t>& chain_ends,
                        double h, double corner_deg, const std::string& where) {
   const TriMesh& m = sub.mesh;
   const std::vector<std::uint8_t> corner = corner_vertices(m, m.vertices, corner_deg);
@@ -337,8 +342,8 @@ PatchInput patch_input(const Subregion& sub, const std::vector<std::uint8_t>& is
     }
     // Counts of an interface come from the quantization when its other side was quantized (the neighbour is
     // mapped, or was patched only after quantization); otherwise both patches take an even count. Between two
-    // patches no piece passes a junction of the partition (a vertex of three or more subregions): a union of
-    // patches has one chain where its neighbour has one per member, and both must cut it alike (else a crack).
+    // patches no piece passes a chain end of the subregions (`chain_ends`): a union of patches has one chain
+    // where its neighbour has one per member, and both must cut it alike (else a crack).
     const bool mapped_side = ch.interface >= 0 && !is_patch[static_cast<std::size_t>(ch.interface)];
     const bool interface = ch.interface >= 0;
     std::vector<Piece> out;
@@ -351,7 +356,7 @@ PatchInput patch_input(const Subregion& sub, const std::vector<std::uint8_t>& is
         if (!mapped_side)
           for (end = i + 1; end + 1 < verts.size(); ++end) {
             const std::int32_t g = gv(verts[end]);
-            if (g >= 0 && static_cast<std::size_t>(g) < junction.size() && junction[static_cast<std::size_t>(g)]) break;
+            if (g >= 0 && static_cast<std::size_t>(g) < chain_ends.size() && chain_ends[static_cast<std::size_t>(g)]) break;
           }
         for (; j <= end; ++j) {
           const std::int32_t a = gv(verts[i]), b = gv(verts[j]);
@@ -359,7 +364,7 @@ PatchInput patch_input(const Subregion& sub, const std::vector<std::uint8_t>& is
           if (auto it = side_count.find(key); it != side_count.end()) { count = it->second; break; }
         }
         if (count < 0 && !mapped_side) {
-          j = end;  // no quantized side up to the next junction: one piece, an even count
+          j = end;  // no quantized side up to the next chain end: one piece, an even count
         } else if (count < 0)
           throw MeshingError(where + ": no element count for its interface with subregion " +
                              std::to_string(ch.interface) + " at " + at_text(m.vertices[verts[i]]));
@@ -604,8 +609,12 @@ void for_each_subregion(std::size_t count, F&& f) {
 }  // namespace
 
 std::vector<Subregion> split_subregions(const TriMesh& tri, const std::vector<std::int32_t>& triangle_part, int parts,
-                                        const std::string& name) {
+                                        const std::string& name, std::vector<std::uint8_t>* chain_ends) {
   const PartitionTopology g = topology(tri, triangle_part);
+  if (chain_ends) {
+    chain_ends->assign(tri.vertices.size(), 0);
+    for (std::size_t v = 0; v < tri.vertices.size(); ++v) (*chain_ends)[v] = ends_chains(g, static_cast<std::int32_t>(v));
+  }
   std::vector<std::vector<std::int32_t>> triangles(static_cast<std::size_t>(parts));
   for (std::size_t t = 0; t < triangle_part.size(); ++t)
     triangles[static_cast<std::size_t>(triangle_part[t])].push_back(static_cast<std::int32_t>(t));
@@ -869,7 +878,8 @@ std::vector<std::vector<std::uint64_t>> patch_runs(const Subregion& sub) {
 QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& triangle_part, int parts,
                        const PolysquareMapOptions& options, const std::string& name, PartMapStats& st) {
   auto t0 = std::chrono::steady_clock::now();
-  std::vector<Subregion> subs = split_subregions(tri, triangle_part, parts, name);
+  std::vector<std::uint8_t> chain_ends;  // of these subregions: where patches cut interfaces between them
+  std::vector<Subregion> subs = split_subregions(tri, triangle_part, parts, name, &chain_ends);
   const std::size_t n = subs.size();
   std::vector<MappedMesh> mapped(n);
   std::vector<Layout> layouts(n);
@@ -939,19 +949,6 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
     const std::int32_t a = gv(0), b = gv(count);
     return SideKey{std::min(a, b), std::max(a, b), a < b ? gv(1) : gv(count - 1)};
   };
-  // Vertices where three or more subregions meet: the ends of every interface between two of them.
-  std::vector<std::uint8_t> junction(tri.vertices.size(), 0);
-  {
-    std::vector<std::int32_t> first(tri.vertices.size(), -1), second(tri.vertices.size(), -1);
-    for (std::size_t t = 0; t < tri.triangles.size(); ++t)
-      for (std::int32_t v : tri.triangles[t]) {
-        const auto u = static_cast<std::size_t>(v);
-        const std::int32_t part = triangle_part[t];
-        if (first[u] < 0 || first[u] == part) first[u] = part;
-        else if (second[u] < 0 || second[u] == part) second[u] = part;
-        else junction[u] = 1;
-      }
-  }
   std::vector<SegmentCoupling> couplings;
   for (bool again = true; again;) {
     again = false;
@@ -1187,7 +1184,7 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
     // Builds the patch of subregion (or union) `sub`, numbered p, on the nodes of its quantized neighbours.
     auto build_patch = [&](std::size_t p, const Subregion& sub, const std::vector<std::uint8_t>& patch_now,
                            PatchMethod method) {
-      const PatchInput in = patch_input(sub, patch_now, side_count, junction, options.size, options.layout.corner_threshold_deg,
+      const PatchInput in = patch_input(sub, patch_now, side_count, chain_ends, options.size, options.layout.corner_threshold_deg,
                                         sub_name(p));
       PatchOptions po;
       po.size = options.size;

@@ -309,10 +309,10 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
       // pinned by an input corner sharper than the SJ gate are only counted (no conforming mesh does better).
       std::vector<std::uint8_t> poor;
       auto measure = [&] {
-        const auto t0 = std::chrono::steady_clock::now();
-        metrics = quad_metrics(r.mesh);
-        pinned = quads_pinned_by_sharp_input(r.mesh, options.min_scaled_jacobian, options.size);
-        t_measure += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        timed(t_measure, [&] {
+          metrics = quad_metrics(r.mesh);
+          pinned = quads_pinned_by_sharp_input(r.mesh, options.min_scaled_jacobian, options.size);
+        });
         poor.assign(metrics.sj.size(), 0);
         bool any = false;
         for (std::size_t q = 0; q < metrics.sj.size(); ++q) {

@@ -26,9 +26,10 @@ struct Subregion {
 /// A boundary loop is cut wherever the neighbour across it changes (outside, another subregion, a feature on
 /// the interface) and at every vertex where three or more curves meet, identically on both sides of each
 /// interface. Throws MeshingError naming `name` when a subregion touches itself at a vertex or is enclosed by a
-/// single neighbour (no junction to close its poly-square on).
+/// single neighbour (no junction to close its poly-square on). With `chain_ends` given, it receives for every vertex
+/// of `tri` whether chains are cut there (a union of these subregions, cut later, has longer chains).
 std::vector<Subregion> split_subregions(const TriMesh& tri, const std::vector<std::int32_t>& triangle_part, int parts,
-                                        const std::string& name);
+                                        const std::string& name, std::vector<std::uint8_t>* chain_ends = nullptr);
 
 /// Welds the nodes of several quad meshes that lie on shared sides: node i < side_nodes[m] of mesh m is merged
 /// with any node of another mesh within `tolerance`; feature edges found twice are kept once. quad_part of the
