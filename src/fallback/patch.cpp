@@ -15,6 +15,7 @@
 #include <unordered_set>
 
 #include "polysquare/core/error.h"
+#include "fallback/patch_valence.h"
 #include "fallback/perfect_matching.h"
 #include "polysquare/fallback/split_triangles.h"
 
@@ -214,9 +215,8 @@ void collapse_doublets(const PatchInput& in, QuadMesh& out) {
 // untangler; a quad still flat or reflex at a given node (no move of the free nodes can open it: two triangles of given
 // nodes paired into a non-convex quad) is split the same way and untangled again. Last, the check that every
 // given node is used and, with refuse_folded, that no quad is folded.
-void finish_patch(const PatchInput& in, const PatchOptions& options, QuadMesh& out) {
+void smooth_patch(const PatchInput& in, const PatchOptions& options, QuadMesh& out) {
   const double pi = std::acos(-1.0);
-  collapse_doublets(in, out);
   inset_wide_given_corners(in, options.inset_angle_deg * pi / 180.0, true, out);
   out.quad_part.assign(out.quads.size(), 0);
   std::vector<std::vector<std::int32_t>> adj(out.nodes.size());
@@ -251,6 +251,47 @@ void finish_patch(const PatchInput& in, const PatchOptions& options, QuadMesh& o
     if (quad_min_sj(a, b, c, d) <= 0.0)
       throw MeshingError("patch: a quad at " + at_text(a) + " stays folded (the boundary is too convoluted there)");
   }
+}
+
+// Either construction leaves many irregular nodes (about one in three quads touches a triangle's centre or a coarse
+// vertex, and a wide corner split by smooth_patch adds four). Local moves lower them first (patch_valence.h); the
+// relaxed patch is kept unless it ends with more folded or poor quads than the one without the moves.
+void finish_patch(const PatchInput& in, const PatchOptions& options, QuadMesh& out) {
+  collapse_doublets(in, out);
+  if (!options.relax_valences) return smooth_patch(in, options, out);
+  std::vector<std::array<std::int32_t, 2>> kept;
+  for (const PatchCurve& c : in.curves) {
+    const std::size_t n = c.nodes.size();
+    for (std::size_t i = 0; i + 1 < n + (c.closed ? 1 : 0); ++i) kept.push_back({c.nodes[i], c.nodes[(i + 1) % n]});
+  }
+  QuadMesh relaxed = out;
+  const patch_valence::Moves moves = patch_valence::relax_valences(relaxed, in.nodes.size(), kept, options.max_valence_moves,
+                                                                         options.valence_plateau_rounds);
+  if (moves.flips + moves.collapses == 0) return smooth_patch(in, options, out);
+  try {
+    collapse_doublets(in, relaxed);
+    smooth_patch(in, options, relaxed);
+  } catch (const MeshingError&) {
+    return smooth_patch(in, options, out);
+  }
+  try {
+    smooth_patch(in, options, out);
+  } catch (const MeshingError&) {
+    out = std::move(relaxed);  // refused folded without the moves, not with them
+    return;
+  }
+  auto poor = [&](const QuadMesh& m) {
+    std::pair<std::size_t, std::size_t> folded_poor{0, 0};
+    for (const auto& q : m.quads) {
+      const double sj = quad_min_sj(m.nodes[static_cast<std::size_t>(q[0])], m.nodes[static_cast<std::size_t>(q[1])],
+                                    m.nodes[static_cast<std::size_t>(q[2])], m.nodes[static_cast<std::size_t>(q[3])]);
+      folded_poor.first += sj <= 0.0;
+      folded_poor.second += sj < options.pair_min_sj;
+    }
+    return folded_poor;
+  };
+  const auto before = poor(out), after = poor(relaxed);
+  if (after.first <= before.first && after.second <= before.second) out = std::move(relaxed);
 }
 
 std::size_t folded_quads(const QuadMesh& m) {
@@ -603,9 +644,7 @@ QuadMesh matched_patch(const PatchInput& in, const PatchOptions& options) {
   return std::move(*best);
 }
 
-}  // namespace
-
-QuadMesh mesh_patch(const PatchInput& in, const PatchOptions& options) {
+QuadMesh built_patch(const PatchInput& in, const PatchOptions& options) {
   // A loop of four nodes and nothing inside is one quad.
   if (in.curves.size() == 1 && in.curves[0].loop && in.curves[0].nodes.size() == 4 && in.points.empty()) {
     QuadMesh out;
@@ -641,6 +680,12 @@ QuadMesh mesh_patch(const PatchInput& in, const PatchOptions& options) {
   } catch (const MeshingError&) {
   }
   return split;
+}
+
+}  // namespace
+
+QuadMesh mesh_patch(const PatchInput& in, const PatchOptions& options) {
+  return built_patch(in, options);
 }
 
 }  // namespace polysquare

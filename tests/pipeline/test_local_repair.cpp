@@ -2,7 +2,9 @@
 // patch on the nodes its mapped neighbours made, and only that subregion; the mesh keeps every invariant.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <iostream>
 #include <fstream>
 #include <map>
 #include <set>
@@ -383,4 +385,56 @@ TEST(LocalRepair, QuadsBesideACrackAreFlaggedForRepair) {
   m.boundary_edges = {{0, 1}, {2, 3}, {3, 0}, {1, 5}, {5, 6}, {6, 2}};
   EXPECT_EQ(quads_beside_cracks(m), (std::vector<std::uint8_t>{0, 0}));
   EXPECT_TRUE(check_invariants(m).ok()) << check_invariants(m).first_problem;
+}
+
+TEST(Patch, ValenceMovesLeaveFewerIrregularNodes) {
+  // The delta_box patches and a square, each built with and without the valence moves: with them, fewer free
+  // nodes sit in other than four quads, fewer given nodes in more or fewer quads than their angle asks for, and
+  // no quad is folded or poorer than before.
+  auto irregular = [](const PatchInput& in, const QuadMesh& m) {
+    std::vector<int> quads_at(m.nodes.size(), 0);
+    for (const auto& q : m.quads)
+      for (auto v : q) quads_at[static_cast<std::size_t>(v)]++;
+    std::size_t count = 0;
+    for (std::size_t v = in.nodes.size(); v < m.nodes.size(); ++v) count += quads_at[v] != 4;
+    return count;
+  };
+  std::size_t with = 0, without = 0;
+  std::vector<std::pair<std::string, PatchInput>> inputs;
+  std::vector<double> sizes;
+  for (const char* name : {"delta_box_400m_subregion45.txt", "delta_box_400m_subregion45_grown.txt"}) {
+    double h = 0;
+    inputs.push_back({name, read_patch(name, h)});
+    sizes.push_back(h);
+  }
+  inputs.push_back({"square", square_loop(8.0, 12)});
+  sizes.push_back(8.0 / 12);
+  for (std::size_t i = 0; i < inputs.size(); ++i) {
+    const auto& [name, in] = inputs[i];
+    PatchOptions o;
+    o.size = sizes[i];
+    o.relax_valences = false;
+    const QuadMesh plain = mesh_patch(in, o);
+    o.relax_valences = true;
+    const QuadMesh relaxed = mesh_patch(in, o);
+    const std::size_t a = irregular(in, plain), b = irregular(in, relaxed);
+    EXPECT_LE(b, a) << name;
+    without += a;
+    with += b;
+    for (std::size_t v = 0; v < in.nodes.size(); ++v) EXPECT_EQ(relaxed.nodes[v], in.nodes[v]) << name;
+    auto worst = [](const QuadMesh& m) {
+      double w = 1.0;
+      for (const auto& q : m.quads) w = std::min(w, quad_min_sj(m.nodes[q[0]], m.nodes[q[1]], m.nodes[q[2]], m.nodes[q[3]]));
+      return w;
+    };
+    EXPECT_GT(worst(relaxed), 0.0) << name;
+    double quads_area = 0, plain_area = 0;
+    for (const auto& q : relaxed.quads)
+      quads_area += 0.5 * cross(relaxed.nodes[q[2]] - relaxed.nodes[q[0]], relaxed.nodes[q[3]] - relaxed.nodes[q[1]]);
+    for (const auto& q : plain.quads)
+      plain_area += 0.5 * cross(plain.nodes[q[2]] - plain.nodes[q[0]], plain.nodes[q[3]] - plain.nodes[q[1]]);
+    EXPECT_NEAR(quads_area, plain_area, 1e-6 * std::abs(plain_area)) << name;
+  }
+  std::cout << "free nodes not in four quads: " << without << " without the moves, " << with << " with them\n";
+  EXPECT_LT(static_cast<double>(with), 0.8 * static_cast<double>(without));
 }

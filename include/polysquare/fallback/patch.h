@@ -57,6 +57,11 @@ struct PatchOptions {
                                    ///< (that quad is replaced by an inner quad and four around it)
   int untangle_sweeps = 30;    ///< plain Laplacian sweeps over the interior nodes, before the untangler
   UntangleOptions untangle;    ///< then the untangler (untangle.h) on the interior nodes
+  bool relax_valences = true;  ///< then local moves (edge flips, quad collapses) towards four quads at an interior
+                               ///< node and one per right angle on a curve, kept unless more quads end folded or poor
+  std::size_t max_valence_moves = 100000;  ///< at most this many of those moves
+  int valence_plateau_rounds = 40;  ///< rounds of moves that keep the valence energy (irregular nodes wander until
+                                    ///< they meet one they cancel with), each followed by the improving moves
 };
 
 /// The all-quad patch. Its first in.nodes.size() nodes are the given nodes, in order (all of them used), then

@@ -1,0 +1,314 @@
+#include "fallback/patch_valence.h"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <unordered_map>
+#include <unordered_set>
+
+#include "polysquare/core/geometry.h"
+
+namespace polysquare::patch_valence {
+namespace {
+
+using Quad = std::array<std::int32_t, 4>;
+
+std::uint64_t edge_key(std::int32_t a, std::int32_t b) {
+  const auto lo = static_cast<std::uint32_t>(std::min(a, b)), hi = static_cast<std::uint32_t>(std::max(a, b));
+  return (static_cast<std::uint64_t>(lo) << 32) | hi;
+}
+
+Quad rotated_to(Quad q, std::int32_t first) {
+  while (q[0] != first) std::rotate(q.begin(), q.begin() + 1, q.end());
+  return q;
+}
+
+// A candidate move: the quads it replaces and what replaces them, with the energy change.
+struct Move {
+  double gain = 0.0;               // energy decrease (> 0)
+  std::vector<std::int32_t> quads;  // indices of the quads replaced (the first ones are rewritten, the rest removed)
+  std::vector<Quad> by;             // new quads, as many as `quads` or one fewer (a collapse)
+  std::int32_t merged = -1, removed = -1;  // a collapse: the node kept and the one merged into it
+  Vec2 at{};                               // the kept node's new position
+};
+
+class Relaxer {
+ public:
+  Relaxer(QuadMesh& mesh, std::size_t given, const std::vector<std::array<std::int32_t, 2>>& kept_edges)
+      : m_(mesh), given_(given) {
+    for (const auto& e : kept_edges) kept_.insert(edge_key(e[0], e[1]));
+    const double right = std::acos(0.0);
+    std::vector<double> angle(m_.nodes.size(), 0.0);
+    for (const Quad& q : m_.quads)
+      for (int k = 0; k < 4; ++k) {
+        const Vec2 p = pos(q[k]), next = pos(q[(k + 1) % 4]) - p, prev = pos(q[(k + 3) % 4]) - p;
+        double a = std::atan2(cross(next, prev), dot(next, prev));
+        if (a < 0) a += 4.0 * right;
+        angle[static_cast<std::size_t>(q[k])] += a;
+      }
+    target_.assign(m_.nodes.size(), 4.0);
+    for (std::size_t v = 0; v < given_ && v < m_.nodes.size(); ++v)
+      target_[v] = std::clamp(angle[v] / right, 1.0, 4.0);
+  }
+
+  double energy() const {
+    double e = 0.0;
+    for (std::size_t v = 0; v < val_.size(); ++v)
+      if (val_[v] > 0) e += sq(val_[v] - target_[v]);
+    return e;
+  }
+
+  // One pass: every improving move, best first, none touching a node an earlier one touched. Returns the moves made.
+  // With `plateau`, the moves that leave the energy as it is instead, in a shuffled order: irregular nodes wander
+  // (a valence 3 beside a 5 moves as a pair) until the next greedy passes find them beside one they cancel with.
+  std::size_t pass(Moves& moves, std::size_t budget, std::mt19937* plateau = nullptr) {
+    min_gain_ = plateau ? -1e-9 : 1e-9;
+    index();
+    std::vector<Move> found;
+    for (std::size_t i = 0; i < m_.quads.size(); ++i)
+      for (int k = 0; k < 4; ++k) {
+        const std::uint64_t key = edge_key(m_.quads[i][k], m_.quads[i][(k + 1) % 4]);
+        const auto& uses = edge_quads_.at(key);
+        if (uses.size() == 2 && uses[0] == static_cast<std::int32_t>(i) && !kept_.count(key))
+          flip_candidates(uses[0], uses[1], found);
+      }
+    for (std::size_t i = 0; i < m_.quads.size(); ++i) {
+      collapse_candidate(static_cast<std::int32_t>(i), 0, found);
+      collapse_candidate(static_cast<std::int32_t>(i), 1, found);
+    }
+    if (plateau) {
+      found.erase(std::remove_if(found.begin(), found.end(), [](const Move& mv) { return mv.gain > 1e-9; }), found.end());
+      std::shuffle(found.begin(), found.end(), *plateau);
+    } else {
+      std::stable_sort(found.begin(), found.end(), [](const Move& x, const Move& y) { return x.gain > y.gain; });
+    }
+    std::vector<std::uint8_t> touched(m_.nodes.size(), 0);
+    std::vector<std::int32_t> gone;
+    std::size_t made = 0;
+    for (const Move& mv : found) {
+      if (made >= budget) break;
+      bool free = true;
+      for (std::int32_t q : mv.quads)
+        for (std::int32_t v : m_.quads[static_cast<std::size_t>(q)]) free = free && !touched[static_cast<std::size_t>(v)];
+      if (mv.merged >= 0)  // a collapse changes every quad at both nodes
+        for (std::int32_t v : {mv.merged, mv.removed})
+          for (std::int32_t q : quads_at_[static_cast<std::size_t>(v)])
+            for (std::int32_t u : m_.quads[static_cast<std::size_t>(q)]) free = free && !touched[static_cast<std::size_t>(u)];
+      if (!free) continue;
+      for (std::int32_t q : mv.quads)
+        for (std::int32_t v : m_.quads[static_cast<std::size_t>(q)]) touched[static_cast<std::size_t>(v)] = 1;
+      if (mv.merged >= 0) {
+        for (std::int32_t v : {mv.merged, mv.removed})
+          for (std::int32_t q : quads_at_[static_cast<std::size_t>(v)])
+            for (std::int32_t u : m_.quads[static_cast<std::size_t>(q)]) touched[static_cast<std::size_t>(u)] = 1;
+        for (std::int32_t q : quads_at_[static_cast<std::size_t>(mv.removed)])
+          for (std::int32_t& v : m_.quads[static_cast<std::size_t>(q)])
+            if (v == mv.removed) v = mv.merged;
+        m_.nodes[static_cast<std::size_t>(mv.merged)] = mv.at;
+        gone.push_back(mv.quads.back());
+        ++moves.collapses;
+      } else {
+        ++moves.flips;
+      }
+      for (std::size_t k = 0; k < mv.by.size(); ++k) m_.quads[static_cast<std::size_t>(mv.quads[k])] = mv.by[k];
+      ++made;
+    }
+    std::sort(gone.begin(), gone.end());
+    for (auto it = gone.rbegin(); it != gone.rend(); ++it) m_.quads.erase(m_.quads.begin() + *it);
+    if (made > 0) smooth(3);
+    return made;
+  }
+
+  double energy_now() { index(); return energy(); }
+  void finish(Moves& moves) {
+    index();
+    moves.energy_after = energy();
+  }
+
+  void start(Moves& moves) {
+    index();
+    moves.energy_before = energy();
+  }
+
+ private:
+  static double sq(double x) { return x * x; }
+  Vec2 pos(std::int32_t v) const { return m_.nodes[static_cast<std::size_t>(v)]; }
+  bool is_given(std::int32_t v) const { return static_cast<std::size_t>(v) < given_; }
+
+  void index() {
+    val_.assign(m_.nodes.size(), 0);
+    quads_at_.assign(m_.nodes.size(), {});
+    edge_quads_.clear();
+    neighbours_.assign(m_.nodes.size(), {});
+    for (std::size_t i = 0; i < m_.quads.size(); ++i) {
+      const Quad& q = m_.quads[i];
+      for (int k = 0; k < 4; ++k) {
+        const auto v = static_cast<std::size_t>(q[k]);
+        val_[v]++;
+        quads_at_[v].push_back(static_cast<std::int32_t>(i));
+        edge_quads_[edge_key(q[k], q[(k + 1) % 4])].push_back(static_cast<std::int32_t>(i));
+        auto& nb = neighbours_[v];
+        for (std::int32_t u : {q[(k + 1) % 4], q[(k + 3) % 4]})
+          if (std::find(nb.begin(), nb.end(), u) == nb.end()) nb.push_back(u);
+      }
+    }
+  }
+
+  // Positive area at the current positions (with `moved` at `to`), and no corner of three given nodes that is
+  // reflex or within 10 degrees of flat: no move of the free nodes could open it.
+  bool valid(const Quad& q, std::int32_t moved = -1, Vec2 to = {}) const {
+    auto p = [&](std::int32_t v) { return v == moved ? to : pos(v); };
+    double area = 0.0;
+    for (int k = 0; k < 4; ++k) area += cross(p(q[k]), p(q[(k + 1) % 4]));
+    if (area <= 0.0) return false;
+    for (int k = 0; k < 4; ++k) {
+      const std::int32_t v = q[k], n = q[(k + 1) % 4], r = q[(k + 3) % 4];
+      if (!is_given(v) || !is_given(n) || !is_given(r) || v == moved) continue;
+      const Vec2 e1 = p(n) - p(v), e2 = p(r) - p(v);
+      const double l = std::sqrt(dot(e1, e1) * dot(e2, e2));
+      if (l <= 0.0 || cross(e1, e2) < 0.17 * l) return false;
+    }
+    return true;
+  }
+
+  double change(std::int32_t v, int delta) const {
+    const double x = val_[static_cast<std::size_t>(v)] - target_[static_cast<std::size_t>(v)];
+    return sq(x + delta) - sq(x);
+  }
+  bool may_lose_one(std::int32_t v) const { return val_[static_cast<std::size_t>(v)] > (is_given(v) ? 1 : 3); }
+  bool is_edge(std::int32_t a, std::int32_t b) const { return edge_quads_.count(edge_key(a, b)) > 0; }
+
+  void flip_candidates(std::int32_t i1, std::int32_t i2, std::vector<Move>& out) const {
+    const Quad& q1 = m_.quads[static_cast<std::size_t>(i1)];
+    const Quad& q2 = m_.quads[static_cast<std::size_t>(i2)];
+    // q1 = (a, b, c, d) and q2 = (b, a, e, f), both counter-clockwise: the hexagon (b, c, d, a, e, f).
+    for (int k = 0; k < 4; ++k) {
+      const std::int32_t a = q1[k], b = q1[(k + 1) % 4];
+      if (std::find(q2.begin(), q2.end(), b) == q2.end()) continue;
+      const Quad r2 = rotated_to(q2, b);
+      if (r2[1] != a) continue;
+      const std::int32_t c = q1[(k + 2) % 4], d = q1[(k + 3) % 4], e = r2[2], f = r2[3];
+      std::array<std::int32_t, 6> hex{b, c, d, a, e, f};
+      std::sort(hex.begin(), hex.end());
+      if (std::adjacent_find(hex.begin(), hex.end()) != hex.end()) return;
+      if (!may_lose_one(a) || !may_lose_one(b)) return;
+      const double lose = change(a, -1) + change(b, -1);
+      const std::array<std::array<std::int32_t, 2>, 2> diagonals{{{c, e}, {d, f}}};
+      const std::array<std::array<Quad, 2>, 2> splits{{{Quad{c, d, a, e}, Quad{e, f, b, c}},
+                                                       {Quad{d, a, e, f}, Quad{f, b, c, d}}}};
+      for (int s = 0; s < 2; ++s) {
+        const auto [x, y] = diagonals[static_cast<std::size_t>(s)];
+        if (is_edge(x, y)) continue;
+        const double gain = -(lose + change(x, 1) + change(y, 1));
+        if (gain <= min_gain_) continue;
+        const auto& split = splits[static_cast<std::size_t>(s)];
+        if (!valid(split[0]) || !valid(split[1])) continue;
+        out.push_back({gain, {i1, i2}, {split[0], split[1]}, -1, -1, {}});
+      }
+      return;
+    }
+  }
+
+  // Collapse quad i along its diagonal (k, k + 2): its nodes there merge, the other two lose a quad.
+  void collapse_candidate(std::int32_t i, int k, std::vector<Move>& out) const {
+    const Quad& q = m_.quads[static_cast<std::size_t>(i)];
+    std::int32_t a = q[k], c = q[k + 2];
+    const std::int32_t b = q[k + 1], d = q[(k + 3) % 4];
+    if (is_given(a) && is_given(c)) return;
+    if (is_given(c)) std::swap(a, c);  // a is kept: the given one, else the lower index
+    else if (!is_given(a) && c < a) std::swap(a, c);
+    if (!may_lose_one(b) || !may_lose_one(d) || is_edge(a, c)) return;
+    for (std::int32_t u : neighbours_[static_cast<std::size_t>(a)])
+      if (u != b && u != d &&
+          std::find(neighbours_[static_cast<std::size_t>(c)].begin(), neighbours_[static_cast<std::size_t>(c)].end(), u) !=
+              neighbours_[static_cast<std::size_t>(c)].end())
+        return;
+    const auto& at_a = quads_at_[static_cast<std::size_t>(a)];
+    for (std::int32_t j : quads_at_[static_cast<std::size_t>(c)])
+      if (j != i && std::find(at_a.begin(), at_a.end(), j) != at_a.end()) return;
+    const double va = val_[static_cast<std::size_t>(a)], vc = val_[static_cast<std::size_t>(c)];
+    const double ta = target_[static_cast<std::size_t>(a)], tc = target_[static_cast<std::size_t>(c)];
+    const double gain = sq(va - ta) + sq(vc - tc) - sq(va + vc - 2 - ta) - change(b, -1) - change(d, -1);
+    if (gain <= min_gain_) return;
+    const Vec2 to = is_given(a) ? pos(a) : 0.5 * (pos(a) + pos(c));
+    for (std::int32_t j : at_a)
+      if (j != i && !valid(m_.quads[static_cast<std::size_t>(j)], a, to)) return;
+    for (std::int32_t j : quads_at_[static_cast<std::size_t>(c)]) {
+      if (j == i) continue;
+      Quad moved = m_.quads[static_cast<std::size_t>(j)];
+      for (std::int32_t& v : moved)
+        if (v == c) v = a;
+      if (!valid(moved, a, to)) return;
+    }
+    out.push_back({gain, {i}, {}, a, c, to});
+  }
+
+  // Laplacian sweeps over the free nodes still in a quad, so the next pass judges moves at sensible positions.
+  void smooth(int sweeps) {
+    index();
+    for (int s = 0; s < sweeps; ++s)
+      for (std::size_t v = given_; v < m_.nodes.size(); ++v) {
+        if (neighbours_[v].empty()) continue;
+        Vec2 c{};
+        for (std::int32_t u : neighbours_[v]) c = c + pos(u);
+        const Vec2 to = (1.0 / static_cast<double>(neighbours_[v].size())) * c;
+        bool ok = true;
+        for (std::int32_t q : quads_at_[v]) ok = ok && valid(m_.quads[static_cast<std::size_t>(q)], static_cast<std::int32_t>(v), to);
+        if (ok) m_.nodes[v] = to;
+      }
+  }
+
+  QuadMesh& m_;
+  std::size_t given_;
+  double min_gain_ = 1e-9;
+  std::unordered_set<std::uint64_t> kept_;
+  std::vector<double> target_;
+  std::vector<int> val_;
+  std::vector<std::vector<std::int32_t>> quads_at_;
+  std::vector<std::vector<std::int32_t>> neighbours_;
+  std::unordered_map<std::uint64_t, std::vector<std::int32_t>> edge_quads_;
+};
+
+}  // namespace
+
+Moves relax_valences(QuadMesh& mesh, std::size_t given, const std::vector<std::array<std::int32_t, 2>>& kept_edges,
+                     std::size_t max_moves, int plateau_rounds) {
+  Moves moves;
+  Relaxer r(mesh, given, kept_edges);
+  r.start(moves);
+  std::size_t made = 0;
+  auto greedy = [&] {
+    while (made < max_moves) {
+      const std::size_t now = r.pass(moves, max_moves - made);
+      if (now == 0) break;
+      made += now;
+    }
+  };
+  greedy();
+  // Plateau rounds; the mesh with the lowest energy seen is kept.
+  QuadMesh best = mesh;
+  Moves best_moves = moves;
+  double best_energy = r.energy_now();
+  std::mt19937 order(12345);
+  for (int round = 0, stale = 0; round < plateau_rounds && stale < 6 && made < max_moves; ++round) {
+    const std::size_t wandered = r.pass(moves, std::max<std::size_t>(1, mesh.quads.size() / 20), &order);
+    if (wandered == 0) break;
+    made += wandered;
+    greedy();
+    const double e = r.energy_now();
+    if (e < best_energy - 1e-9) {
+      best = mesh;
+      best_moves = moves;
+      best_energy = e;
+      stale = 0;
+    } else {
+      ++stale;
+    }
+  }
+  mesh = std::move(best);
+  moves = best_moves;
+  r.finish(moves);
+  return moves;
+}
+
+}  // namespace polysquare::patch_valence
