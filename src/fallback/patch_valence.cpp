@@ -34,7 +34,8 @@ struct Move {
 
 class Relaxer {
  public:
-  Relaxer(QuadMesh& mesh, std::size_t given, const std::vector<std::array<std::int32_t, 2>>& kept_edges)
+  Relaxer(QuadMesh& mesh, std::size_t given, const std::vector<std::array<std::int32_t, 2>>& kept_edges,
+          const std::vector<double>& given_targets)
       : m_(mesh), given_(given) {
     for (const auto& e : kept_edges) kept_.insert(edge_key(e[0], e[1]));
     const double right = std::acos(0.0);
@@ -48,7 +49,7 @@ class Relaxer {
       }
     target_.assign(m_.nodes.size(), 4.0);
     for (std::size_t v = 0; v < given_ && v < m_.nodes.size(); ++v)
-      target_[v] = std::clamp(angle[v] / right, 1.0, 4.0);
+      target_[v] = given_targets.empty() ? std::clamp(angle[v] / right, 1.0, 4.0) : given_targets[v];
   }
 
   double energy() const {
@@ -114,7 +115,11 @@ class Relaxer {
       ++made;
     }
     std::sort(gone.begin(), gone.end());
-    for (auto it = gone.rbegin(); it != gone.rend(); ++it) m_.quads.erase(m_.quads.begin() + *it);
+    const bool parts = m_.quad_part.size() == m_.quads.size();
+    for (auto it = gone.rbegin(); it != gone.rend(); ++it) {
+      m_.quads.erase(m_.quads.begin() + *it);
+      if (parts) m_.quad_part.erase(m_.quad_part.begin() + *it);
+    }
     if (made > 0) smooth(3);
     return made;
   }
@@ -272,9 +277,9 @@ class Relaxer {
 }  // namespace
 
 Moves relax_valences(QuadMesh& mesh, std::size_t given, const std::vector<std::array<std::int32_t, 2>>& kept_edges,
-                     std::size_t max_moves, int plateau_rounds) {
+                     std::size_t max_moves, int plateau_rounds, const std::vector<double>& given_targets) {
   Moves moves;
-  Relaxer r(mesh, given, kept_edges);
+  Relaxer r(mesh, given, kept_edges, given_targets);
   r.start(moves);
   std::size_t made = 0;
   auto greedy = [&] {

@@ -21,12 +21,14 @@ struct Moves {
 };
 
 /// Greedy moves on `mesh` (nodes below `given` are fixed: never removed, never moved), each lowering the valence
-/// energy: the target of a free node is 4, of a given node its angle inside the patch over a right angle.
+/// energy: the target of a free node is 4, of a given node its angle inside the patch over a right angle, or
+/// `given_targets[v]` when that is not empty.
 /// `kept_edges` (node pairs) are never flipped. A move is made only when every quad it creates keeps a positive
 /// area at the current positions, and no quad gets a corner of three given nodes that is reflex or nearly flat.
-/// Removed free nodes stay in `mesh.nodes` but in no quad. At most `max_moves` moves. Then up to `plateau_rounds`
+/// Removed free nodes stay in `mesh.nodes` but in no quad; `mesh.quad_part`, when it has an entry per quad,
+/// follows the quads (a turned quad keeps its entry). At most `max_moves` moves. Then up to `plateau_rounds`
 /// rounds of moves that keep the energy, each followed by the greedy moves; the lowest energy reached is kept.
 Moves relax_valences(QuadMesh& mesh, std::size_t given, const std::vector<std::array<std::int32_t, 2>>& kept_edges,
-                     std::size_t max_moves, int plateau_rounds);
+                     std::size_t max_moves, int plateau_rounds, const std::vector<double>& given_targets = {});
 
 }  // namespace polysquare::patch_valence

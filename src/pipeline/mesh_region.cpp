@@ -273,7 +273,7 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
              (r.stats.subregions[static_cast<std::size_t>(s)].mapped ? " (mapped)" : " (patch)");
     };
     // Where the candidate's time goes, summed over its repair rounds (the report's `stage_seconds`).
-    double t_map = 0.0, t_first_map = 0.0, t_refine = 0.0, t_smooth = 0.0, t_local = 0.0, t_measure = 0.0;
+    double t_map = 0.0, t_first_map = 0.0, t_refine = 0.0, t_smooth = 0.0, t_local = 0.0, t_relax = 0.0, t_measure = 0.0;
     nlohmann::json first_map;  // the first round's map: partition, split rounds, joint maps
     auto timed = [](double& total, auto&& f) {
       const auto t0 = std::chrono::steady_clock::now();
@@ -353,6 +353,34 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
       if (any_flagged && options.local_patch.enabled &&
           patch_locally(flagged, options.local_patch.max_rings, options.local_patch.max_quads))
         patch_locally(poor, options.local_patch.second_rings, options.local_patch.second_max_quads);
+      {
+        // The unstructured quads (patched subregions, local patches) cleaned up across their seams, where each
+        // patch alone could only guess what its neighbours put at its boundary nodes.
+        std::vector<std::uint8_t> unstructured_quads(r.mesh.quads.size(), 0);
+        for (std::size_t q = 0; q < unstructured_quads.size(); ++q) {
+          const int s = subregion_of(q);
+          unstructured_quads[q] = (q < local_patched.size() && local_patched[q]) ||
+                      (s >= 0 && !r.stats.subregions[static_cast<std::size_t>(s)].mapped);
+        }
+        std::vector<std::size_t> origin;
+        RelaxValencesStats relaxed;
+        RelaxValencesOptions ro = options.relax_valences;
+        ro.poor_sj = options.min_scaled_jacobian;
+        timed(t_relax, [&] { relaxed = relax_region_valences(r.mesh, unstructured_quads, ro, smooth, origin); });
+        if (relaxed.region_quads > 0)
+          c.summary["relax_valences"] = {{"quads", relaxed.region_quads}, {"flips", relaxed.flips},
+                                         {"collapses", relaxed.collapses}, {"energy_before", relaxed.energy_before},
+                                         {"energy_after", relaxed.energy_after}};
+        if (relaxed.kept) {
+          if (!local_patched.empty()) {
+            std::vector<std::uint8_t> moved(origin.size(), 0);
+            for (std::size_t q = 0; q < origin.size(); ++q) moved[q] = origin[q] < local_patched.size() && local_patched[origin[q]];
+            local_patched = std::move(moved);
+          }
+          timed(t_smooth, [&] { c.smooth = smooth_quads(r.mesh, smooth, &region); });
+          measure();
+        }
+      }
       // Quads beside a crack (pieces that do not share their nodes) count as folded: their subregions are meshed
       // again, instead of the whole candidate failing the invariants after the last round.
       const std::vector<std::uint8_t> cracked = quads_beside_cracks(r.mesh);
@@ -456,6 +484,7 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
     }
     c.summary["stage_seconds"] = {{"map", t_first_map}, {"map_of", first_map}, {"repair_maps", t_map - t_first_map},
                                   {"refine", t_refine}, {"smooth", t_smooth}, {"local_patches", t_local},
+                                  {"relax_valences", t_relax},
                                   {"measure", t_measure}};
     const QualityReport q = compute_quality(r.mesh, metrics);
     c.min_sj = q.sj.min;

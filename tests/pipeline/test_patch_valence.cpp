@@ -1,10 +1,13 @@
-// Topological clean-up of unstructured patches (fallback/patch_valence.h): moves that lower the valence energy.
+// Topological clean-up of unstructured quads (fallback/patch_valence.h, refine/relax_valences.h): moves that lower
+// the valence energy.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <vector>
 
 #include "fallback/patch_valence.h"
+#include "polysquare/core/geometry.h"
+#include "polysquare/refine/relax_valences.h"
 
 using namespace polysquare;
 
@@ -119,4 +122,63 @@ TEST(PatchValence, KeptEdgesAreNeverTurned) {
   for (const auto& q : m.quads)
     for (int k = 0; k < 4; ++k) kept = kept || (std::minmax(q[k], q[(k + 1) % 4]) == std::minmax(a, b));
   EXPECT_TRUE(kept);
+}
+
+TEST(RelaxValences, AFlaggedRegionIsMadeRegularAcrossItsSeamAndTheRestStays) {
+  // A 6 x 6 grid whose 2 x 2 centre (x and y in [2, 4]) is flagged unstructured, with the edge x = 3, y in [2, 3]
+  // turned: two nodes on the flagged region's border get 5 quads (their quads outside count), one on the
+  // border and the centre get 3. Only the flagged quads may change; the result is a regular grid again.
+  std::size_t given = 0;
+  QuadMesh m = grid(6, given);
+  m.node_kind.assign(m.nodes.size(), NodeKind::interior);
+  for (std::size_t v = 0; v < given; ++v) m.node_kind[v] = NodeKind::boundary;
+  m.quad_part.resize(m.quads.size());
+  for (std::size_t q = 0; q < m.quads.size(); ++q) m.quad_part[q] = static_cast<std::int32_t>(q);
+  std::vector<std::uint8_t> region(m.quads.size(), 0);
+  for (int j = 2; j < 4; ++j)
+    for (int i = 2; i < 4; ++i) region[static_cast<std::size_t>(j * 6 + i)] = 1;
+  const auto q1 = m.quads[2 * 6 + 2], q2 = m.quads[2 * 6 + 3];  // (a0, b, c, a1) and (b, d, e, c)
+  m.quads[2 * 6 + 2] = {q1[0], q1[1], q2[1], q1[3]};
+  m.quads[2 * 6 + 3] = {q2[1], q2[2], q2[3], q1[3]};
+  const QuadMesh turned = m;
+  auto interior_irregular = [](const QuadMesh& x) {
+    const std::vector<int> v = valences(x);
+    std::size_t n = 0;
+    for (std::size_t i = 0; i < v.size(); ++i) n += x.node_kind[i] == NodeKind::interior && v[i] != 4;
+    return n;
+  };
+  ASSERT_EQ(interior_irregular(turned), 4u);
+
+  std::vector<std::size_t> origin;
+  const RelaxValencesStats st = relax_region_valences(m, region, RelaxValencesOptions{}, SmoothOptions{}, origin);
+  EXPECT_TRUE(st.kept);
+  EXPECT_EQ(st.region_quads, 4u);
+  EXPECT_LT(st.energy_after, st.energy_before);
+  EXPECT_EQ(interior_irregular(m), 0u);
+  ASSERT_EQ(origin.size(), m.quads.size());
+  // Quads outside the region come first, as they were; each quad carries the per-quad data of its origin.
+  for (std::size_t q = 0; q < m.quads.size(); ++q) {
+    EXPECT_EQ(m.quad_part[q], static_cast<std::int32_t>(origin[q]));
+    if (region[origin[q]]) continue;
+    for (int k = 0; k < 4; ++k) EXPECT_EQ(m.nodes[m.quads[q][k]], turned.nodes[turned.quads[origin[q]][k]]);
+  }
+  double area = 0;
+  for (const auto& q : m.quads) area += 0.5 * cross(m.nodes[q[2]] - m.nodes[q[0]], m.nodes[q[3]] - m.nodes[q[1]]);
+  EXPECT_NEAR(area, 36.0, 1e-9);
+  for (const auto& q : m.quads)
+    EXPECT_GT(quad_min_sj(m.nodes[q[0]], m.nodes[q[1]], m.nodes[q[2]], m.nodes[q[3]]), 0.5);
+}
+
+TEST(RelaxValences, NothingFlaggedChangesNothing) {
+  std::size_t given = 0;
+  QuadMesh m = grid(3, given);
+  m.node_kind.assign(m.nodes.size(), NodeKind::interior);
+  const QuadMesh was = m;
+  std::vector<std::size_t> origin;
+  const RelaxValencesStats st = relax_region_valences(m, std::vector<std::uint8_t>(m.quads.size(), 0),
+                                                      RelaxValencesOptions{}, SmoothOptions{}, origin);
+  EXPECT_FALSE(st.kept);
+  EXPECT_TRUE(origin.empty());
+  EXPECT_EQ(m.quads, was.quads);
+  EXPECT_EQ(m.nodes.size(), was.nodes.size());
 }

@@ -11,6 +11,7 @@
 #include "polysquare/map/polysquare_map.h"
 #include "polysquare/pipeline/progress.h"
 #include "polysquare/refine/local_patch.h"
+#include "polysquare/refine/relax_valences.h"
 #include "polysquare/refine/refine.h"
 #include "polysquare/smooth/smooth.h"
 
@@ -80,6 +81,8 @@ struct MeshOptions {
                                        ///< 0 = unbounded
   PolysquareMapOptions map;      ///< stages 2 and 4-6 (map.size and map.layout.corner_threshold_deg are set from above)
   RefineOptions refine;          ///< stage 8 templates at flattened boundary corners (before smoothing)
+  RelaxValencesOptions relax_valences;  ///< after the local patches, the unstructured quads' valences are cleaned
+                                        ///< up across their seams (refine/relax_valences.h)
   LocalPatchOptions local_patch; ///< after smoothing, poor or folded quads are meshed again with a few rings
                                  ///< around them, before a repair round turns their whole subregion into a patch
                                  ///< (local_patch.size is set from size)
