@@ -377,7 +377,19 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
             for (std::size_t q = 0; q < origin.size(); ++q) moved[q] = origin[q] < local_patched.size() && local_patched[origin[q]];
             local_patched = std::move(moved);
           }
-          timed(t_smooth, [&] { c.smooth = smooth_quads(r.mesh, smooth, &region); });
+          // The mesh's smoothing again, on the moved pieces and two rings of quads around them: their seams
+          // with the mapped quads are smoothed from both sides (a piece alone kept its border nodes fixed).
+          std::vector<std::uint8_t> near(r.mesh.nodes.size(), 0);
+          for (std::size_t q = relaxed.first_kept_quad; q < r.mesh.quads.size(); ++q)
+            for (std::int32_t v : r.mesh.quads[q]) near[static_cast<std::size_t>(v)] = 1;
+          for (int ring = 0; ring < 2; ++ring) {
+            std::vector<std::uint8_t> grown = near;
+            for (const auto& x : r.mesh.quads)
+              if (near[x[0]] || near[x[1]] || near[x[2]] || near[x[3]])
+                for (std::int32_t v : x) grown[static_cast<std::size_t>(v)] = 1;
+            near = std::move(grown);
+          }
+          timed(t_smooth, [&] { c.smooth = smooth_quads(r.mesh, smooth, &region, &near); });
           measure();
         }
       }

@@ -198,6 +198,7 @@ RelaxValencesStats relax_region_valences(QuadMesh& mesh, const std::vector<std::
     quads.push_back(mesh.quads[q]);
     origin.push_back(q);
   }
+  total.first_kept_quad = quads.size();
   for (const Piece& p : done) {
     if (!p.stats.kept) continue;
     quads.insert(quads.end(), p.quads.begin(), p.quads.end());

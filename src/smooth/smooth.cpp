@@ -236,11 +236,13 @@ double quad_min_corner_sj(const QuadMesh& mesh, std::size_t q) {
   return quad_min_sj(mesh.nodes[quad[0]], mesh.nodes[quad[1]], mesh.nodes[quad[2]], mesh.nodes[quad[3]]);
 }
 
-SmoothStats smooth_quads(QuadMesh& mesh, const SmoothOptions& options, const Region* region) {
+SmoothStats smooth_quads(QuadMesh& mesh, const SmoothOptions& options, const Region* region,
+                         const std::vector<std::uint8_t>* only) {
   const std::size_t nn = mesh.nodes.size();
   const Incidence inc(mesh);
   const bool kinds = mesh.node_kind.size() == nn;
-  auto is_interior = [&](std::size_t v) { return kinds && mesh.node_kind[v] == NodeKind::interior; };
+  auto allowed = [&](std::size_t v) { return only == nullptr || (*only)[v] != 0; };
+  auto is_interior = [&](std::size_t v) { return kinds && mesh.node_kind[v] == NodeKind::interior && allowed(v); };
   SmoothStats stats;
   std::vector<std::uint8_t> interior(nn, 0);
   for (std::size_t v = 0; v < nn; ++v) interior[v] = is_interior(v);
@@ -335,7 +337,7 @@ SmoothStats smooth_quads(QuadMesh& mesh, const SmoothOptions& options, const Reg
   const Vec2 dirs[8] = {{1, 0}, {0.7071067811865476, 0.7071067811865476}, {0, 1}, {-0.7071067811865476, 0.7071067811865476},
                         {-1, 0}, {-0.7071067811865476, -0.7071067811865476}, {0, -1}, {0.7071067811865476, -0.7071067811865476}};
   std::vector<std::uint8_t> searchable(nn, 0);
-  for (std::size_t v = 0; v < nn; ++v) searchable[v] = interior[v] || (kinds && !curves.empty() && slides(v));
+  for (std::size_t v = 0; v < nn; ++v) searchable[v] = interior[v] || (kinds && !curves.empty() && slides(v) && allowed(v));
   const auto search_classes = colour_classes(mesh, inc, searchable);
   std::vector<std::uint8_t> curve_moved(nn, 0);
   Visits search(nn);

@@ -30,6 +30,7 @@ struct RelaxValencesStats {
   std::size_t flips = 0, collapses = 0;  ///< moves in the pieces kept
   double energy_before = 0.0, energy_after = 0.0;  ///< sum of (quads - target)^2 over the pieces' nodes
   bool kept = false;              ///< some piece was kept (the mesh changed)
+  std::size_t first_kept_quad = 0;  ///< when kept: the kept pieces' quads are mesh.quads from this index on
 };
 
 /// Moves on the quads flagged in `region` (#quads), in pieces (flagged quads sharing a node), each kept or not on

@@ -36,8 +36,10 @@ struct SmoothStats {
 /// maximizes that worst corner around the poor nodes: in the plane for interior nodes and, when `region` is
 /// given and slide_on_curves is set, along the input ring or feature curve for boundary and feature nodes
 /// (positions interpolated on the input polyline, between the node's curve neighbours). No move makes the worst
-/// quad around a node worse. Deterministic (fixed node order), independent of the thread count.
-SmoothStats smooth_quads(QuadMesh& mesh, const SmoothOptions& options, const Region* region = nullptr);
+/// quad around a node worse. Deterministic (fixed node order), independent of the thread count. With `only`
+/// (#nodes), just the nodes flagged there move (a mesh changed in a few places is smoothed there).
+SmoothStats smooth_quads(QuadMesh& mesh, const SmoothOptions& options, const Region* region = nullptr,
+                         const std::vector<std::uint8_t>* only = nullptr);
 
 /// Smallest corner scaled Jacobian of quad q (sin of the corner angle; negative when inverted).
 double quad_min_corner_sj(const QuadMesh& mesh, std::size_t q);
