@@ -15,6 +15,7 @@
 #include <sstream>
 
 #include "polysquare/core/error.h"
+#include "polysquare/core/quad_topology.h"
 #include "polysquare/core/version.h"
 #include "polysquare/fallback/split_triangles.h"
 #include "polysquare/input/chord_clearance.h"
@@ -512,19 +513,31 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
       // Quads of mapped subregions, less those local patches made; subregion figures follow the final mesh.
       for (SubregionStats& sr : r.stats.subregions) sr.quads = sr.local_patch_quads = 0;
       std::size_t unstructured = 0;
+      // Where the interior singular nodes are: 2 = at a local patch's quad, 1 = at a patched subregion's, 0 = maps.
+      std::vector<std::uint8_t> origin(r.mesh.nodes.size(), 0);
       for (std::size_t q = 0; q < r.mesh.quads.size(); ++q) {
         const bool local = q < local_patched.size() && local_patched[q];
         const int s = subregion_of(q);
+        bool patch = local;
         if (s >= 0) {
           SubregionStats& sr = r.stats.subregions[static_cast<std::size_t>(s)];
           sr.quads++;
           sr.local_patch_quads += local;
           unstructured += local || !sr.mapped;
+          patch = patch || !sr.mapped;
         } else {
           unstructured += local;
         }
+        const std::uint8_t o = local ? 2 : (patch ? 1 : 0);
+        for (std::int32_t v : r.mesh.quads[q]) origin[static_cast<std::size_t>(v)] = std::max(origin[static_cast<std::size_t>(v)], o);
       }
       c.structured = r.mesh.quads.empty() ? 1.0 : 1.0 - static_cast<double>(unstructured) / static_cast<double>(r.mesh.quads.size());
+      const NodeValences nv = node_valences(r.mesh, quad_edge_counts(r.mesh));
+      std::array<std::size_t, 3> singular{0, 0, 0};
+      for (std::size_t v = 0; v < r.mesh.nodes.size(); ++v)
+        if (nv.valence[v] > 0 && !nv.on_boundary[v] && nv.valence[v] != 4) singular[origin[v]]++;
+      c.summary["interior_singularities_at"] = {{"maps", singular[0]}, {"subregion_patches", singular[1]},
+                                                {"local_patches", singular[2]}};
     }
     c.summary["structured_fraction"] = c.structured;
     c.summary["min_scaled_jacobian"] = c.min_sj;

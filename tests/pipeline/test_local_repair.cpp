@@ -277,7 +277,8 @@ TEST(LocalRepair, AnUnrepairedMeshIsFullyStructured) {
 
 TEST(LocalRepair, TheReportSaysWhereACandidatesTimeWent) {
   // letter_M in 4 subregions, subregion 1 forced to a patch: the chosen candidate's stage times are each >= 0 and
-  // add up to no more than its wall time; its part was mapped jointly at least once.
+  // add up to no more than its wall time; its part was mapped jointly at least once; its interior singular nodes
+  // are all placed.
   const Region region = load("letter_M");
   MeshOptions o;
   o.size = 2.0;
@@ -290,7 +291,7 @@ TEST(LocalRepair, TheReportSaysWhereACandidatesTimeWent) {
     found = true;
     const auto& st = c["stage_seconds"];
     double sum = 0.0;
-    for (const char* k : {"map", "repair_maps", "refine", "smooth", "local_patches", "measure"}) {
+    for (const char* k : {"map", "repair_maps", "refine", "smooth", "local_patches", "relax_valences", "measure"}) {
       ASSERT_TRUE(st.contains(k)) << k;
       EXPECT_GE(st[k].get<double>(), 0.0) << k;
       sum += st[k].get<double>();
@@ -298,6 +299,10 @@ TEST(LocalRepair, TheReportSaysWhereACandidatesTimeWent) {
     EXPECT_LE(sum, c["seconds"].get<double>() + 1e-6);
     EXPECT_GE(st["map_of"]["joint_maps"].get<int>(), 1);
     EXPECT_LE(st["map_of"]["joint_maps_seconds"].get<double>(), st["map"].get<double>() + 1e-6);
+    // Every interior singular node is counted once, by where it is.
+    const auto& at = c["interior_singularities_at"];
+    EXPECT_EQ(at["maps"].get<std::size_t>() + at["subregion_patches"].get<std::size_t>() + at["local_patches"].get<std::size_t>(),
+              c["interior_singularities"].get<std::size_t>());
   }
   EXPECT_TRUE(found);
   EXPECT_GE(r.report["parts"][0]["joint_maps"].get<int>(), 1);
