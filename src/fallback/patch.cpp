@@ -280,27 +280,12 @@ void finish_patch(const PatchInput& in, const PatchOptions& options, QuadMesh& o
     out = std::move(relaxed);  // refused folded without the moves, not with them
     return;
   }
-  auto poor = [&](const QuadMesh& m) {
-    std::pair<std::size_t, std::size_t> folded_poor{0, 0};
-    for (const auto& q : m.quads) {
-      const double sj = quad_min_sj(m.nodes[static_cast<std::size_t>(q[0])], m.nodes[static_cast<std::size_t>(q[1])],
-                                    m.nodes[static_cast<std::size_t>(q[2])], m.nodes[static_cast<std::size_t>(q[3])]);
-      folded_poor.first += sj <= 0.0;
-      folded_poor.second += sj < options.pair_min_sj;
-    }
-    return folded_poor;
-  };
-  const auto before = poor(out), after = poor(relaxed);
+  const auto before = patch_valence::folded_and_poor(out, options.pair_min_sj);
+  const auto after = patch_valence::folded_and_poor(relaxed, options.pair_min_sj);
   if (after.first <= before.first && after.second <= before.second) out = std::move(relaxed);
 }
 
-std::size_t folded_quads(const QuadMesh& m) {
-  std::size_t folded = 0;
-  for (const auto& q : m.quads)
-    folded += quad_min_sj(m.nodes[static_cast<std::size_t>(q[0])], m.nodes[static_cast<std::size_t>(q[1])],
-                          m.nodes[static_cast<std::size_t>(q[2])], m.nodes[static_cast<std::size_t>(q[3])]) <= 0.0;
-  return folded;
-}
+std::size_t folded_quads(const QuadMesh& m) { return patch_valence::folded_and_poor(m, 0.0).first; }
 
 // A CDT whose vertices carry the index of their node; inserting a node where another one is already is an error.
 struct IndexedCdt {
@@ -644,7 +629,9 @@ QuadMesh matched_patch(const PatchInput& in, const PatchOptions& options) {
   return std::move(*best);
 }
 
-QuadMesh built_patch(const PatchInput& in, const PatchOptions& options) {
+}  // namespace
+
+QuadMesh mesh_patch(const PatchInput& in, const PatchOptions& options) {
   // A loop of four nodes and nothing inside is one quad.
   if (in.curves.size() == 1 && in.curves[0].loop && in.curves[0].nodes.size() == 4 && in.points.empty()) {
     QuadMesh out;
@@ -680,12 +667,6 @@ QuadMesh built_patch(const PatchInput& in, const PatchOptions& options) {
   } catch (const MeshingError&) {
   }
   return split;
-}
-
-}  // namespace
-
-QuadMesh mesh_patch(const PatchInput& in, const PatchOptions& options) {
-  return built_patch(in, options);
 }
 
 }  // namespace polysquare

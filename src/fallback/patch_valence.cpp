@@ -13,11 +13,6 @@ namespace {
 
 using Quad = std::array<std::int32_t, 4>;
 
-std::uint64_t edge_key(std::int32_t a, std::int32_t b) {
-  const auto lo = static_cast<std::uint32_t>(std::min(a, b)), hi = static_cast<std::uint32_t>(std::max(a, b));
-  return (static_cast<std::uint64_t>(lo) << 32) | hi;
-}
-
 Quad rotated_to(Quad q, std::int32_t first) {
   while (q[0] != first) std::rotate(q.begin(), q.begin() + 1, q.end());
   return q;
@@ -114,11 +109,19 @@ class Relaxer {
       for (std::size_t k = 0; k < mv.by.size(); ++k) m_.quads[static_cast<std::size_t>(mv.quads[k])] = mv.by[k];
       ++made;
     }
-    std::sort(gone.begin(), gone.end());
-    const bool parts = m_.quad_part.size() == m_.quads.size();
-    for (auto it = gone.rbegin(); it != gone.rend(); ++it) {
-      m_.quads.erase(m_.quads.begin() + *it);
-      if (parts) m_.quad_part.erase(m_.quad_part.begin() + *it);
+    if (!gone.empty()) {  // one compaction, quad_part alongside
+      std::vector<std::uint8_t> drop(m_.quads.size(), 0);
+      for (std::int32_t q : gone) drop[static_cast<std::size_t>(q)] = 1;
+      const bool parts = m_.quad_part.size() == m_.quads.size();
+      std::size_t kept = 0;
+      for (std::size_t q = 0; q < m_.quads.size(); ++q) {
+        if (drop[q]) continue;
+        m_.quads[kept] = m_.quads[q];
+        if (parts) m_.quad_part[kept] = m_.quad_part[q];
+        ++kept;
+      }
+      m_.quads.resize(kept);
+      if (parts) m_.quad_part.resize(kept);
     }
     if (made > 0) smooth(3);
     return made;
@@ -275,6 +278,17 @@ class Relaxer {
 };
 
 }  // namespace
+
+std::pair<std::size_t, std::size_t> folded_and_poor(const QuadMesh& m, double poor) {
+  std::pair<std::size_t, std::size_t> r{0, 0};
+  for (const auto& q : m.quads) {
+    const double sj = quad_min_sj(m.nodes[static_cast<std::size_t>(q[0])], m.nodes[static_cast<std::size_t>(q[1])],
+                                  m.nodes[static_cast<std::size_t>(q[2])], m.nodes[static_cast<std::size_t>(q[3])]);
+    r.first += sj <= 0.0;
+    r.second += sj < poor;
+  }
+  return r;
+}
 
 Moves relax_valences(QuadMesh& mesh, std::size_t given, const std::vector<std::array<std::int32_t, 2>>& kept_edges,
                      std::size_t max_moves, int plateau_rounds, const std::vector<double>& given_targets) {

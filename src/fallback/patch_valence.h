@@ -6,6 +6,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "polysquare/core/quad_mesh.h"
@@ -19,6 +20,9 @@ struct Moves {
   double energy_before = 0.0;
   double energy_after = 0.0;
 };
+
+/// Quads of `mesh` that are folded (scaled Jacobian <= 0), and those below `poor`: how a move's result is judged.
+std::pair<std::size_t, std::size_t> folded_and_poor(const QuadMesh& mesh, double poor);
 
 /// Greedy moves on `mesh` (nodes below `given` are fixed: never removed, never moved), each lowering the valence
 /// energy: the target of a free node is 4, of a given node its angle inside the patch over a right angle, or

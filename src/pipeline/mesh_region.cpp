@@ -15,7 +15,6 @@
 #include <sstream>
 
 #include "polysquare/core/error.h"
-#include "polysquare/core/quad_topology.h"
 #include "polysquare/core/version.h"
 #include "polysquare/fallback/split_triangles.h"
 #include "polysquare/input/chord_clearance.h"
@@ -499,7 +498,8 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
                                   {"refine", t_refine}, {"smooth", t_smooth}, {"local_patches", t_local},
                                   {"relax_valences", t_relax},
                                   {"measure", t_measure}};
-    const QualityReport q = compute_quality(r.mesh, metrics);
+    std::vector<std::uint8_t> singular_node;
+    const QualityReport q = compute_quality(r.mesh, metrics, &singular_node);
     c.min_sj = q.sj.min;
     c.max_edge_ratio = q.edge_ratio.max;
     c.interior_singularities = q.interior_singularities;
@@ -532,10 +532,9 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
         for (std::int32_t v : r.mesh.quads[q]) origin[static_cast<std::size_t>(v)] = std::max(origin[static_cast<std::size_t>(v)], o);
       }
       c.structured = r.mesh.quads.empty() ? 1.0 : 1.0 - static_cast<double>(unstructured) / static_cast<double>(r.mesh.quads.size());
-      const NodeValences nv = node_valences(r.mesh, quad_edge_counts(r.mesh));
       std::array<std::size_t, 3> singular{0, 0, 0};
       for (std::size_t v = 0; v < r.mesh.nodes.size(); ++v)
-        if (nv.valence[v] > 0 && !nv.on_boundary[v] && nv.valence[v] != 4) singular[origin[v]]++;
+        if (singular_node[v]) singular[origin[v]]++;
       c.summary["interior_singularities_at"] = {{"maps", singular[0]}, {"subregion_patches", singular[1]},
                                                 {"local_patches", singular[2]}};
     }

@@ -255,7 +255,7 @@ void check_judgeable(const QuadMesh& mesh, const std::string& name) {
                      " triangles, " + std::to_string(mesh.nodes.size()) + " nodes): there is nothing to judge");
 }
 
-QualityReport compute_quality(const QuadMesh& mesh, const QuadMetrics& m) {
+QualityReport compute_quality(const QuadMesh& mesh, const QuadMetrics& m, std::vector<std::uint8_t>* interior_singular) {
   QualityReport r;
   r.nodes = mesh.nodes.size();
   r.quads = mesh.quads.size();
@@ -275,10 +275,14 @@ QualityReport compute_quality(const QuadMesh& mesh, const QuadMetrics& m) {
   const NodeValences nv = node_valences(mesh, edge_counts);
   const std::vector<int>& valence = nv.valence;
   const std::vector<std::uint8_t>& on_boundary = nv.on_boundary;
+  if (interior_singular) interior_singular->assign(mesh.nodes.size(), 0);
   for (std::size_t v = 0; v < mesh.nodes.size(); ++v) {
     if (valence[v] == 0) continue;  // a node of no quad
     if (on_boundary[v] && valence[v] != 3) r.boundary_singularities++;
-    if (!on_boundary[v] && valence[v] != 4) r.interior_singularities++;
+    if (!on_boundary[v] && valence[v] != 4) {
+      r.interior_singularities++;
+      if (interior_singular) (*interior_singular)[v] = 1;
+    }
   }
   r.singularities = r.boundary_singularities + r.interior_singularities;
   std::size_t regular = 0;

@@ -5,23 +5,13 @@
 #include <algorithm>
 #include <cmath>
 #include <unordered_map>
+#include <unordered_set>
 
 #include "fallback/patch_valence.h"
+#include "polysquare/core/geometry.h"
 
 namespace polysquare {
 namespace {
-
-// Folded quads, and quads below `poor`, of a mesh.
-std::pair<std::size_t, std::size_t> folded_and_poor(const QuadMesh& m, double poor) {
-  std::pair<std::size_t, std::size_t> r{0, 0};
-  for (const auto& q : m.quads) {
-    const double sj = quad_min_sj(m.nodes[static_cast<std::size_t>(q[0])], m.nodes[static_cast<std::size_t>(q[1])],
-                                  m.nodes[static_cast<std::size_t>(q[2])], m.nodes[static_cast<std::size_t>(q[3])]);
-    r.first += sj <= 0.0;
-    r.second += sj < poor;
-  }
-  return r;
-}
 
 // What the moves made of one connected piece of the region.
 struct Piece {
@@ -31,10 +21,12 @@ struct Piece {
   std::vector<std::pair<std::int32_t, Vec2>> moved;  // free nodes' new positions
 };
 
-// The per-node figures of the whole mesh the pieces need: quads at each node and their angle there.
+// The figures of the whole mesh the pieces need: quads at each node and their angle there, and the boundary and
+// feature edges (never turned).
 struct NodeTotals {
   std::vector<int> quads;
   std::vector<double> angle;
+  std::unordered_set<std::uint64_t> curve_edges;
 };
 
 Piece relax_piece(const QuadMesh& mesh, const std::vector<std::size_t>& quads, const NodeTotals& totals,
@@ -78,13 +70,13 @@ Piece relax_piece(const QuadMesh& mesh, const std::vector<std::size_t>& quads, c
     local.quad_part.push_back(static_cast<std::int32_t>(q));
   }
   std::vector<std::array<std::int32_t, 2>> kept;
-  for (const auto* edges : {&mesh.boundary_edges, &mesh.feature_edges})
-    for (const auto& e : *edges) {
-      const auto a = to_local.find(e[0]), b = to_local.find(e[1]);
-      if (a != to_local.end() && b != to_local.end()) kept.push_back({a->second, b->second});
+  for (std::size_t q : quads)
+    for (int k = 0; k < 4; ++k) {
+      const std::int32_t a = mesh.quads[q][k], b = mesh.quads[q][(k + 1) % 4];
+      if (totals.curve_edges.count(edge_key(a, b))) kept.push_back({to_local.at(a), to_local.at(b)});
     }
   const QuadMesh before = local;
-  const auto was = folded_and_poor(before, options.poor_sj);
+  const auto was = patch_valence::folded_and_poor(before, options.poor_sj);
   // The moves with wandering rounds first; where the smoothing cannot follow them, the improving moves alone.
   for (int plateau : {options.plateau_rounds, 0}) {
     local = before;
@@ -114,7 +106,7 @@ Piece relax_piece(const QuadMesh& mesh, const std::vector<std::size_t>& quads, c
     const std::vector<std::int32_t> slots = local.quad_part;
     smooth_quads(local, smooth);
     local.quad_part = slots;
-    const auto now = folded_and_poor(local, options.poor_sj);
+    const auto now = patch_valence::folded_and_poor(local, options.poor_sj);
     if (now.first <= was.first && now.second <= was.second) {
       piece.stats.kept = true;
       break;
@@ -142,7 +134,9 @@ RelaxValencesStats relax_region_valences(QuadMesh& mesh, const std::vector<std::
   auto flagged = [&](std::size_t q) { return q < region.size() && region[q] != 0; };
   if (!options.enabled) return total;
 
-  NodeTotals totals{std::vector<int>(nv, 0), std::vector<double>(nv, 0.0)};
+  NodeTotals totals{std::vector<int>(nv, 0), std::vector<double>(nv, 0.0), {}};
+  for (const auto* edges : {&mesh.boundary_edges, &mesh.feature_edges})
+    for (const auto& e : *edges) totals.curve_edges.insert(edge_key(e[0], e[1]));
   std::vector<std::vector<std::int32_t>> at(nv);  // flagged quads at each node
   for (std::size_t q = 0; q < nq; ++q) {
     const auto& x = mesh.quads[q];

@@ -79,8 +79,10 @@ QualityReport compute_quality(const QuadMesh& mesh);
 /// cells, or triangles only: figures over no quads would read as a perfect or a zero mesh), or a node of a cell
 /// has a non-finite coordinate (the node and its coordinate are named).
 void check_judgeable(const QuadMesh& mesh, const std::string& name);
-/// The same from per-quad metrics already computed for `mesh` (quad_metrics).
-QualityReport compute_quality(const QuadMesh& mesh, const QuadMetrics& metrics);
+/// The same from per-quad metrics already computed for `mesh` (quad_metrics); `interior_singular`, when given,
+/// gets #nodes flags of the nodes counted in interior_singularities.
+QualityReport compute_quality(const QuadMesh& mesh, const QuadMetrics& metrics,
+                              std::vector<std::uint8_t>* interior_singular = nullptr);
 
 /// #quads: 1 for a quad with an acute corner at an input corner node (NodeKind::corner) whose two edges both lie
 /// on input curves (tagged boundary or feature edges) and whose corner scaled Jacobian is below `below`. Such a
