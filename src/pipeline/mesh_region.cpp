@@ -242,6 +242,12 @@ struct Repairs {
   }
 };
 
+// After local patches or valence moves the mesh is smoothed again only near what changed and near quads still
+// below this corner scaled Jacobian, with this many rings of quads around them: the rest was smoothed already,
+// and searching it again cost as much as the first smoothing (5.5 s of a 209k-quad delta_water part at 40 m).
+constexpr double kResmoothBelowSj = 0.5;
+constexpr int kResmoothRings = 4;
+
 // Meshes a part with `make_mesh` (a map candidate or the fallback), then smooths, checks and measures it.
 template <typename MakeMesh>
 Candidate finish_candidate(const Region& region, const RegionPart& part, const MeshOptions& options,
@@ -322,9 +328,25 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
         }
         return any;
       };
+      // The mesh's smoothing again near the quads `changed` (kResmoothRings): the new quads' seams with the rest
+      // are smoothed from both sides.
+      auto smooth_near = [&](auto changed) {
+        std::vector<std::uint8_t> near(r.mesh.nodes.size(), 0);
+        for (std::size_t q = 0; q < r.mesh.quads.size(); ++q)
+          if (changed(q))
+            for (std::int32_t v : r.mesh.quads[q]) near[static_cast<std::size_t>(v)] = 1;
+        for (int ring = 0; ring < kResmoothRings; ++ring) {
+          std::vector<std::uint8_t> grown = near;
+          for (const auto& x : r.mesh.quads)
+            if (near[x[0]] || near[x[1]] || near[x[2]] || near[x[3]])
+              for (std::int32_t v : x) grown[static_cast<std::size_t>(v)] = 1;
+          near = std::move(grown);
+        }
+        timed(t_smooth, [&] { c.smooth = smooth_quads(r.mesh, smooth, &region, &near); });
+      };
       local_patched.clear();
       // First the neighbourhoods of the poor quads are meshed again (a few rings of quads, the rest of their
-      // subregions keeps its map), then smoothed with the whole part.
+      // subregions keeps its map), then smoothed near them.
       // Local patches around the flagged quads, `rings` and `max_quads` as far as they may grow; then the whole
       // part is smoothed and measured again. Returns whether poor quads remain.
       auto patch_locally = [&](const std::vector<std::uint8_t>& flagged, int rings, std::size_t max_quads) {
@@ -339,7 +361,8 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
         local_stats.quads_added += done.quads_added;
         local_stats.quads_removed += done.quads_removed;
         if (done.patched == 0) return true;  // the flagged quads are as they were
-        timed(t_smooth, [&] { c.smooth = smooth_quads(r.mesh, smooth, &region); });
+        smooth_near(
+            [&](std::size_t q) { return local_patched[q] != 0 || quad_min_corner_sj(r.mesh, q) < kResmoothBelowSj; });
         return measure();
       };
       // The first pass also mends valid quads under local_patch.mend_below_sj where a patch does better.
@@ -377,19 +400,8 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
             for (std::size_t q = 0; q < origin.size(); ++q) moved[q] = origin[q] < local_patched.size() && local_patched[origin[q]];
             local_patched = std::move(moved);
           }
-          // The mesh's smoothing again, on the moved pieces and two rings of quads around them: their seams
-          // with the mapped quads are smoothed from both sides (a piece alone kept its border nodes fixed).
-          std::vector<std::uint8_t> near(r.mesh.nodes.size(), 0);
-          for (std::size_t q = relaxed.first_kept_quad; q < r.mesh.quads.size(); ++q)
-            for (std::int32_t v : r.mesh.quads[q]) near[static_cast<std::size_t>(v)] = 1;
-          for (int ring = 0; ring < 2; ++ring) {
-            std::vector<std::uint8_t> grown = near;
-            for (const auto& x : r.mesh.quads)
-              if (near[x[0]] || near[x[1]] || near[x[2]] || near[x[3]])
-                for (std::int32_t v : x) grown[static_cast<std::size_t>(v)] = 1;
-            near = std::move(grown);
-          }
-          timed(t_smooth, [&] { c.smooth = smooth_quads(r.mesh, smooth, &region, &near); });
+          // A piece alone kept its border nodes fixed: its seams with the mapped quads are smoothed now.
+          smooth_near([&](std::size_t q) { return q >= relaxed.first_kept_quad; });
           measure();
         }
       }
