@@ -347,8 +347,8 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
       local_patched.clear();
       // First the neighbourhoods of the poor quads are meshed again (a few rings of quads, the rest of their
       // subregions keeps its map), then smoothed near them.
-      // Local patches around the flagged quads, `rings` and `max_quads` as far as they may grow; then the whole
-      // part is smoothed and measured again. Returns whether poor quads remain.
+      // Local patches around the flagged quads, `rings` and `max_quads` as far as they may grow; then the mesh
+      // is smoothed near them (smooth_near) and measured again. Returns whether poor quads remain.
       auto patch_locally = [&](const std::vector<std::uint8_t>& flagged, int rings, std::size_t max_quads) {
         LocalPatchOptions lp = options.local_patch;
         lp.size = options.size;
