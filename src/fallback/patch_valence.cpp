@@ -7,6 +7,7 @@
 #include <unordered_set>
 
 #include "polysquare/core/geometry.h"
+#include "polysquare/smooth/smooth.h"
 
 namespace polysquare::patch_valence {
 namespace {
@@ -305,9 +306,8 @@ class Relaxer {
 
 std::pair<std::size_t, std::size_t> folded_and_poor(const QuadMesh& m, double poor) {
   std::pair<std::size_t, std::size_t> r{0, 0};
-  for (const auto& q : m.quads) {
-    const double sj = quad_min_sj(m.nodes[static_cast<std::size_t>(q[0])], m.nodes[static_cast<std::size_t>(q[1])],
-                                  m.nodes[static_cast<std::size_t>(q[2])], m.nodes[static_cast<std::size_t>(q[3])]);
+  for (std::size_t q = 0; q < m.quads.size(); ++q) {
+    const double sj = quad_min_corner_sj(m, q);
     r.first += sj <= 0.0;
     r.second += sj < poor;
   }

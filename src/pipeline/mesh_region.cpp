@@ -248,6 +248,23 @@ struct Repairs {
 constexpr double kResmoothBelowSj = 0.5;
 constexpr int kResmoothRings = 4;
 
+// #nodes: 1 for the nodes of the quads `changed(q)` and of `rings` rings of quads around them.
+template <typename Changed>
+std::vector<std::uint8_t> nodes_near(const QuadMesh& mesh, Changed changed, int rings) {
+  std::vector<std::uint8_t> near(mesh.nodes.size(), 0);
+  for (std::size_t q = 0; q < mesh.quads.size(); ++q)
+    if (changed(q))
+      for (std::int32_t v : mesh.quads[q]) near[static_cast<std::size_t>(v)] = 1;
+  for (int ring = 0; ring < rings; ++ring) {
+    std::vector<std::uint8_t> grown = near;
+    for (const auto& x : mesh.quads)
+      if (near[x[0]] || near[x[1]] || near[x[2]] || near[x[3]])
+        for (std::int32_t v : x) grown[static_cast<std::size_t>(v)] = 1;
+    near = std::move(grown);
+  }
+  return near;
+}
+
 // Meshes a part with `make_mesh` (a map candidate or the fallback), then smooths, checks and measures it.
 template <typename MakeMesh>
 Candidate finish_candidate(const Region& region, const RegionPart& part, const MeshOptions& options,
@@ -328,20 +345,10 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
         }
         return any;
       };
-      // The mesh's smoothing again near the quads `changed` (kResmoothRings): the new quads' seams with the rest
-      // are smoothed from both sides.
+      // The mesh's smoothing again near the quads `changed`: the new quads' seams with the rest are smoothed from
+      // both sides.
       auto smooth_near = [&](auto changed) {
-        std::vector<std::uint8_t> near(r.mesh.nodes.size(), 0);
-        for (std::size_t q = 0; q < r.mesh.quads.size(); ++q)
-          if (changed(q))
-            for (std::int32_t v : r.mesh.quads[q]) near[static_cast<std::size_t>(v)] = 1;
-        for (int ring = 0; ring < kResmoothRings; ++ring) {
-          std::vector<std::uint8_t> grown = near;
-          for (const auto& x : r.mesh.quads)
-            if (near[x[0]] || near[x[1]] || near[x[2]] || near[x[3]])
-              for (std::int32_t v : x) grown[static_cast<std::size_t>(v)] = 1;
-          near = std::move(grown);
-        }
+        const std::vector<std::uint8_t> near = nodes_near(r.mesh, changed, kResmoothRings);
         timed(t_smooth, [&] { c.smooth = smooth_quads(r.mesh, smooth, &region, &near); });
       };
       local_patched.clear();
