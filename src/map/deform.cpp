@@ -4,6 +4,7 @@
 #include <Eigen/SparseCholesky>
 #include <oneapi/tbb/blocked_range.h>
 #include <oneapi/tbb/parallel_for.h>
+#include <oneapi/tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <atomic>
@@ -189,32 +190,43 @@ struct Energy {
   }
 };
 
-// Largest step along p before some triangle's signed area reaches zero (inf if none does).
-double max_feasible_step(const DeformProblem& pr, const std::vector<Vec2>& x, const std::vector<Vec2>& p) {
-  double tmax = kInf;
-  for (const auto& t : pr.triangles) {
-    const Vec2 a = x[t[1]] - x[t[0]], b = x[t[2]] - x[t[0]];
-    const Vec2 da = p[t[1]] - p[t[0]], db = p[t[2]] - p[t[0]];
-    // area(s) = c + s*bb + s^2*aa
-    const double c = cross(a, b), bb = cross(a, db) + cross(da, b), aa = cross(da, db);
-    if (c > 0 && bb >= 0 && aa >= 0) continue;  // every term stays >= 0 for s > 0: no root (and no sqrt)
-    double root = kInf;
-    if (std::abs(aa) < 1e-300) {
-      if (bb < 0) root = -c / bb;
-    } else {
-      const double disc = bb * bb - 4 * aa * c;
-      if (disc >= 0) {
-        const double sq = std::sqrt(disc);
-        // Numerically stable roots.
-        const double q = -0.5 * (bb + (bb >= 0 ? sq : -sq));
-        const double r1 = q / aa, r2 = (q != 0.0) ? c / q : kInf;
-        for (double r : {r1, r2})
-          if (r > 0 && r < root) root = r;
-      }
+// Largest step along p before triangle t's signed area reaches zero (inf if it never does).
+double triangle_max_step(const std::array<std::int32_t, 3>& t, const std::vector<Vec2>& x, const std::vector<Vec2>& p) {
+  const Vec2 a = x[t[1]] - x[t[0]], b = x[t[2]] - x[t[0]];
+  const Vec2 da = p[t[1]] - p[t[0]], db = p[t[2]] - p[t[0]];
+  // area(s) = c + s*bb + s^2*aa
+  const double c = cross(a, b), bb = cross(a, db) + cross(da, b), aa = cross(da, db);
+  if (c > 0 && bb >= 0 && aa >= 0) return kInf;  // every term stays >= 0 for s > 0: no root (and no sqrt)
+  double root = kInf;
+  if (std::abs(aa) < 1e-300) {
+    if (bb < 0) root = -c / bb;
+  } else {
+    const double disc = bb * bb - 4 * aa * c;
+    if (disc >= 0) {
+      const double sq = std::sqrt(disc);
+      // Numerically stable roots.
+      const double q = -0.5 * (bb + (bb >= 0 ? sq : -sq));
+      const double r1 = q / aa, r2 = (q != 0.0) ? c / q : kInf;
+      for (double r : {r1, r2})
+        if (r > 0 && r < root) root = r;
     }
-    tmax = std::min(tmax, root);
   }
-  return tmax;
+  return root;
+}
+
+// Largest step along p before some triangle's signed area reaches zero (inf if none does). Large meshes take
+// the minimum over blocks in parallel: a minimum does not depend on the order, so neither does the step.
+double max_feasible_step(const DeformProblem& pr, const std::vector<Vec2>& x, const std::vector<Vec2>& p) {
+  const std::size_t nt = pr.triangles.size();
+  auto block_min = [&](std::size_t begin, std::size_t end, double m) {
+    for (std::size_t t = begin; t < end; ++t) m = std::min(m, triangle_max_step(pr.triangles[t], x, p));
+    return m;
+  };
+  if (nt < Energy::kParallelTriangles) return block_min(0, nt, kInf);
+  return oneapi::tbb::parallel_reduce(
+      oneapi::tbb::blocked_range<std::size_t>(0, nt, 1024), kInf,
+      [&](const oneapi::tbb::blocked_range<std::size_t>& r, double m) { return block_min(r.begin(), r.end(), m); },
+      [](double a, double b) { return std::min(a, b); });
 }
 
 double dotv(const std::vector<Vec2>& a, const std::vector<Vec2>& b) {

@@ -403,7 +403,7 @@ std::vector<std::uint8_t> quads_beside_cracks(const QuadMesh& mesh) {
   for (std::size_t q = 0; q < mesh.quads.size(); ++q)
     for (int k = 0; k < 4; ++k) {
       const std::uint64_t key = edge_key(mesh.quads[q][k], mesh.quads[q][(k + 1) % 4]);
-      const int count = edge_count.at(key);
+      const int count = edge_count.count(key);
       out[q] |= count > 2 || (count == 1 && !tagged.count(key));
     }
   return out;

@@ -2,7 +2,11 @@
 
 #include "polysquare/core/quad_topology.h"
 
+#include <oneapi/tbb/blocked_range.h>
+#include <oneapi/tbb/parallel_for.h>
+
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 #include <sstream>
@@ -13,6 +17,21 @@
 
 namespace polysquare {
 namespace {
+
+// f(i) for i in [0, n), in parallel on large meshes. Every f writes only its own element, so the results do not
+// depend on the thread count; sums and extremes are taken afterwards in index order.
+template <typename F>
+void for_each_index(std::size_t n, F&& f) {
+  constexpr std::size_t kParallel = 16384;
+  if (n < kParallel) {
+    for (std::size_t i = 0; i < n; ++i) f(i);
+    return;
+  }
+  oneapi::tbb::parallel_for(oneapi::tbb::blocked_range<std::size_t>(0, n, 4096),
+                            [&](const oneapi::tbb::blocked_range<std::size_t>& r) {
+                              for (std::size_t i = r.begin(); i != r.end(); ++i) f(i);
+                            });
+}
 
 Stats stats_of(const std::vector<double>& v) {
   Stats s;
@@ -83,7 +102,7 @@ QuadMetrics quad_metrics(const QuadMesh& mesh) {
   QuadMetrics m;
   const std::size_t n = mesh.quads.size();
   m.sj.resize(n); m.eta.resize(n); m.skew.resize(n); m.edge_ratio.resize(n);
-  for (std::size_t q = 0; q < n; ++q) {
+  for_each_index(n, [&](std::size_t q) {
     const auto& quad = mesh.quads[q];
     double mn = INFINITY, sum = 0, amin = INFINITY, amax = -INFINITY, lmin = INFINITY, lmax = 0;
     bool degenerate = false;
@@ -108,13 +127,13 @@ QuadMetrics quad_metrics(const QuadMesh& mesh) {
       m.sj[q] = m.eta[q] = -1.0;
       m.skew[q] = 1.0;
       m.edge_ratio[q] = 1e300;
-      continue;
+      return;
     }
     m.sj[q] = mn;
     m.eta[q] = sum / 4.0;
     m.skew[q] = std::max((amax - 90.0) / 90.0, (90.0 - amin) / 90.0);
     m.edge_ratio[q] = lmax / lmin;
-  }
+  });
   return m;
 }
 
@@ -157,7 +176,7 @@ Vec2 quad_centre(const QuadMesh& mesh, const std::array<std::int32_t, 4>& quad) 
 
 std::vector<double> schism_angle_ratios(const QuadMesh& mesh) {
   std::vector<double> r(mesh.quads.size());
-  for (std::size_t q = 0; q < mesh.quads.size(); ++q) r[q] = schism_angle_ratio(mesh, mesh.quads[q]);
+  for_each_index(mesh.quads.size(), [&](std::size_t q) { r[q] = schism_angle_ratio(mesh, mesh.quads[q]); });
   return r;
 }
 
@@ -167,9 +186,9 @@ SchismQuadQuality schism_quad_quality(const QuadMesh& mesh, double angle_ratio_l
   r.aspect_ratio_limit = aspect_ratio_limit;
   const std::vector<double> angle = schism_angle_ratios(mesh);
   std::vector<double> aspect(mesh.quads.size());
+  for_each_index(mesh.quads.size(), [&](std::size_t q) { aspect[q] = side_ratio(mesh, mesh.quads[q]); });
   double worst_angle = INFINITY, worst_aspect = -INFINITY;
   for (std::size_t q = 0; q < mesh.quads.size(); ++q) {
-    aspect[q] = side_ratio(mesh, mesh.quads[q]);
     const bool angle_fails = angle[q] < angle_ratio_limit, aspect_fails = aspect[q] > aspect_ratio_limit;
     r.non_convex += angle[q] == 0.0;
     r.angle_ratio_below += angle_fails;
@@ -472,24 +491,35 @@ EdgeTable edge_table(const QuadMesh& mesh) {
 
 std::vector<Vec2> face_circumcentres(const QuadMesh& mesh, const EdgeTable& edges) {
   const std::size_t nf = face_count(mesh);
-  // Interior sides of each face, as (midpoint, unit direction).
-  std::vector<std::vector<std::pair<Vec2, Vec2>>> interior(nf);
-  for (std::size_t e = 0; e < edges.nodes.size(); ++e) {
-    if (edges.faces[e][1] < 0) continue;
-    const Vec2 a = mesh.nodes[edges.nodes[e][0]], b = mesh.nodes[edges.nodes[e][1]];
-    const double len = distance(a, b);
-    if (!(len > 0)) continue;
-    for (auto f : edges.faces[e]) interior[static_cast<std::size_t>(f)].push_back({0.5 * (a + b), (1.0 / len) * (b - a)});
+  // Interior sides of each face, as (midpoint, unit direction), in edge order: face f's are
+  // side[first[f]] .. side[first[f + 1] - 1] (one array for all faces, not a list per face).
+  std::vector<std::size_t> first(nf + 1, 0);
+  auto usable = [&](std::size_t e) {
+    return edges.faces[e][1] >= 0 && distance(mesh.nodes[edges.nodes[e][0]], mesh.nodes[edges.nodes[e][1]]) > 0;
+  };
+  for (std::size_t e = 0; e < edges.nodes.size(); ++e)
+    if (usable(e))
+      for (auto f : edges.faces[e]) first[static_cast<std::size_t>(f) + 1]++;
+  for (std::size_t f = 0; f < nf; ++f) first[f + 1] += first[f];
+  std::vector<std::pair<Vec2, Vec2>> side(first[nf]);
+  {
+    std::vector<std::size_t> fill(first.begin(), first.end() - 1);
+    for (std::size_t e = 0; e < edges.nodes.size(); ++e) {
+      if (!usable(e)) continue;
+      const Vec2 a = mesh.nodes[edges.nodes[e][0]], b = mesh.nodes[edges.nodes[e][1]];
+      const double len = distance(a, b);
+      for (auto f : edges.faces[e]) side[fill[static_cast<std::size_t>(f)]++] = {0.5 * (a + b), (1.0 / len) * (b - a)};
+    }
   }
   std::vector<Vec2> centres(nf);
-  std::vector<Vec2> poly;
-  for (std::size_t f = 0; f < nf; ++f) {
+  for_each_index(nf, [&](std::size_t f) {
     const int n = face_size(mesh, f);
-    poly.clear();
+    const std::size_t sides = first[f + 1] - first[f];
+    std::array<Vec2, 4> poly;
     Vec2 mean{0, 0};
     for (int k = 0; k < n; ++k) {
-      poly.push_back(mesh.nodes[face_node(mesh, f, k)]);
-      mean = mean + poly.back();
+      poly[static_cast<std::size_t>(k)] = mesh.nodes[face_node(mesh, f, k)];
+      mean = mean + poly[static_cast<std::size_t>(k)];
     }
     mean = (1.0 / n) * mean;
     Vec2 c = mean;
@@ -498,7 +528,7 @@ std::vector<Vec2> face_circumcentres(const QuadMesh& mesh, const EdgeTable& edge
       const double den = 2 * cross(d1, d2);
       if (den != 0)
         c = poly[0] + (1.0 / den) * Vec2{d2.y * dot(d1, d1) - d1.y * dot(d2, d2), d1.x * dot(d2, d2) - d2.x * dot(d1, d1)};
-    } else if (interior[f].empty()) {
+    } else if (sides == 0) {
       // Centroid of the area (a face with no neighbour carries no link).
       const double area = face_area(mesh, f);
       if (area != 0) {
@@ -509,14 +539,17 @@ std::vector<Vec2> face_circumcentres(const QuadMesh& mesh, const EdgeTable& edge
         }
         c = (1.0 / (6 * area)) * s;
       }
-    } else if (interior[f].size() >= 2) {
+    } else if (sides >= 2) {
       for (int iter = 0; iter < 100; ++iter) {
         const Vec2 previous = c;
-        for (const auto& [mid, dir] : interior[f]) c = c + (-0.1 * dot(previous - mid, dir)) * dir;
+        for (std::size_t i = first[f]; i < first[f + 1]; ++i) {
+          const auto& [mid, dir] = side[i];
+          c = c + (-0.1 * dot(previous - mid, dir)) * dir;
+        }
         if (iter > 0 && distance(c, previous) < 1e-15) break;
       }
     }
-    if (!point_in_ring(c, poly)) {
+    if (!point_in_ring(c, poly.data(), static_cast<std::size_t>(n))) {
       // Back along mean -> c to the first side it crosses.
       double best = INFINITY;
       const Vec2 d = c - mean;
@@ -530,20 +563,20 @@ std::vector<Vec2> face_circumcentres(const QuadMesh& mesh, const EdgeTable& edge
       if (best <= 1) c = mean + best * d;
     }
     centres[f] = c;
-  }
+  });
   return centres;
 }
 
 std::vector<double> edge_orthogonality(const QuadMesh& mesh, const EdgeTable& edges, const std::vector<Vec2>& centres) {
   std::vector<double> o(edges.nodes.size(), -1.0);
-  for (std::size_t e = 0; e < edges.nodes.size(); ++e) {
-    if (edges.faces[e][1] < 0) continue;
+  for_each_index(edges.nodes.size(), [&](std::size_t e) {
+    if (edges.faces[e][1] < 0) return;
     const Vec2 t = mesh.nodes[edges.nodes[e][1]] - mesh.nodes[edges.nodes[e][0]];
     const Vec2 link = centres[static_cast<std::size_t>(edges.faces[e][1])] - centres[static_cast<std::size_t>(edges.faces[e][0])];
     const double l = norm(t) * norm(link);
     // Coinciding centres give no direction: counted as the worst (1), as the solver cannot use that link.
     o[e] = l > 0 ? std::min(1.0, std::abs(dot(t, link)) / l) : 1.0;
-  }
+  });
   return o;
 }
 

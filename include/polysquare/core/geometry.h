@@ -93,15 +93,17 @@ inline double ring_signed_area(const std::vector<Vec2>& ring) {
   return 0.5 * s;
 }
 
-/// Even-odd test of p against a closed ring (closing point not repeated). Points on the ring may go either way.
-inline bool point_in_ring(Vec2 p, const std::vector<Vec2>& ring) {
+/// Even-odd test of p against the closed ring ring[0..n) (closing point not repeated). Points on the ring may go
+/// either way.
+inline bool point_in_ring(Vec2 p, const Vec2* ring, std::size_t n) {
   bool inside = false;
-  for (std::size_t i = 0, j = ring.size() - 1; i < ring.size(); j = i++) {
+  for (std::size_t i = 0, j = n - 1; i < n; j = i++) {
     const Vec2 a = ring[i], b = ring[j];
     if ((a.y > p.y) != (b.y > p.y) && p.x < (b.x - a.x) * (p.y - a.y) / (b.y - a.y) + a.x) inside = !inside;
   }
   return inside;
 }
+inline bool point_in_ring(Vec2 p, const std::vector<Vec2>& ring) { return point_in_ring(p, ring.data(), ring.size()); }
 
 /// Axis-aligned bounding box.
 struct Box2 {
