@@ -4,6 +4,7 @@
 
 #include <oneapi/tbb/blocked_range.h>
 #include <oneapi/tbb/parallel_for.h>
+#include <oneapi/tbb/parallel_sort.h>
 
 #include <algorithm>
 #include <array>
@@ -470,22 +471,43 @@ double face_area(const QuadMesh& m, std::size_t f) {
 }  // namespace
 
 EdgeTable edge_table(const QuadMesh& mesh) {
-  EdgeTable t;
-  std::unordered_map<std::uint64_t, std::int32_t> index;
-  index.reserve(2 * face_count(mesh) + 16);
-  for (std::size_t f = 0; f < face_count(mesh); ++f) {
+  // Every side of every face at its scan position (faces in order, sides in order), sorted by edge and position:
+  // an edge's first entry is where it first appears (its node order and first face), its second entry the second
+  // face. Then the edges in order of first appearance: the table a hash map filled in scan order gives, from
+  // sorts that run in parallel and allocate nothing per edge.
+  const std::size_t nq = mesh.quads.size(), nf = face_count(mesh);
+  auto position = [&](std::size_t f) { return f < nq ? 4 * f : 4 * nq + 3 * (f - nq); };
+  auto face_of = [&](std::size_t at) { return at < 4 * nq ? at / 4 : nq + (at - 4 * nq) / 3; };
+  std::vector<std::pair<std::uint64_t, std::uint64_t>> sides(position(nf));  // (edge key, scan position)
+  for_each_index(nf, [&](std::size_t f) {
     const int n = face_size(mesh, f);
-    for (int k = 0; k < n; ++k) {
-      const std::int32_t a = face_node(mesh, f, k), b = face_node(mesh, f, (k + 1) % n);
-      const auto [it, added] = index.try_emplace(edge_key(a, b), static_cast<std::int32_t>(t.nodes.size()));
-      if (added) {
-        t.nodes.push_back({a, b});
-        t.faces.push_back({static_cast<std::int32_t>(f), -1});
-      } else if (t.faces[static_cast<std::size_t>(it->second)][1] < 0) {
-        t.faces[static_cast<std::size_t>(it->second)][1] = static_cast<std::int32_t>(f);
-      }
-    }
+    for (int k = 0; k < n; ++k)
+      sides[position(f) + static_cast<std::size_t>(k)] = {edge_key(face_node(mesh, f, k), face_node(mesh, f, (k + 1) % n)),
+                                                          position(f) + static_cast<std::size_t>(k)};
+  });
+  oneapi::tbb::parallel_sort(sides.begin(), sides.end());
+  struct Edge {
+    std::uint64_t first;  // scan position of the first appearance
+    std::int32_t second;  // face of the second appearance, -1 when none
+  };
+  std::vector<Edge> edges;
+  edges.reserve(sides.size() / 2 + 4);
+  for (std::size_t i = 0; i < sides.size();) {
+    std::size_t j = i + 1;
+    while (j < sides.size() && sides[j].first == sides[i].first) ++j;
+    edges.push_back({sides[i].second, j > i + 1 ? static_cast<std::int32_t>(face_of(sides[i + 1].second)) : -1});
+    i = j;
   }
+  oneapi::tbb::parallel_sort(edges.begin(), edges.end(), [](const Edge& a, const Edge& b) { return a.first < b.first; });
+  EdgeTable t;
+  t.nodes.resize(edges.size());
+  t.faces.resize(edges.size());
+  for_each_index(edges.size(), [&](std::size_t e) {
+    const std::size_t at = edges[e].first, f = face_of(at);
+    const int n = face_size(mesh, f), k = static_cast<int>(at - position(f));
+    t.nodes[e] = {face_node(mesh, f, k), face_node(mesh, f, (k + 1) % n)};
+    t.faces[e] = {static_cast<std::int32_t>(f), edges[e].second};
+  });
   return t;
 }
 
