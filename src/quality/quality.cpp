@@ -516,21 +516,22 @@ std::vector<Vec2> face_circumcentres(const QuadMesh& mesh, const EdgeTable& edge
   // Interior sides of each face, as (midpoint, unit direction), in edge order: face f's are
   // side[first[f]] .. side[first[f + 1] - 1] (one array for all faces, not a list per face).
   std::vector<std::size_t> first(nf + 1, 0);
-  auto usable = [&](std::size_t e) {
-    return edges.faces[e][1] >= 0 && distance(mesh.nodes[edges.nodes[e][0]], mesh.nodes[edges.nodes[e][1]]) > 0;
-  };
+  // Each interior edge's length once (0 on the boundary): it decides which edges count and scales their direction.
+  std::vector<double> length(edges.nodes.size(), 0.0);
+  for_each_index(edges.nodes.size(), [&](std::size_t e) {
+    if (edges.faces[e][1] >= 0) length[e] = distance(mesh.nodes[edges.nodes[e][0]], mesh.nodes[edges.nodes[e][1]]);
+  });
   for (std::size_t e = 0; e < edges.nodes.size(); ++e)
-    if (usable(e))
+    if (length[e] > 0)
       for (auto f : edges.faces[e]) first[static_cast<std::size_t>(f) + 1]++;
   for (std::size_t f = 0; f < nf; ++f) first[f + 1] += first[f];
   std::vector<std::pair<Vec2, Vec2>> side(first[nf]);
   {
     std::vector<std::size_t> fill(first.begin(), first.end() - 1);
     for (std::size_t e = 0; e < edges.nodes.size(); ++e) {
-      if (!usable(e)) continue;
+      if (!(length[e] > 0)) continue;
       const Vec2 a = mesh.nodes[edges.nodes[e][0]], b = mesh.nodes[edges.nodes[e][1]];
-      const double len = distance(a, b);
-      for (auto f : edges.faces[e]) side[fill[static_cast<std::size_t>(f)]++] = {0.5 * (a + b), (1.0 / len) * (b - a)};
+      for (auto f : edges.faces[e]) side[fill[static_cast<std::size_t>(f)]++] = {0.5 * (a + b), (1.0 / length[e]) * (b - a)};
     }
   }
   std::vector<Vec2> centres(nf);
