@@ -30,6 +30,7 @@
 #include "polysquare/pipeline/report.h"
 #include "polysquare/quality/quality.h"
 #include "terminal_progress.h"
+#include "polysquare/driver/mpi_driver.h"
 #include "time_limit.h"
 
 namespace {
@@ -55,6 +56,7 @@ struct MeshArgs {
   std::string msh_version = "2.2", msh_features = "nodes";
   InputOptions input_options;
   MeshOptions options;
+  const MpiDriver* mpi = nullptr;  ///< the processes of this run (mpirun); only rank 0 writes and reports
 };
 
 // --picture: PNG, or SVG when the mesh is small enough for one (else a PNG beside it, with a warning).
@@ -156,6 +158,11 @@ int run_mesh(const MeshArgs& args) {
     return "(" + short_number(at[0].get<double>() + origin.x) + ", " + short_number(at[1].get<double>() + origin.y) + ")";
   };
   options.progress = limit.callback();
+  if (args.mpi && args.mpi->active()) {
+    // The processes of one machine share its cores (0 = all cores between them).
+    options.map.sharing = args.mpi->sharing();
+    if (options.threads == 0) options.threads = args.mpi->threads_per_process();
+  }
   MeshResult result;
   try {
     result = mesh_region(local, options);
@@ -165,6 +172,8 @@ int run_mesh(const MeshArgs& args) {
                        short_number(origin.y) + "))");
   }
   if (moved) result.report["input"]["local_origin"] = {origin.x, origin.y};
+  if (args.mpi && args.mpi->rank() != 0) return 0;  // every process holds the mesh; rank 0 measures and writes it
+  if (args.mpi && args.mpi->active()) result.report["summary"]["processes"] = args.mpi->processes();
   progress.start("quality");
   QualityReport quality = compute_quality(result.mesh);
   quality.schism.angle_ratio_worst_at = quality.schism.angle_ratio_worst_at + origin;
@@ -407,6 +416,9 @@ int run_quality(const std::string& mesh_path, const std::string& domain_path, bo
 }  // namespace
 
 int main(int argc, char** argv) {
+  // Under mpirun every process runs this same command; the driver starts MPI (else it does nothing).
+  const MpiDriver mpi(argc, argv);
+  if (mpi.rank() != 0) std::cerr.rdbuf(nullptr);  // rank 0 speaks for all: they meet the same warnings
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
   spdlog::set_level(spdlog::level::warn);
@@ -548,6 +560,11 @@ int main(int argc, char** argv) {
     return 2;
   }
   mesh.depth_given = cmd_mesh->count("--depth") > 0;
+  mesh.mpi = &mpi;
+  if (mpi.rank() != 0) {
+    mesh.quiet = true;
+    spdlog::set_level(spdlog::level::off);
+  }
   try {
     if (*cmd_mesh) return run_mesh(mesh);
     if (*cmd_render) return run_render(render);
@@ -559,7 +576,16 @@ int main(int argc, char** argv) {
     std::cerr << "error: " << e.what() << "\n";
     return 3;
   } catch (const std::exception& e) {
+    if (mpi.active() && mpi.rank() != 0) {
+      // Not an error every process meets alike (those are reported by rank 0): this one may leave the others
+      // waiting for it, so it is printed here and ends the whole job.
+      std::cerr.rdbuf(std::clog.rdbuf());
+      std::cerr.clear();
+      std::cerr << "error: rank " << mpi.rank() << ": " << e.what() << "\n";
+      mpi.abort(1);
+    }
     std::cerr << "error: " << e.what() << "\n";
+    if (mpi.active()) mpi.abort(1);
     return 1;
   }
   return 1;

@@ -2,3 +2,4 @@
 list(APPEND MODULE_SOURCES)
 list(APPEND MODULE_SOURCES version.cpp)
 list(APPEND MODULE_SOURCES quad_topology.cpp)
+list(APPEND MODULE_SOURCES work_sharing.cpp)

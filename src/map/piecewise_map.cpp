@@ -18,13 +18,13 @@
 #include "polysquare/fallback/patch.h"
 #include "polysquare/map/extract.h"
 #include "polysquare/map/layout.h"
+#include "polysquare/map/map_bytes.h"
 #include "polysquare/map/quantize.h"
 #include "polysquare/partition/partition.h"
 #include "map/interface_turns.h"
 
 namespace polysquare {
 namespace {
-
 
 // What lies across a boundary edge of a subregion: the outside (a ring piece) or a neighbour, with the feature
 // curve the edge belongs to, if any. A loop is cut where this changes.
@@ -706,7 +706,9 @@ int split_unmappable_subregions(const TriMesh& tri, std::vector<std::int32_t>& t
     std::vector<std::uint8_t> test(n, 0);
     for (std::size_t p = 0; p < n; ++p) test[p] = maps_alone.count(triangles[p]) == 0;
     stats.tested += static_cast<int>(std::count(test.begin(), test.end(), 1));
-    oneapi::tbb::parallel_for(std::size_t{0}, n, [&](std::size_t p) {
+    std::vector<double> cost(n, 0.0);
+    for (std::size_t p = 0; p < n; ++p) cost[p] = test[p] ? static_cast<double>(subs[p].mesh.triangles.size()) : 0.0;
+    shared_for(options.sharing.get(), n, cost, "split test", [&](std::size_t p) {
       if (!test[p]) return;
       try {
         MappedMesh mm = deform_mesh(subs[p].mesh, options, true);
@@ -720,7 +722,8 @@ int split_unmappable_subregions(const TriMesh& tri, std::vector<std::int32_t>& t
       } catch (const MeshingError&) {
         failed[p] = 1;
       }
-    });
+    }, [&](std::size_t p, ByteWriter& w) { w.put(failed[p]), w.put(sides[p]); },
+       [&](std::size_t p, ByteReader& r) { r.get(failed[p]), r.get(sides[p]); });
     std::vector<std::pair<int, int>> listed;  // failed subregion, its sides
     for (std::size_t p = 0; p < n; ++p) {
       if (!failed[p]) {
@@ -896,20 +899,35 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
   std::vector<std::optional<Subregion>> union_sub(n);
   // The subregion a patch root meshes: the union's, or its own.
   auto patch_area = [&](std::size_t p) -> const Subregion& { return union_sub[p] ? *union_sub[p] : subs[p]; };
-  auto each_mapped = [&](auto&& f) {
-    for_each_subregion(n, [&](std::size_t p) {
-      if (!failure[p].empty()) return;
+  // f(p) for every subregion still mapped, divided among the processes (options.sharing); pack and unpack
+  // carry what f changed (also where it failed half-way) from the process that ran it to the others.
+  auto each_mapped = [&](std::string_view tag, auto&& f, auto&& pack, auto&& unpack) {
+    std::vector<double> cost(n, 0.0);
+    std::vector<std::uint8_t> ran(n, 0);
+    for (std::size_t p = 0; p < n; ++p)
+      if (failure[p].empty()) ran[p] = 1, cost[p] = static_cast<double>(subs[p].mesh.triangles.size());
+    shared_for(options.sharing.get(), n, cost, tag, [&](std::size_t p) {
+      if (!ran[p]) return;
       try {
         f(p);
       } catch (const MeshingError& e) {
         failure[p] = e.what();
       }
+    }, [&](std::size_t p, ByteWriter& w) {
+      w.put(failure[p]);
+      if (ran[p]) pack(p, w);
+    }, [&](std::size_t p, ByteReader& r) {
+      r.get(failure[p]);
+      if (ran[p]) unpack(p, r);
     });
   };
-  each_mapped([&](std::size_t p) {
+  auto pack_layout = [&](std::size_t p, ByteWriter& w) { put_bytes(w, layouts[p]); };
+  auto unpack_layout = [&](std::size_t p, ByteReader& r) { get_bytes(r, layouts[p]); };
+  each_mapped("deform", [&](std::size_t p) {
     mapped[p] = deform_mesh(subs[p].mesh, options, true);
     layouts[p] = build_layout(subs[p].mesh, subs[p].mesh.vertices, mapped[p].x, options.layout, sub_name(p));
-  });
+  }, [&](std::size_t p, ByteWriter& w) { put_bytes(w, mapped[p], true), put_bytes(w, layouts[p]); },
+     [&](std::size_t p, ByteReader& r) { get_bytes(r, mapped[p], true), get_bytes(r, layouts[p]); });
   if (!options.layout.straight_interfaces) {
     // Bent interfaces: a break point one side puts on an interface becomes a (straight) break point on the
     // other side too, so the two sides split it into the same segments.
@@ -919,7 +937,7 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
         for (std::int32_t v : layouts[p].break_vertex)
           if (subs[p].global_vertex[static_cast<std::size_t>(v)] >= 0)
             interface_breaks.insert(subs[p].global_vertex[static_cast<std::size_t>(v)]);
-    each_mapped([&](std::size_t p) {
+    each_mapped("straight breaks", [&](std::size_t p) {
       const TriMesh& m = subs[p].mesh;
       std::vector<std::uint8_t> extra(m.vertices.size(), 0);
       for (const TriChain& ch : m.chains)
@@ -927,9 +945,11 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
           for (std::int32_t v : ch.vertices)
             extra[static_cast<std::size_t>(v)] = interface_breaks.count(subs[p].global_vertex[static_cast<std::size_t>(v)]) > 0;
       add_straight_breaks(layouts[p], m, mapped[p].x, extra, sub_name(p));
-    });
+    }, pack_layout, unpack_layout);
   }
-  each_mapped([&](std::size_t p) { straighten_to_labels(mapped[p], layouts[p], subs[p].mesh, options); });
+  each_mapped("straighten", [&](std::size_t p) { straighten_to_labels(mapped[p], layouts[p], subs[p].mesh, options); },
+              [&](std::size_t p, ByteWriter& w) { put_bytes(w, mapped[p], false), put_bytes(w, layouts[p]); },
+              [&](std::size_t p, ByteReader& r) { get_bytes(r, mapped[p], false), get_bytes(r, layouts[p]); });
   st.seconds_deform = seconds_since(t0);
   for (std::size_t p = 0; p < n; ++p) {
     if (!failure[p].empty()) continue;
@@ -1150,11 +1170,12 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
     side_nodes.assign(n, 0);
     for (std::size_t p = 0; p < n; ++p)
       if (failure[p].empty()) unsnapped[p] = mapped[p].x;
-    each_mapped([&](std::size_t p) {
+    each_mapped("snap", [&](std::size_t p) {
       snap_to_layout(subs[p].mesh, mapped[p], layouts[p], options, sub_name(p));
       meshes[p] = extract_quads(subs[p].mesh, subs[p].mesh.vertices, mapped[p].x, layouts[p], sub_name(p), nullptr,
                                 &side_nodes[p]);
-    });
+    }, [&](std::size_t p, ByteWriter& w) { put_bytes(w, mapped[p], false), put_bytes(w, meshes[p]), w.put(side_nodes[p]); },
+       [&](std::size_t p, ByteReader& r) { get_bytes(r, mapped[p], false), get_bytes(r, meshes[p]), r.get(side_nodes[p]); });
     seconds_snap += seconds_since(t0);
     auto quantize_again = [&] {
       for (std::size_t p = 0; p < n; ++p)
@@ -1198,7 +1219,17 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
       }
       side_nodes[p] = in.nodes.size();
     };
-    for_each_subregion(n, [&](std::size_t p) {
+    // What a patch loop shares between processes: the patch (or its error) of subregion p.
+    auto pack_patch = [&](std::size_t p, ByteWriter& w) {
+      w.put(patch_error[p]), put_bytes(w, meshes[p]), w.put(side_nodes[p]);
+    };
+    auto unpack_patch = [&](std::size_t p, ByteReader& r) {
+      r.get(patch_error[p]), get_bytes(r, meshes[p]), r.get(side_nodes[p]);
+    };
+    std::vector<double> patch_cost(n, 0.0);
+    for (std::size_t p = 0; p < n; ++p)
+      if (is_patch[p] && group[p] == static_cast<std::int32_t>(p)) patch_cost[p] = static_cast<double>(patch_area(p).mesh.triangles.size());
+    shared_for(options.sharing.get(), n, patch_cost, "patches", [&](std::size_t p) {
       if (!is_patch[p] || group[p] != static_cast<std::int32_t>(p)) return;  // a union's members are in its root's
       try {
         const bool matched = std::find(options.matched_patches.begin(), options.matched_patches.end(),
@@ -1207,7 +1238,8 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
       } catch (const MeshingError& e) {
         patch_error[p] = sub_name(p) + ": its map failed (" + failure[p] + ") and so did its repair: " + e.what();
       }
-    });
+    }, [&](std::size_t p, ByteWriter& w) { if (patch_cost[p] > 0.0) pack_patch(p, w); },
+       [&](std::size_t p, ByteReader& r) { if (patch_cost[p] > 0.0) unpack_patch(p, r); });
     // A patch that cannot be built (no room for its construction near a narrow neck, an odd count all round)
     // takes in its neighbours, mapped or not, and is built again over their union, which gains room and reaches
     // ring pieces that can even out its count; the subregions beyond keep their maps and nodes.
@@ -1308,7 +1340,9 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
           }
         }
       const std::vector<std::int32_t> roots(rebuilt.begin(), rebuilt.end());
-      for_each_subregion(roots.size(), [&](std::size_t k) {
+      std::vector<double> root_cost(roots.size(), 0.0);
+      for (std::size_t k = 0; k < roots.size(); ++k) root_cost[k] = static_cast<double>(gp.members[static_cast<std::size_t>(roots[k])].size());
+      shared_for(options.sharing.get(), roots.size(), root_cost, "grown patches", [&](std::size_t k) {
         const auto r = static_cast<std::size_t>(roots[k]);
         try {
           build_patch(r, cut_subregion(tri, gp.tp, gp.topology, roots[k], gp.members[r], name), patch_now,
@@ -1317,7 +1351,8 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
           patch_error[r] = sub_name(r) + ": its repair failed even over its neighbours' area too (" +
                            std::to_string(grow + 1) + " times): " + e.what();
         }
-      });
+      }, [&](std::size_t k, ByteWriter& w) { pack_patch(static_cast<std::size_t>(roots[k]), w); },
+         [&](std::size_t k, ByteReader& rd) { unpack_patch(static_cast<std::size_t>(roots[k]), rd); });
     }
     failed_maps = failed_repairs = 0;
     for (std::size_t p = 0; p < n; ++p) {

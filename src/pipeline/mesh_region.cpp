@@ -21,6 +21,7 @@
 #include "polysquare/input/simplify.h"
 #include "polysquare/pipeline/check_options.h"
 #include "polysquare/input/snap_points.h"
+#include "polysquare/map/map_bytes.h"
 #include "polysquare/pipeline/invariants.h"
 #include "polysquare/quality/quality.h"
 #include "polysquare/triangulate/background_triangulation.h"
@@ -80,6 +81,20 @@ nlohmann::json dropped_json(const std::vector<DroppedCurve>& curves) {
   }
   return out;
 }
+
+// f(i) for i in [first, last): in parallel, or in order when several processes mesh together (`in_order`):
+// their shared loops (core/work_sharing.h) must come in the same order on every process, from the thread that
+// started them.
+template <class F>
+void for_each_task(bool in_order, std::size_t first, std::size_t last, F&& f) {
+  if (in_order) {
+    for (std::size_t i = first; i < last; ++i) f(i);
+    return;
+  }
+  oneapi::tbb::parallel_for(first, last, std::forward<F>(f));
+}
+
+bool several_processes(const PolysquareMapOptions& map) { return map.sharing && map.sharing->processes() > 1; }
 
 // "FILE: part P", how messages name a part.
 std::string name_of(const Region& region, const RegionPart& part) {
@@ -218,6 +233,25 @@ struct Candidate {
     return gated_sj > o.gated_sj;
   }
 };
+
+// A candidate meshed by another process (several processes, see mesh_region), copied as it is.
+void put_bytes(ByteWriter& w, const Candidate& c) {
+  w.put(static_cast<std::uint8_t>(c.result.has_value()));
+  if (c.result) put_bytes(w, *c.result);
+  w.put(c.smooth), w.put(c.min_sj), w.put(c.max_edge_ratio), w.put(c.gated_sj), w.put(c.interior_singularities);
+  w.put(c.error), w.put(c.summary.dump()), w.put(c.size_deviation), w.put(c.structured), w.put(c.poor_quads);
+}
+
+void get_bytes(ByteReader& r, Candidate& c) {
+  std::uint8_t has = 0;
+  r.get(has);
+  c.result.reset();
+  if (has) get_bytes(r, c.result.emplace());
+  std::string summary;
+  r.get(c.smooth), r.get(c.min_sj), r.get(c.max_edge_ratio), r.get(c.gated_sj), r.get(c.interior_singularities);
+  r.get(c.error), r.get(summary), r.get(c.size_deviation), r.get(c.structured), r.get(c.poor_quads);
+  c.summary = nlohmann::json::parse(summary);
+}
 
 // What a candidate is meshed again with, after a round left folded or poor quads in some subregions: mapped
 // subregions become patches, patches are built by the other (matching) construction.
@@ -792,7 +826,10 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
   const int threads = options.threads > 0 ? options.threads : static_cast<int>(oneapi::tbb::info::default_concurrency());
   oneapi::tbb::global_control limit(oneapi::tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
   progress.start("mesh parts");
-  oneapi::tbb::parallel_for(std::size_t{0}, parts.size(), [&](std::size_t k) {
+  // Several processes (PolysquareMapOptions::sharing) divide among them the parts when there are several, else
+  // the candidates of a round when there are several, else the subregions of a map; each process meshes what it
+  // was given with its threads alone, and the results are copied to all of them.
+  auto mesh_part = [&](std::size_t k, const PolysquareMapOptions& map) {
     const ProgressReporter::Item part_done(progress, "mesh parts", parts.size());
     std::vector<CandidateSpec> ks;
     std::vector<Candidate> cands;
@@ -805,14 +842,22 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
       cands.resize(ks.size());
       // Every candidate of a round is meshed, smoothed and measured; the best valid one wins, so the choice
       // depends only on the input and the options, never on timing.
-      oneapi::tbb::parallel_for(first, ks.size(), [&](std::size_t c) {
+      const bool share_candidates = several_processes(map) && ks.size() - first > 1;
+      auto mesh_candidate = [&](std::size_t c) {
         PolysquareMapOptions part_map = map;
+        if (share_candidates) part_map.sharing = nullptr;
         part_map.partition.parts = ks[c].subregions;
         part_map.layout.straight_interfaces = !ks[c].bend_interfaces;
         if (!ks[c].split) part_map.split_rounds = 0;
         if (ks[c].fine) part_map.parameterization_ratio = options.fine_parameterization_ratio;
         cands[c] = try_candidate(*work, parts[k], part_map, options);
-      });
+      };
+      if (share_candidates)
+        shared_for(map.sharing.get(), ks.size() - first, {}, "candidates", [&](std::size_t i) { mesh_candidate(first + i); },
+                   [&](std::size_t i, ByteWriter& w) { put_bytes(w, cands[first + i]); },
+                   [&](std::size_t i, ByteReader& r) { get_bytes(r, cands[first + i]); });
+      else
+        for_each_task(several_processes(map), first, ks.size(), mesh_candidate);
       for (std::size_t c = first; c < cands.size(); ++c) {
         tried[k].push_back(cands[c].summary);
         if (cands[c].error.empty() && (best < 0 || cands[c].better_than(cands[static_cast<std::size_t>(best)])))
@@ -856,7 +901,29 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
     structured[k] = cands[static_cast<std::size_t>(best)].structured;
     poor_quads[k] = cands[static_cast<std::size_t>(best)].poor_quads;
     results[k] = std::move(cands[static_cast<std::size_t>(best)].result);
-  });
+  };
+  if (several_processes(map) && parts.size() > 1) {
+    PolysquareMapOptions alone = map;
+    alone.sharing = nullptr;
+    std::vector<double> cost(parts.size());
+    for (std::size_t k = 0; k < parts.size(); ++k) cost[k] = part_area(*work, parts[k]);
+    shared_for(map.sharing.get(), parts.size(), cost, "parts", [&](std::size_t k) { mesh_part(k, alone); },
+               [&](std::size_t k, ByteWriter& w) {
+                 w.put(static_cast<std::uint8_t>(results[k].has_value()));
+                 if (results[k]) put_bytes(w, *results[k]);
+                 w.put(errors[k]), w.put(tried[k].dump()), w.put(smoothed[k]), w.put(structured[k]), w.put(poor_quads[k]);
+               },
+               [&](std::size_t k, ByteReader& r) {
+                 std::uint8_t has = 0;
+                 r.get(has);
+                 if (has) get_bytes(r, results[k].emplace());
+                 std::string text;
+                 r.get(errors[k]), r.get(text), r.get(smoothed[k]), r.get(structured[k]), r.get(poor_quads[k]);
+                 tried[k] = nlohmann::json::parse(text);
+               });
+  } else {
+    for_each_task(several_processes(map), std::size_t{0}, parts.size(), [&](std::size_t k) { mesh_part(k, map); });
+  }
   std::ostringstream failed;
   int nfailed = 0;
   for (std::size_t k = 0; k < parts.size(); ++k)

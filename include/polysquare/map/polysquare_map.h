@@ -11,6 +11,7 @@
 
 #include "polysquare/core/quad_mesh.h"
 #include "polysquare/core/region.h"
+#include "polysquare/core/work_sharing.h"
 #include "polysquare/map/deform.h"
 #include "polysquare/map/layout.h"
 #include "polysquare/map/quantize.h"
@@ -75,6 +76,9 @@ struct PolysquareMapOptions {
   std::shared_ptr<const std::vector<std::int32_t>> triangle_partition;
   int patch_growth = 3;  ///< times a patch that cannot be built takes in its neighbouring subregions and is built
                          ///< again over their union (a narrow or odd-counted subregion gains room and a ring piece)
+  /// The processes meshing this region together (driver/mpi_driver.h): the subregions' maps, split tests and
+  /// snaps are divided among them; null = this process alone. The mesh does not depend on it.
+  std::shared_ptr<const WorkSharing> sharing;
   DeformOptions deform;
   /// Weights of the labelled deformation that runs between labelling and quantization (continuation, one L-BFGS
   /// solve per weight): every side is pulled straight along its label, so the deformed layout the quantization
