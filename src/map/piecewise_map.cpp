@@ -1054,7 +1054,8 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
         if (!g.empty()) even.push_back(std::move(g));
     }
     std::vector<std::size_t> broken;
-    const QuantizeStats q = quantize_layouts(lp, dp, local, options.quantize, name, even, disagree ? &broken : nullptr);
+    const QuantizeStats q = quantize_layouts_shared(options.sharing.get(), lp, dp, local, options.quantize, name, even,
+                                                    disagree ? &broken : nullptr);
     for (std::size_t c : broken) disagree->push_back({members[local[c].layout_a], members[local[c].layout_b]});
     return q;
   };
@@ -1088,14 +1089,22 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
       // (parity rows or separations that no elastic coupling relaxes).
       bool located = false, alone_checked = false;
       auto check_alone = [&] {
-        for (std::size_t p : members_now()) {
+        const std::vector<std::size_t> members = members_now();
+        std::vector<std::string> alone_failure(members.size());
+        std::vector<double> cost(members.size());
+        for (std::size_t i = 0; i < members.size(); ++i) cost[i] = static_cast<double>(layouts[members[i]].segments.size());
+        shared_for(options.sharing.get(), members.size(), cost, "quantize alone", [&](std::size_t i) {
+          const std::size_t p = members[i];
           Layout alone = layouts[p];
           try {
             quantize_layout(alone, mapped[p].x, options.quantize, sub_name(p));
           } catch (const MeshingError& e) {
-            failure[p] = std::string(e.what()) + " [" + std::to_string(layouts[p].segments.size()) + " sides]";
+            alone_failure[i] = std::string(e.what()) + " [" + std::to_string(layouts[p].segments.size()) + " sides]";
           }
-        }
+        }, [&](std::size_t i, ByteWriter& w) { w.put(alone_failure[i]); },
+           [&](std::size_t i, ByteReader& r) { r.get(alone_failure[i]); });
+        for (std::size_t i = 0; i < members.size(); ++i)
+          if (!alone_failure[i].empty()) failure[members[i]] = alone_failure[i];
         alone_checked = true;
       };
       while (!located && !members_now().empty()) {

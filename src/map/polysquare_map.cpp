@@ -280,7 +280,7 @@ PartMapResult map_part(const Region& region, const RegionPart& part, const Polys
   st.break_points = layout.break_vertex.size();
   st.segments = layout.segments.size();
   straighten_to_labels(mm, layout, tri, options);
-  st.quantize = quantize_layout(layout, mm.x, options.quantize, name);
+  st.quantize = quantize_layouts_shared(options.sharing.get(), {&layout}, {&mm.x}, {}, options.quantize, name);
   if (const std::string problem_text = check_layout(layout); !problem_text.empty())
     throw MeshingError(name + ": the quantized poly-square is not valid: " + problem_text);
   st.seconds_quantize = seconds_since(t0);

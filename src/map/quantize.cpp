@@ -303,6 +303,32 @@ QuantizeStats quantize_layouts(const std::vector<Layout*>& layouts, const std::v
   }
 }
 
+QuantizeStats quantize_layouts_shared(const WorkSharing* sharing, const std::vector<Layout*>& layouts,
+                                      const std::vector<const std::vector<Vec2>*>& deformed,
+                                      const std::vector<SegmentCoupling>& couplings, const QuantizeOptions& options,
+                                      const std::string& part_name, const std::vector<EvenGroup>& even_groups,
+                                      std::vector<std::size_t>* broken) {
+  QuantizeStats q;
+  std::string error;
+  std::vector<std::size_t> broken_here;
+  shared_for(sharing, 1, {}, "quantize", [&](std::size_t) {
+    try {
+      q = quantize_layouts(layouts, deformed, couplings, options, part_name, even_groups, broken ? &broken_here : nullptr);
+    } catch (const MeshingError& e) {
+      error = e.what();  // shared like a result: the lattices it left are copied too
+    }
+  }, [&](std::size_t, ByteWriter& w) {
+    w.put(error), w.put(q), w.put(broken_here);
+    for (const Layout* l : layouts) w.put(l->lattice);
+  }, [&](std::size_t, ByteReader& r) {
+    r.get(error), r.get(q), r.get(broken_here);
+    for (Layout* l : layouts) r.get(l->lattice);
+  });
+  if (!error.empty()) throw MeshingError(error);
+  if (broken) *broken = std::move(broken_here);
+  return q;
+}
+
 QuantizeStats quantize_layout(Layout& layout, const std::vector<Vec2>& deformed, const QuantizeOptions& options,
                               const std::string& part_name) {
   return quantize_layouts({&layout}, {&deformed}, {}, options, part_name);

@@ -3,6 +3,7 @@
 
 #include <string>
 
+#include "polysquare/core/work_sharing.h"
 #include "polysquare/map/layout.h"
 
 namespace polysquare {
@@ -76,6 +77,14 @@ QuantizeStats quantize_layouts(const std::vector<Layout*>& layouts, const std::v
                                const std::string& part_name, const std::vector<EvenGroup>& even_groups = {},
                                std::vector<std::size_t>* broken = nullptr);
 
+/// quantize_layouts solved by one of the processes of `sharing` (null: this one), its lattices, statistics and
+/// broken couplings (or its error) copied to the others: the solver's wall-clock limit (time_limit_ms) then
+/// decides for all of them, so they cannot part ways.
+QuantizeStats quantize_layouts_shared(const WorkSharing* sharing, const std::vector<Layout*>& layouts,
+                                      const std::vector<const std::vector<Vec2>*>& deformed,
+                                      const std::vector<SegmentCoupling>& couplings, const QuantizeOptions& options,
+                                      const std::string& part_name, const std::vector<EvenGroup>& even_groups = {},
+                                      std::vector<std::size_t>* broken = nullptr);
 /// Checks that the quantized layout is a valid poly-square: no zero-length segment, and segments of different
 /// chains or non-adjacent segments of one chain meet only at shared break points. Returns an empty string when
 /// valid, otherwise a description of the first conflict.
