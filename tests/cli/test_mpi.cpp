@@ -89,6 +89,22 @@ TEST(Mpi, CoastWithRepairedSubregionsIsByteIdenticalOnTwoAndThreeProcesses) {
   fs::remove_all(dir);
 }
 
+TEST(Mpi, SubregionsOfOnePartAreDividedAndTheirRepairsMatchOneProcess) {
+  if (std::string(POLYSQUARE_MPIRUN).empty()) GTEST_SKIP() << "built without MPI";
+  const fs::path dir = scratch("subregions");
+  // delta_box at 200 m with --parts 64: one part, one candidate in the first round, so the processes divide
+  // its subregions (maps, split tests, snaps, patches) and one of them solves the quantization; dozens of
+  // subregions fail and are repaired by patches.
+  const std::string in = data("cases/delta_box.geojson") + " --size 200 --parts 64 -o ";
+  ASSERT_EQ(mesh(0, in + (dir / "p0.msh").string() + " --report " + (dir / "r0.json").string(), dir).code, 0);
+  std::ifstream rep0(dir / "r0.json");
+  ASSERT_GE(nlohmann::json::parse(rep0)["summary"]["unstructured_subregions"].get<int>(), 1);
+  const MpiRun r = mesh(2, in + (dir / "p2.msh").string(), dir);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(bytes(dir / "p2.msh") == bytes(dir / "p0.msh"));
+  fs::remove_all(dir);
+}
+
 TEST(Mpi, ErrorsEndEveryProcessWithTheirExitCodeAndNoFile) {
   if (std::string(POLYSQUARE_MPIRUN).empty()) GTEST_SKIP() << "built without MPI";
   const fs::path dir = scratch("errors");
