@@ -1,7 +1,7 @@
 #include "map/integer_program.h"
 
 #include <Cbc_C_Interface.h>
-#include <Clp_C_Interface.h>
+#include <ClpSimplex.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -80,7 +80,7 @@ void IntegerProgram::add_row(const std::vector<std::pair<int, double>>& terms, d
 }
 
 struct IntegerProgram::Lp {
-  std::unique_ptr<Clp_Simplex, void (*)(Clp_Simplex*)> model{Clp_newModel(), Clp_deleteModel};
+  std::unique_ptr<ClpSimplex> model = std::make_unique<ClpSimplex>();
   int columns = 0, rows = 0;  // the program's size when it was loaded or last extended
   std::size_t entries = 0;
 };
@@ -91,7 +91,7 @@ IntegerProgram::IntegerProgram(IntegerProgram&&) noexcept = default;
 IntegerProgram& IntegerProgram::operator=(IntegerProgram&&) noexcept = default;
 
 bool IntegerProgram::solve_relaxation(double seconds) {
-  Clp_Simplex* model = nullptr;
+  ClpSimplex* model = nullptr;
   if (lp_ && lp_->columns == columns()) {
     // Rows added since the last solve join its model, the bounds a dive fixed are restored, and the dual
     // simplex starts from the last basis (still dual feasible: only rows were added).
@@ -104,29 +104,29 @@ bool IntegerProgram::solve_relaxation(double seconds) {
       for (int& r : row) r -= lp_->rows;
       const Csc added = compress(rows() - lp_->rows, std::vector<int>(entry_col_.begin() + from, entry_col_.end()), row,
                                  std::vector<double>(entry_value_.begin() + from, entry_value_.end()));
-      Clp_addRows(model, rows() - lp_->rows, row_lo_.data() + lp_->rows, row_hi_.data() + lp_->rows, added.start.data(),
-                  added.index.data(), added.value.data());
+      model->addRows(rows() - lp_->rows, row_lo_.data() + lp_->rows, row_hi_.data() + lp_->rows, added.start.data(),
+                     added.index.data(), added.value.data());
     }
-    Clp_chgColumnLower(model, col_lo_.data());
-    Clp_chgColumnUpper(model, col_hi_.data());
-    Clp_setMaximumSeconds(model, seconds);
-    Clp_dual(model, 0);
+    model->chgColumnLower(col_lo_.data());
+    model->chgColumnUpper(col_hi_.data());
+    model->setMaximumSeconds(seconds);
+    model->dual(0);
   } else {
     lp_ = std::make_unique<Lp>();
     model = lp_->model.get();
     const Csc m = compress(columns(), entry_row_, entry_col_, entry_value_);
-    Clp_setLogLevel(model, 0);
-    Clp_loadProblem(model, columns(), rows(), m.start.data(), m.index.data(), m.value.data(), col_lo_.data(),
-                    col_hi_.data(), cost_.data(), row_lo_.data(), row_hi_.data());
-    Clp_setMaximumSeconds(model, seconds);
+    model->setLogLevel(0);
+    model->loadProblem(columns(), rows(), m.start.data(), m.index.data(), m.value.data(), col_lo_.data(), col_hi_.data(),
+                       cost_.data(), row_lo_.data(), row_hi_.data());
+    model->setMaximumSeconds(seconds);
     // The primal simplex: on the small cases its choice among equal-cost optima gave the same meshes as the
     // GLPK primal simplex used before (turtle_shell SJ min 0.72; the dual simplex's choice 0.69).
-    Clp_primal(model, 0);
+    model->primal(0);
   }
   lp_->columns = columns();
   lp_->rows = rows();
   lp_->entries = entry_row_.size();
-  return Clp_status(model) == 0;  // 0: optimal
+  return model->status() == 0;  // 0: optimal
 }
 
 std::optional<std::vector<double>> IntegerProgram::solve(double seconds, double gap, double dive_gap) {
@@ -141,9 +141,9 @@ std::optional<std::vector<double>> IntegerProgram::solve(double seconds, double 
     lp_.reset();
     if (!solve_relaxation(seconds)) return std::nullopt;
   }
-  Clp_Simplex* const lp = lp_->model.get();
+  ClpSimplex* const lp = lp_->model.get();
   auto fractional = [&] {  // the integer column nearest an integer without being one, or -1
-    const double* x = Clp_getColSolution(lp);
+    const double* x = lp->getColSolution();
     int best = -1;
     double off_best = 1.0;
     for (std::size_t c = 0; c < n; ++c) {
@@ -157,30 +157,30 @@ std::optional<std::vector<double>> IntegerProgram::solve(double seconds, double 
     return best;
   };
   if (fractional() < 0) {
-    const double* x = Clp_getColSolution(lp);
+    const double* x = lp->getColSolution();
     return std::vector<double>(x, x + n);
   }
   // A dive: the quantization's coupled programs are network programs but for a few rows, and fixing one
   // fractional column (to its nearest integer, else the other side) and re-solving by the dual simplex from the
   // last basis mostly makes the whole solution integral within a few steps, at a cost near the LP's; a fraction
   // of branch-and-cut's time on coasts' joint programs.
-  const double bound = Clp_objectiveValue(lp);
+  const double bound = lp->objectiveValue();
   std::optional<std::vector<double>> dived;
   for (int c; (c = fractional()) >= 0;) {
-    double* lo = Clp_columnLower(lp);
-    double* hi = Clp_columnUpper(lp);
-    const double v = Clp_getColSolution(lp)[c], near = std::round(v);
+    double* lo = lp->columnLower();
+    double* hi = lp->columnUpper();
+    const double v = lp->getColSolution()[c], near = std::round(v);
     lo[c] = hi[c] = near;
-    Clp_dual(lp, 0);
-    if (Clp_status(lp) == 0) continue;
+    lp->dual(0);
+    if (lp->status() == 0) continue;
     lo[c] = hi[c] = v > near ? near + 1.0 : near - 1.0;
-    Clp_dual(lp, 0);
-    if (Clp_status(lp) != 0) break;
+    lp->dual(0);
+    if (lp->status() != 0) break;
   }
-  if (Clp_status(lp) == 0 && fractional() < 0) {
-    const double* x = Clp_getColSolution(lp);
+  if (lp->status() == 0 && fractional() < 0) {
+    const double* x = lp->getColSolution();
     dived = std::vector<double>(x, x + n);
-    if (Clp_objectiveValue(lp) <= bound + dive_gap) return dived;
+    if (lp->objectiveValue() <= bound + dive_gap) return dived;
   }
   const Csc m = compress(columns(), entry_row_, entry_col_, entry_value_);
   const std::lock_guard<std::mutex> lock(cbc_mutex);
