@@ -425,7 +425,8 @@ int main(int argc, char** argv) {
 
   CLI::App app{"polysquare: feature-aligned semi-structured quad meshes of 2D regions"};
   app.require_subcommand(1);
-  app.set_version_flag("--version", std::string("polysquare ") + library_version());
+  app.set_version_flag("--version", std::string("polysquare ") + library_version() +
+                                        (MpiDriver::built_with_mpi() ? " (mpirun -np P: Open MPI)" : " (one process: built without MPI)"));
 
   MeshArgs mesh;
   auto* cmd_mesh = app.add_subcommand("mesh", "mesh a region (GeoJSON) into all quadrilaterals");
