@@ -577,16 +577,16 @@ int main(int argc, char** argv) {
     std::cerr << "error: " << e.what() << "\n";
     return 3;
   } catch (const std::exception& e) {
-    if (mpi.active() && mpi.rank() != 0) {
-      // Not an error every process meets alike (those are reported by rank 0): this one may leave the others
-      // waiting for it, so it is printed here and ends the whole job.
+    // Not an error every process meets alike (those are InputError and MeshingError): the others may be waiting
+    // for this one, so it is printed by whichever process met it and ends the whole job.
+    if (mpi.rank() != 0) {
       std::cerr.rdbuf(std::clog.rdbuf());
       std::cerr.clear();
       std::cerr << "error: rank " << mpi.rank() << ": " << e.what() << "\n";
-      mpi.abort(1);
+    } else {
+      std::cerr << "error: " << e.what() << "\n";
     }
-    std::cerr << "error: " << e.what() << "\n";
-    if (mpi.active()) mpi.abort(1);
+    mpi.abort(1);
     return 1;
   }
   return 1;

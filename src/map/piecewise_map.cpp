@@ -589,23 +589,6 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-// Runs f(i) for every subregion in parallel; the first failure in subregion order is rethrown as it was thrown
-// (a MeshingError fails the candidate; anything else is a bug and must not pass for one), so the error does not
-// depend on the thread count.
-template <class F>
-void for_each_subregion(std::size_t count, F&& f) {
-  std::vector<std::exception_ptr> errors(count);
-  oneapi::tbb::parallel_for(std::size_t{0}, count, [&](std::size_t i) {
-    try {
-      f(i);
-    } catch (...) {
-      errors[i] = std::current_exception();
-    }
-  });
-  for (const std::exception_ptr& e : errors)
-    if (e) std::rethrow_exception(e);
-}
-
 }  // namespace
 
 std::vector<Subregion> split_subregions(const TriMesh& tri, const std::vector<std::int32_t>& triangle_part, int parts,
@@ -619,7 +602,7 @@ std::vector<Subregion> split_subregions(const TriMesh& tri, const std::vector<st
   for (std::size_t t = 0; t < triangle_part.size(); ++t)
     triangles[static_cast<std::size_t>(triangle_part[t])].push_back(static_cast<std::int32_t>(t));
   std::vector<Subregion> subs(static_cast<std::size_t>(parts));
-  for_each_subregion(subs.size(), [&](std::size_t p) {
+  for_each_item(subs.size(), [&](std::size_t p) {
     if (triangles[p].empty()) throw MeshingError(name + ": subregion " + std::to_string(p) + " is empty");
     subs[p] = cut_subregion(tri, triangle_part, g, static_cast<int>(p), triangles[p], name);
   });

@@ -115,6 +115,23 @@ void put_error(ByteWriter& w, const std::exception_ptr& e);
 std::exception_ptr get_error(ByteReader& r);
 }  // namespace detail
 
+/// Runs f(i) for every i < n in parallel on this process's threads; then the first failure in item order is
+/// rethrown as it was thrown (a MeshingError fails a candidate; anything else is a bug and must not pass for one),
+/// so which error surfaces does not depend on the thread count.
+template <class F>
+void for_each_item(std::size_t n, F&& f) {
+  std::vector<std::exception_ptr> errors(n);
+  oneapi::tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
+    try {
+      f(i);
+    } catch (...) {
+      errors[i] = std::current_exception();
+    }
+  });
+  for (const std::exception_ptr& e : errors)
+    if (e) std::rethrow_exception(e);
+}
+
 /// Runs compute(i) for every item i < n, in parallel on this process's threads for the items it owns, then
 /// shares the results: pack(i, ByteWriter&) writes what compute(i) produced on its owner, unpack(i, ByteReader&)
 /// reads it on every other process. `cost` (empty: all equal) balances the processes. The first item (in item
@@ -124,34 +141,30 @@ template <class Compute, class Pack, class Unpack>
 void shared_for(const WorkSharing* sharing, std::size_t n, const std::vector<double>& cost, std::string_view tag,
                 Compute&& compute, Pack&& pack, Unpack&& unpack) {
   const bool alone = sharing == nullptr || sharing->processes() <= 1;
-  std::vector<int> owner;
-  if (!alone) owner = item_owners(cost.empty() ? std::vector<double>(n, 1.0) : cost, sharing->processes());
-  const int me = alone ? 0 : sharing->rank();
+  if (alone) return for_each_item(n, compute);
+  const std::vector<int> owner = item_owners(cost.empty() ? std::vector<double>(n, 1.0) : cost, sharing->processes());
+  const int me = sharing->rank();
+  // Each item's bytes: its error (none) and then what pack wrote; the owner keeps its exception as thrown.
   std::vector<std::exception_ptr> errors(n);
+  std::vector<std::string> items(n);
   oneapi::tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
-    if (!alone && owner[i] != me) return;
+    if (owner[i] != me) return;
     try {
       compute(i);
     } catch (...) {
       errors[i] = std::current_exception();
     }
+    ByteWriter w(items[i]);
+    detail::put_error(w, errors[i]);
+    if (!errors[i]) pack(i, w);
   });
-  if (!alone) {
-    std::vector<std::string> items(n);
-    oneapi::tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
-      if (owner[i] != me) return;
-      ByteWriter w(items[i]);
-      detail::put_error(w, errors[i]);
-      if (!errors[i]) pack(i, w);
-    });
-    sharing->all_gather(items, owner, tag);
-    oneapi::tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
-      if (owner[i] == me) return;
-      ByteReader r(items[i]);
-      errors[i] = detail::get_error(r);
-      if (!errors[i]) unpack(i, r);
-    });
-  }
+  sharing->all_gather(items, owner, tag);
+  oneapi::tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
+    if (owner[i] == me) return;
+    ByteReader r(items[i]);
+    errors[i] = detail::get_error(r);
+    if (!errors[i]) unpack(i, r);
+  });
   for (const std::exception_ptr& e : errors)
     if (e) std::rethrow_exception(e);
 }
