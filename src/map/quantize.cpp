@@ -49,6 +49,22 @@ struct JointProblem {
   int col(std::size_t l, int axis, int b) const { return col0[l][axis] + cls[l][axis][b]; }
 };
 
+// The target length of every segment in the joint program: its own map's, but for the two sides of a coupling,
+// whose maps may disagree on the interface's length (each subregion is deformed alone), the geometric mean of
+// both. With each side's own target the optimum of the relative deviations sits at the shorter target (its cost
+// per element is higher), so the longer side took the whole disagreement; the mean shares it equally in ratio.
+std::vector<std::vector<double>> coupled_targets(const JointProblem& jp, const std::vector<SegmentCoupling>& couplings) {
+  std::vector<std::vector<double>> target(jp.layouts.size());
+  for (std::size_t l = 0; l < jp.layouts.size(); ++l)
+    for (const LayoutSegment& s : jp.layouts[l]->segments) target[l].push_back(s.target);
+  for (const SegmentCoupling& c : couplings) {
+    double& ta = target[c.layout_a][static_cast<std::size_t>(c.segment_a)];
+    double& tb = target[c.layout_b][static_cast<std::size_t>(c.segment_b)];
+    ta = tb = std::sqrt(std::max(ta, 1e-9) * std::max(tb, 1e-9));
+  }
+  return target;
+}
+
 // With `broken` given, the couplings are elastic: a coupling may break at a cost per element far above any
 // deviation cost, so the program has a solution whenever each layout closes alone, and the couplings the
 // optimum breaks (appended to `broken`) show which subregions cannot agree.
@@ -58,6 +74,7 @@ IntegerProgram joint_program(JointProblem& jp, const std::vector<SegmentCoupling
   IntegerProgram P;
   const bool integer = !couplings.empty() || !even_groups.empty();
   constexpr double inf = IntegerProgram::inf;
+  const std::vector<std::vector<double>> target = coupled_targets(jp, couplings);
   // Class coordinate columns with the weak pull of each class towards its mean deformed coordinate (anchors
   // pieces, such as interior features, that no segment ties to the boundary).
   for (std::size_t l = 0; l < jp.layouts.size(); ++l) {
@@ -83,6 +100,7 @@ IntegerProgram joint_program(JointProblem& jp, const std::vector<SegmentCoupling
     }
     for (std::size_t k = 0; k < layout.segments.size(); ++k) {
       const LayoutSegment& s = layout.segments[k];
+      const double target_k = target[l][k];
       const int axis = label_axis(s.label);
       const int xa = jp.col(l, axis, s.break_a), xb = jp.col(l, axis, s.break_b);
       if (xa == xb)
@@ -90,10 +108,10 @@ IntegerProgram joint_program(JointProblem& jp, const std::vector<SegmentCoupling
                            std::to_string(s.chain) + ") would have zero length");
       const double sg = label_sign(s.label);
       // u: deviation from t; w: deviation beyond the band [lo, hi]
-      const int u = P.add_columns(1, 0.0, inf, 1.0 / std::max(s.target, 1.0));
-      const int w = P.add_columns(1, 0.0, inf, options.outside_band_weight / std::max(s.target, 1.0));
+      const int u = P.add_columns(1, 0.0, inf, 1.0 / std::max(target_k, 1.0));
+      const int w = P.add_columns(1, 0.0, inf, options.outside_band_weight / std::max(target_k, 1.0));
       // Integer right-hand sides keep the LP vertex integral (the matrix is totally unimodular).
-      const double t = std::max(std::round(s.target), 1.0);
+      const double t = std::max(std::round(target_k), 1.0);
       // n = sg (X_b - X_a) >= 1 ; u >= |n - t| ; w >= n - hi, w >= lo - n. The band is soft: a layout that only
       // closes with a stretched side still gets counts, and the quality checks downstream judge the result.
       const double lo = std::max(1.0, std::ceil(t / options.max_side_change));

@@ -94,6 +94,25 @@ TEST(InterfaceQuantization, TJunctionCountsAgreeAcrossSubregions) {
   EXPECT_LT(st.max_relative_deviation, 0.5);
 }
 
+TEST(InterfaceQuantization, DisagreeingMapsShareTheInterfaceLength) {
+  // Two subregions' maps disagree on their interface by a factor of two: A (4 x 8) sees it 8 long, B (4 x 16) 16.
+  // Each side's own relative deviation would put the count at the shorter target and squeeze B to half its
+  // length; the shared count lies between, within 1.5 of both targets in ratio.
+  RectLayout A = rectangle({0, 0}, {4, 8}), B = rectangle({0, 0}, {4, 16});
+  // A's right side (1, +Y) against B's left side (3, -Y).
+  quantize_layouts({&A.layout, &B.layout}, {&A.deformed, &B.deformed}, {{0, 1, 1, 3}}, QuantizeOptions{}, "AB");
+  const auto len = [](const Layout& l, int k) {
+    const auto a = l.lattice[l.segments[k].break_a], b = l.lattice[l.segments[k].break_b];
+    return std::llabs(b[0] - a[0]) + std::llabs(b[1] - a[1]);
+  };
+  ASSERT_EQ(len(A.layout, 1), len(B.layout, 3));
+  const double n = static_cast<double>(len(A.layout, 1));
+  EXPECT_LE(n / 8.0, 1.5);
+  EXPECT_GE(n / 16.0, 1.0 / 1.5);
+  EXPECT_EQ(len(A.layout, 3), len(A.layout, 1));  // both close as rectangles
+  EXPECT_EQ(len(B.layout, 1), len(B.layout, 3));
+}
+
 TEST(InterfaceQuantization, CouplingsPropagateThroughSubregions) {
   // A wants 1 x 3 elements; its bottom is coupled to B's right side and its right side to B's left side. B is a
   // rectangle (left = right), so A must come out square: counts travel across subregions, not just one interface.
