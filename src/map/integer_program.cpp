@@ -168,7 +168,8 @@ std::optional<std::vector<double>> IntegerProgram::solve(double seconds, double 
   // of branch-and-cut's time on coasts' joint programs.
   // Each step changes two bounds only, so the steps keep Clp's factorization and work areas between them
   // (startFinishOptions 1: keep them at the end, 2: start from them) instead of refactorizing a matrix of tens
-  // of thousands of columns each time; they are released when the dive ends.
+  // of thousands of columns each time; they are released when the dive ends (it takes at least one step: the
+  // relaxation was fractional).
   const double bound = lp->objectiveValue();
   std::optional<std::vector<double>> dived;
   int keep = 1;
@@ -184,7 +185,7 @@ std::optional<std::vector<double>> IntegerProgram::solve(double seconds, double 
     lp->dual(0, keep);
     if (lp->status() != 0) break;
   }
-  if (keep != 1) lp->finish(0);
+  lp->finish(0);
   if (lp->status() == 0 && fractional() < 0) {
     const double* x = lp->getColSolution();
     dived = std::vector<double>(x, x + n);
