@@ -994,53 +994,65 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
   // with their neighbours (elastic couplings) or cannot close alone are repaired; their neighbours keep their maps.
   // With `disagree` given the couplings are elastic, and the pairs of subregions whose interface counts the
   // solution could not make equal are appended to it.
-  auto solve = [&](const std::vector<std::size_t>& members,
+  // Subregions that cannot close even alone are marked failed as the solve finds them, and the rest solved again.
+  auto solve = [&](std::vector<std::size_t> members,
                    std::vector<std::pair<std::size_t, std::size_t>>* disagree = nullptr) {
-    std::vector<std::int32_t> index(n, -1);
-    std::vector<Layout*> lp;
-    std::vector<const std::vector<Vec2>*> dp;
-    for (std::size_t p : members) {
-      index[p] = static_cast<std::int32_t>(lp.size());
-      lp.push_back(&layouts[p]);
-      dp.push_back(&mapped[p].x);
-    }
-    std::vector<SegmentCoupling> local;
-    for (const SegmentCoupling& c : couplings)
-      if (index[c.layout_a] >= 0 && index[c.layout_b] >= 0)
-        local.push_back({static_cast<std::size_t>(index[c.layout_a]), c.segment_a,
-                         static_cast<std::size_t>(index[c.layout_b]), c.segment_b});
-    // A subregion to be patched cannot even out the counts its mapped neighbours give it where no ring piece of
-    // its own is next to them: the quantization must make those counts even (see patch_runs).
-    std::vector<EvenGroup> even;
-    for (std::size_t p = 0; p < n; ++p) {
-      if (failure[p].empty() || group[p] != static_cast<std::int32_t>(p)) continue;
-      const Subregion& area = patch_area(p);
-      std::map<std::uint64_t, std::size_t> run_of;  // global interface edge -> its run
-      const std::vector<std::vector<std::uint64_t>> runs = patch_runs(area);
-      for (std::size_t r = 0; r < runs.size(); ++r)
-        for (std::uint64_t e : runs[r]) run_of[e] = r;
-      std::set<std::size_t> neighbours;  // mapped ones in this program
-      for (const TriChain& ch : area.mesh.chains)
-        if (ch.interface >= 0 && index[static_cast<std::size_t>(ch.interface)] >= 0) neighbours.insert(static_cast<std::size_t>(ch.interface));
-      std::vector<EvenGroup> groups(runs.size());
-      for (std::size_t q : neighbours)
-        for (std::size_t k = 0; k < layouts[q].segments.size(); ++k) {
-          const LayoutSegment& s = layouts[q].segments[k];
-          const TriChain& qc = subs[q].mesh.chains[static_cast<std::size_t>(s.chain)];
-          if (qc.interface < 0 || group[static_cast<std::size_t>(qc.interface)] != static_cast<std::int32_t>(p)) continue;
-          const std::size_t cn = qc.vertices.size();
-          auto gv = [&](int i) { return subs[q].global_vertex[static_cast<std::size_t>(qc.vertices[static_cast<std::size_t>(i) % cn])]; };
-          if (auto it = run_of.find(edge_key(gv(s.first), gv(s.first + 1))); it != run_of.end())
-            groups[it->second].push_back({static_cast<std::size_t>(index[q]), static_cast<int>(k)});
+    for (;;) {
+      std::vector<std::int32_t> index(n, -1);
+      std::vector<Layout*> lp;
+      std::vector<const std::vector<Vec2>*> dp;
+      for (std::size_t p : members) {
+        index[p] = static_cast<std::int32_t>(lp.size());
+        lp.push_back(&layouts[p]);
+        dp.push_back(&mapped[p].x);
+      }
+      std::vector<SegmentCoupling> local;
+      for (const SegmentCoupling& c : couplings)
+        if (index[c.layout_a] >= 0 && index[c.layout_b] >= 0)
+          local.push_back({static_cast<std::size_t>(index[c.layout_a]), c.segment_a,
+                           static_cast<std::size_t>(index[c.layout_b]), c.segment_b});
+      // A subregion to be patched cannot even out the counts its mapped neighbours give it where no ring piece of
+      // its own is next to them: the quantization must make those counts even (see patch_runs).
+      std::vector<EvenGroup> even;
+      for (std::size_t p = 0; p < n; ++p) {
+        if (failure[p].empty() || group[p] != static_cast<std::int32_t>(p)) continue;
+        const Subregion& area = patch_area(p);
+        std::map<std::uint64_t, std::size_t> run_of;  // global interface edge -> its run
+        const std::vector<std::vector<std::uint64_t>> runs = patch_runs(area);
+        for (std::size_t r = 0; r < runs.size(); ++r)
+          for (std::uint64_t e : runs[r]) run_of[e] = r;
+        std::set<std::size_t> neighbours;  // mapped ones in this program
+        for (const TriChain& ch : area.mesh.chains)
+          if (ch.interface >= 0 && index[static_cast<std::size_t>(ch.interface)] >= 0) neighbours.insert(static_cast<std::size_t>(ch.interface));
+        std::vector<EvenGroup> groups(runs.size());
+        for (std::size_t q : neighbours)
+          for (std::size_t k = 0; k < layouts[q].segments.size(); ++k) {
+            const LayoutSegment& s = layouts[q].segments[k];
+            const TriChain& qc = subs[q].mesh.chains[static_cast<std::size_t>(s.chain)];
+            if (qc.interface < 0 || group[static_cast<std::size_t>(qc.interface)] != static_cast<std::int32_t>(p)) continue;
+            const std::size_t cn = qc.vertices.size();
+            auto gv = [&](int i) { return subs[q].global_vertex[static_cast<std::size_t>(qc.vertices[static_cast<std::size_t>(i) % cn])]; };
+            if (auto it = run_of.find(edge_key(gv(s.first), gv(s.first + 1))); it != run_of.end())
+              groups[it->second].push_back({static_cast<std::size_t>(index[q]), static_cast<int>(k)});
+          }
+        for (EvenGroup& g : groups)
+          if (!g.empty()) even.push_back(std::move(g));
+      }
+      std::vector<std::size_t> broken;
+      try {
+        const QuantizeStats q = quantize_layouts_shared(options.sharing.get(), lp, dp, local, options.quantize, name, even,
+                                                        disagree ? &broken : nullptr);
+        for (std::size_t c : broken) disagree->push_back({members[local[c].layout_a], members[local[c].layout_b]});
+        return q;
+      } catch (const LayoutsCannotClose& e) {
+        for (std::size_t i = 0; i < e.layouts.size(); ++i) {
+          const std::size_t p = members[e.layouts[i]];
+          failure[p] = sub_name(p) + ": " + e.reasons[i] + " [" + std::to_string(layouts[p].segments.size()) + " sides]";
         }
-      for (EvenGroup& g : groups)
-        if (!g.empty()) even.push_back(std::move(g));
+        std::erase_if(members, [&](std::size_t p) { return !failure[p].empty(); });
+        if (members.empty()) return QuantizeStats{};
+      }
     }
-    std::vector<std::size_t> broken;
-    const QuantizeStats q = quantize_layouts_shared(options.sharing.get(), lp, dp, local, options.quantize, name, even,
-                                                    disagree ? &broken : nullptr);
-    for (std::size_t c : broken) disagree->push_back({members[local[c].layout_a], members[local[c].layout_b]});
-    return q;
   };
   auto members_now = [&] {
     std::vector<std::size_t> m;

@@ -152,6 +152,11 @@ IntegerProgram joint_program(JointProblem& jp, const std::vector<SegmentCoupling
   return P;
 }
 
+MeshingError no_integer_solution(const std::string& part_name) {
+  return MeshingError(part_name + ": quantization has no integer solution (the labelled sides cannot close into "
+                                  "poly-squares without overlapping)");
+}
+
 // Adds the separations from `first` on to the program, solves it and reads the lattice of every layout.
 void solve_joint(JointProblem& jp, IntegerProgram& P, const std::vector<SegmentCoupling>& couplings,
                  const std::vector<Separation>& separations, std::size_t first, const QuantizeOptions& options,
@@ -166,8 +171,7 @@ void solve_joint(JointProblem& jp, IntegerProgram& P, const std::vector<SegmentC
   const double dive_gap = options.dive_gap * std::max(1.0, static_cast<double>(sides) / 1000.0);
   const std::optional<std::vector<double>> x = P.solve(options.time_limit_ms / 1000.0, options.gap, dive_gap);
   if (!x)
-    throw MeshingError(part_name + ": quantization has no integer solution (the labelled sides cannot close "
-                                   "into poly-squares without overlapping)");
+    throw no_integer_solution(part_name);
   for (std::size_t l = 0; l < jp.layouts.size(); ++l) {
     Layout& layout = *jp.layouts[l];
     const std::size_t nb = layout.break_vertex.size();
@@ -199,12 +203,13 @@ void solve_joint(JointProblem& jp, IntegerProgram& P, const std::vector<SegmentC
     }
 }
 
-// The separation that holds with the largest margin in the deformed plane, between two sets of break points
-// (the ends of two overlapping sides, or two break points on one lattice point). Returns false if none is
-// possible (the sets share a break point on every candidate axis).
-bool best_separation(const Layout& layout, const std::vector<Vec2>& deformed, const std::vector<int>& A,
-                     const std::vector<int>& B, const std::array<std::vector<int>, 2>& cls, Separation& out) {
-  double best = -INFINITY;
+// The separations possible between two sets of break points (the ends of two overlapping sides, or two break
+// points on one lattice point), largest margin in the deformed plane first: one axis or the other, A before B
+// or B before A. Empty when none is possible (the sets share a class on both axes).
+std::vector<Separation> separation_candidates(const Layout& layout, int l, const std::vector<Vec2>& deformed,
+                                              const std::vector<int>& A, const std::vector<int>& B,
+                                              const std::array<std::vector<int>, 2>& cls) {
+  std::vector<std::pair<double, Separation>> found;
   for (int axis = 0; axis < 2; ++axis) {
     auto coord = [&](int b) { const Vec2 p = deformed[layout.break_vertex[b]]; return axis == 0 ? p.x : p.y; };
     auto extreme = [&](const std::vector<int>& S, bool want_max) {
@@ -213,18 +218,27 @@ bool best_separation(const Layout& layout, const std::vector<Vec2>& deformed, co
         if (want_max ? coord(b) > coord(e) : coord(b) < coord(e)) e = b;
       return e;
     };
-    // A before B along the axis, or B before A.
     for (int order = 0; order < 2; ++order) {
       const std::vector<int>& first = order == 0 ? A : B;
       const std::vector<int>& second = order == 0 ? B : A;
       const int lo = extreme(first, true), hi = extreme(second, false);
       if (cls[axis][lo] == cls[axis][hi]) continue;
-      const double margin = coord(hi) - coord(lo);
-      if (margin > best) { best = margin; out = {out.layout, axis, lo, hi}; }
+      found.push_back({coord(hi) - coord(lo), Separation{l, axis, lo, hi}});
     }
   }
-  return best > -INFINITY;
+  // Stable: among equal margins the first found (x before y, A before B) comes first.
+  std::stable_sort(found.begin(), found.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+  std::vector<Separation> out;
+  for (const auto& f : found) out.push_back(f.second);
+  return out;
 }
+
+// Whether layout l closes with the given separations (those of l among them) on its own sides alone: one
+// layout's program is a network program, solved in about a millisecond. Within a joint program with elastic
+// couplings this is exactly what the separations of l can break.
+bool closes_alone(const JointProblem& jp, std::size_t l, const std::vector<Separation>& separations,
+                  const QuantizeOptions& options, const std::string& part_name);
+JointProblem joint_problem(const std::vector<Layout*>& layouts, const std::vector<const std::vector<Vec2>*>& deformed);
 
 }  // namespace
 
@@ -238,18 +252,56 @@ QuantizeStats solve_with_separations(JointProblem& jp, const std::vector<Segment
                                      std::vector<std::size_t>* broken) {
   QuantizeStats stats;
   int round = 0;
+  std::vector<Separation> rejected;  // separations that contradicted their layout's others
+  // The last round's choices: per layout given separations, per conflict the separations not tried yet, the one
+  // with the largest margin in the deformed plane (the one added) first.
+  std::vector<std::pair<std::size_t, std::vector<std::vector<Separation>>>> choices;
+  std::size_t round_start = 0;  // separations before the last round's
+  auto tried = [&](const Separation& sep) {
+    return std::find(separations.begin(), separations.end(), sep) != separations.end() ||
+           std::find(rejected.begin(), rejected.end(), sep) != rejected.end();
+  };
   // One program for all rounds: a round adds its separations as rows, and the solver starts from the last
   // round's basis.
   IntegerProgram P = joint_program(jp, couplings, even_groups, options, part_name, broken != nullptr);
   for (std::size_t in_program = 0;; ) {
     stats = QuantizeStats{};
     if (broken) broken->clear();
-    solve_joint(jp, P, couplings, separations, in_program, options, part_name, stats, broken);
+    try {
+      solve_joint(jp, P, couplings, separations, in_program, options, part_name, stats, broken);
+    } catch (const MeshingError&) {
+      // Separations chosen one conflict at a time can contradict each other or their layout's sides (the
+      // deformed plane holds each of them, not their integer margins all at once). The last round's are tried
+      // on each layout alone: where the best of each do not close, each conflict takes its first choice that
+      // closes with those kept before it, or none (the layout keeps that conflict, and check_layout fails it
+      // alone); the program is then built again with them.
+      if (!options.screen_separations || choices.empty()) throw;
+      separations.resize(round_start);
+      for (const auto& [l, mine] : choices) {
+        const std::size_t first_new = separations.size();
+        for (const auto& cand : mine) separations.push_back(cand.front());
+        if (closes_alone(jp, l, separations, options, part_name)) continue;
+        separations.resize(first_new);
+        for (const auto& cand : mine)
+          for (const Separation& sep : cand) {
+            separations.push_back(sep);
+            if (closes_alone(jp, l, separations, options, part_name)) break;
+            separations.pop_back();
+            rejected.push_back(sep);
+          }
+      }
+      choices.clear();
+      P = joint_program(jp, couplings, even_groups, options, part_name, broken != nullptr);
+      in_program = 0;
+      continue;
+    }
     in_program = separations.size();
     if (++round > options.max_separation_rounds) break;
-    std::size_t added = 0;
+    round_start = separations.size();
+    choices.clear();
     for (std::size_t l = 0; l < jp.layouts.size(); ++l) {
       const Layout& layout = *jp.layouts[l];
+      std::vector<std::vector<Separation>> mine;
       for (const LayoutConflict& c : find_conflicts(layout, 64)) {
         std::vector<int> A, B;
         if (c.seg_a >= 0) {
@@ -259,16 +311,22 @@ QuantizeStats solve_with_separations(JointProblem& jp, const std::vector<Segment
           A = {c.break_a};
           B = {c.break_b};
         }
-        Separation sep{static_cast<int>(l), 0, 0, 0};
-        if (best_separation(layout, *jp.deformed[l], A, B, jp.cls[l], sep) &&
-            std::find(separations.begin(), separations.end(), sep) == separations.end()) {
-          separations.push_back(sep);
-          ++added;
-        }
+        std::vector<Separation> cand = separation_candidates(layout, static_cast<int>(l), *jp.deformed[l], A, B, jp.cls[l]);
+        // A conflict whose best separation is in the program already (or was refused) is left as it is.
+        if (cand.empty() || tried(cand.front())) continue;
+        const Separation best = cand.front();
+        separations.push_back(best);
+        std::erase_if(cand, [&](const Separation& sep) { return sep != best && tried(sep); });
+        mine.push_back(std::move(cand));
       }
+      if (!mine.empty()) choices.push_back({l, std::move(mine)});
     }
-    if (added == 0) break;
+    if (separations.size() == round_start) break;
   }
+  // A layout alone whose overlap no separation can undo has no solution; in a joint program such a layout is
+  // left to check_layout, which fails that subregion alone.
+  if (jp.layouts.size() == 1 && !rejected.empty() && !find_conflicts(*jp.layouts[0], 1).empty())
+    throw no_integer_solution(part_name);
   stats.separations = separations.size();
   return stats;
 }
@@ -285,6 +343,21 @@ JointProblem joint_problem(const std::vector<Layout*>& layouts, const std::vecto
   return jp;
 }
 
+bool closes_alone(const JointProblem& jp, std::size_t l, const std::vector<Separation>& separations,
+                  const QuantizeOptions& options, const std::string& part_name) {
+  JointProblem one = joint_problem({jp.layouts[l]}, {jp.deformed[l]});
+  IntegerProgram P;
+  try {
+    P = joint_program(one, {}, {}, options, part_name, false);
+  } catch (const MeshingError&) {
+    return false;
+  }
+  for (const Separation& sep : separations)
+    if (sep.layout == static_cast<int>(l))
+      P.add_row({{one.col(0, sep.axis, sep.hi), 1.0}, {one.col(0, sep.axis, sep.lo), -1.0}}, 1.0, IntegerProgram::inf);
+  return P.solve(options.time_limit_ms / 1000.0).has_value();
+}
+
 }  // namespace
 
 QuantizeStats quantize_layouts(const std::vector<Layout*>& layouts, const std::vector<const std::vector<Vec2>*>& deformed,
@@ -296,6 +369,11 @@ QuantizeStats quantize_layouts(const std::vector<Layout*>& layouts, const std::v
   // A joint program is a mixed-integer one, each solve of it costly; each layout alone is a network program
   // solved in milliseconds. The separations each layout needs alone start the joint program, which then
   // mostly settles in one or two rounds instead of one per separation found.
+  // A layout that cannot close alone (no solution for its sides, or overlaps that no separation undoes) is said
+  // at once, naming it, instead of after failed solves of the whole. Keeping one whose overlaps might close with
+  // its neighbours' counts was measured worse (delta_box ensembles: it fails later, after the joint solve).
+  std::vector<std::size_t> cannot_close;
+  std::vector<std::string> reasons;
   if (layouts.size() > 1 && (!couplings.empty() || !even_groups.empty()))
     for (std::size_t l = 0; l < layouts.size(); ++l) {
       Layout alone = *layouts[l];
@@ -303,14 +381,22 @@ QuantizeStats quantize_layouts(const std::vector<Layout*>& layouts, const std::v
       std::vector<Separation> own;
       try {
         solve_with_separations(one, {}, {}, own, options, part_name, nullptr);
-      } catch (const MeshingError&) {
-        continue;  // the joint program reports it
+      } catch (const MeshingError& e) {
+        std::string why = e.what();
+        if (why.starts_with(part_name + ": ")) why.erase(0, part_name.size() + 2);
+        cannot_close.push_back(l);
+        reasons.push_back(why);
+        continue;
       }
       for (Separation sep : own) {
         sep.layout = static_cast<int>(l);
         separations.push_back(sep);
       }
     }
+  if (!cannot_close.empty())
+    throw LayoutsCannotClose(part_name + ": " + std::to_string(cannot_close.size()) + " of " +
+                                 std::to_string(layouts.size()) + " poly-squares cannot close alone (" + reasons.front() + ")",
+                             cannot_close, reasons);
   try {
     return solve_with_separations(jp, couplings, even_groups, separations, options, part_name, broken);
   } catch (const MeshingError&) {
@@ -328,20 +414,26 @@ QuantizeStats quantize_layouts_shared(const WorkSharing* sharing, const std::vec
                                       std::vector<std::size_t>* broken) {
   QuantizeStats q;
   std::string error;
-  std::vector<std::size_t> broken_here;
+  std::vector<std::size_t> broken_here, cannot_close;
+  std::vector<std::string> reasons;
   shared_for(sharing, 1, {}, "quantize", [&](std::size_t) {
     try {
       q = quantize_layouts(layouts, deformed, couplings, options, part_name, even_groups, broken ? &broken_here : nullptr);
+    } catch (const LayoutsCannotClose& e) {
+      error = e.what();
+      cannot_close = e.layouts;
+      reasons = e.reasons;
     } catch (const MeshingError& e) {
       error = e.what();  // shared like a result: the lattices it left are copied too
     }
   }, [&](std::size_t, ByteWriter& w) {
-    w.put(error), w.put(q), w.put(broken_here);
+    w.put(error), w.put(q), w.put(broken_here), w.put(cannot_close), w.put(reasons);
     for (const Layout* l : layouts) w.put(l->lattice);
   }, [&](std::size_t, ByteReader& r) {
-    r.get(error), r.get(q), r.get(broken_here);
+    r.get(error), r.get(q), r.get(broken_here), r.get(cannot_close), r.get(reasons);
     for (Layout* l : layouts) r.get(l->lattice);
   });
+  if (!cannot_close.empty()) throw LayoutsCannotClose(error, cannot_close, reasons);
   if (!error.empty()) throw MeshingError(error);
   if (broken) *broken = std::move(broken_here);
   return q;

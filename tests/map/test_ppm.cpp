@@ -164,6 +164,48 @@ TEST(InterfaceQuantization, ElasticCouplingsNameTheOnesThatCannotAgree) {
   EXPECT_EQ(len(B.layout, 0), len(D.layout, 4));
 }
 
+TEST(InterfaceQuantization, LayoutsThatCannotCloseAloneAreNamedBeforeTheJointProgram) {
+  // Two coupled rectangles that agree, and two layouts that no quantization makes valid: a rectangle whose top
+  // side is labelled +X like its bottom (x(left) > x(right) > x(left): no solution at all), and an L-shape whose
+  // notch reads -X, +X, -X along one line (two of its sides overlap however it is separated). The error names
+  // those two, by their index in the call, with why each fails alone; the others then quantize together.
+  RectLayout A = rectangle({0, 0}, {3, 2}), B = rectangle({0, 0}, {2, 2});
+  RectLayout bad_labels = rectangle({0, 0}, {4, 3});
+  bad_labels.layout.segments[2].label = 0;
+  RectLayout notch;
+  notch.deformed = {{0, 0}, {4.2, 0}, {4.2, 2.1}, {2.1, 2.1}, {2.1, 5.9}, {0, 5.9}};
+  const int labels[6] = {0, 1, 2, 0, 2, 3};
+  for (int i = 0; i < 6; ++i) {
+    notch.layout.break_vertex.push_back(i);
+    notch.layout.break_is_corner.push_back(1);
+    notch.layout.vertex_break.push_back(i);
+    LayoutSegment s;
+    s.chain = 0, s.first = i, s.count = 1, s.label = labels[i];
+    s.break_a = i, s.break_b = (i + 1) % 6;
+    s.target = distance(notch.deformed[static_cast<std::size_t>(i)], notch.deformed[static_cast<std::size_t>((i + 1) % 6)]);
+    notch.layout.segments.push_back(s);
+  }
+  try {
+    quantize_layouts({&A.layout, &bad_labels.layout, &B.layout, &notch.layout},
+                     {&A.deformed, &bad_labels.deformed, &B.deformed, &notch.deformed}, {{0, 1, 2, 3}}, QuantizeOptions{},
+                     "four");
+    ADD_FAILURE() << "a joint program with two layouts that cannot close was solved";
+  } catch (const LayoutsCannotClose& e) {
+    EXPECT_EQ(e.layouts, (std::vector<std::size_t>{1, 3}));
+    ASSERT_EQ(e.reasons.size(), 2u);
+    EXPECT_NE(e.reasons[1].find("overlapping"), std::string::npos) << e.reasons[1];
+    EXPECT_NE(std::string(e.what()).find("four"), std::string::npos) << e.what();
+  }
+  quantize_layouts({&A.layout, &B.layout}, {&A.deformed, &B.deformed}, {{0, 1, 1, 3}}, QuantizeOptions{}, "two");
+  EXPECT_EQ(check_layout(A.layout), "");
+  EXPECT_EQ(check_layout(B.layout), "");
+  const auto len = [](const Layout& l, int k) {
+    const auto a = l.lattice[l.segments[k].break_a], b = l.lattice[l.segments[k].break_b];
+    return std::llabs(b[0] - a[0]) + std::llabs(b[1] - a[1]);
+  };
+  EXPECT_EQ(len(A.layout, 1), len(B.layout, 3));
+}
+
 namespace {
 Region load(const std::string& name) {
   return read_region(std::string(POLYSQUARE_DATA_DIR) + "/cases/" + name + ".geojson");

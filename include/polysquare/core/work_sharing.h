@@ -46,6 +46,10 @@ class ByteWriter {
     put(static_cast<std::uint64_t>(v.size()));
     for (const auto& x : v) put(x);
   }
+  void put(const std::vector<std::string>& v) {
+    put(static_cast<std::uint64_t>(v.size()));
+    for (const auto& x : v) put(x);
+  }
 
  private:
   std::string& out_;
@@ -79,6 +83,13 @@ class ByteReader {
   void get(std::vector<std::vector<T>>& v) {
     std::uint64_t n = 0;
     get(n);
+    v.resize(n);
+    for (auto& x : v) get(x);
+  }
+  void get(std::vector<std::string>& v) {
+    std::uint64_t n = 0;
+    get(n);
+    if (n > in_.size() - pos_) throw std::logic_error("work sharing: truncated item");
     v.resize(n);
     for (auto& x : v) get(x);
   }

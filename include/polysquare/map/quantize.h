@@ -2,6 +2,9 @@
 #pragma once
 
 #include <string>
+#include <vector>
+
+#include "polysquare/core/error.h"
 
 #include "polysquare/core/work_sharing.h"
 #include "polysquare/map/layout.h"
@@ -22,6 +25,9 @@ struct QuantizeOptions {
   double dive_gap = 5.0;  ///< a fractional LP optimum is dived from (columns fixed one by one), and the dive's
                          ///< point kept when its cost is within this of the LP's per 1000 sides of the program
                          ///< (at least this: five elements of deviation on unit sides); else branch-and-cut
+  bool screen_separations = true;  ///< the separations a round adds to a layout are first tried on that layout
+                                   ///< alone; those that contradict its sides or each other give way to the next
+                                   ///< choice for their conflict (false: added as found, for comparison)
   double broken_coupling_cost = 1e4;  ///< cost per element of an elastic coupling's mismatch (quantize_layouts
                                       ///< with `broken`): above any saving in deviation, so only what cannot agree breaks
 };
@@ -71,11 +77,22 @@ QuantizeStats quantize_layout(Layout& layout, const std::vector<Vec2>& deformed,
 /// With `broken` given, couplings are elastic (options.broken_coupling_cost per element of mismatch): the program
 /// then fails only where a layout cannot close alone (or with its even groups and separations), and `broken`
 /// receives the indices of the couplings the solution does not honour (empty when all agree). One solve locates
-/// the subregions that make a joint program infeasible.
+/// the subregions that make a joint program infeasible. Each layout is first quantized alone (its separations
+/// start the joint program); layouts that cannot close alone are reported at once (LayoutsCannotClose).
 QuantizeStats quantize_layouts(const std::vector<Layout*>& layouts, const std::vector<const std::vector<Vec2>*>& deformed,
                                const std::vector<SegmentCoupling>& couplings, const QuantizeOptions& options,
                                const std::string& part_name, const std::vector<EvenGroup>& even_groups = {},
                                std::vector<std::size_t>* broken = nullptr);
+
+/// quantize_layouts' error when some of its layouts cannot close even alone, so the joint program cannot either:
+/// `layouts` holds their indices in the call and `reasons` why each failed alone (without the part's name).
+class LayoutsCannotClose : public MeshingError {
+ public:
+  LayoutsCannotClose(const std::string& what, std::vector<std::size_t> layouts, std::vector<std::string> reasons)
+      : MeshingError(what), layouts(std::move(layouts)), reasons(std::move(reasons)) {}
+  std::vector<std::size_t> layouts;
+  std::vector<std::string> reasons;
+};
 
 /// quantize_layouts solved by one of the processes of `sharing` (null: this one), its lattices, statistics and
 /// broken couplings (or its error) copied to the others: the solver's wall-clock limit (time_limit_ms) then
