@@ -446,6 +446,25 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
           measure();
         }
       }
+      // A valid quad far outside a gate (below half the SJ gate, above twice the edge-ratio gate) costs a small
+      // subregion its map, not a large one: a patch adds about one singular node per ten quads (delta_box 40 m:
+      // a 30,000-quad map was patched for one quad). In a map above options.keep_map_above_quads such quads get
+      // the widest local patches first and, if they stay, are kept and reported like the poor quads below.
+      auto severe = [&](std::size_t q) {
+        return metrics.sj[q] > 0.0 && !pinned[q] &&
+               (metrics.sj[q] < 0.5 * options.min_scaled_jacobian || metrics.edge_ratio[q] > 2.0 * options.max_edge_ratio);
+      };
+      auto in_large_map = [&](std::size_t q) {
+        const int s = subregion_of(q);
+        return s >= 0 && r.stats.subregions[static_cast<std::size_t>(s)].mapped &&
+               r.stats.subregions[static_cast<std::size_t>(s)].quads > options.keep_map_above_quads;
+      };
+      if (options.local_patch.enabled) {
+        std::vector<std::uint8_t> wide(metrics.sj.size(), 0);
+        bool any = false;
+        for (std::size_t q = 0; q < wide.size(); ++q) any |= (wide[q] = severe(q) && in_large_map(q)) != 0;
+        if (any) patch_locally(wide, options.local_patch.wide_rings, options.local_patch.wide_max_quads);
+      }
       // Quads beside a crack (pieces that do not share their nodes) count as folded: their subregions are meshed
       // again, instead of the whole candidate failing the invariants after the last round.
       const std::vector<std::uint8_t> cracked = quads_beside_cracks(r.mesh);
@@ -464,21 +483,18 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
         const int s = subregion_of(q);
         if (cracked[q] && s >= 0) bad.emplace(s, "its quads do not share their nodes with a neighbour's (a crack) at " + at_text(r.mesh.nodes[r.mesh.quads[q][0]]));
         if (!poor[q]) continue;
-        // Far outside a gate (half the SJ gate, twice the edge-ratio gate) counts as folded: the budget is for
-        // quads just outside, not for near-degenerate ones a patch can mend.
-        // A patch is not rebuilt for a valid quad however poor: its given nodes (the input's, the neighbours'
+        // Far outside a gate (severe) counts as folded but in large maps: the budget is for quads just outside,
+        // not for near-degenerate ones a patch can mend. A patch is not rebuilt for a valid quad however poor: its given nodes (the input's, the neighbours'
         // interface nodes) fix that quad's shape for any construction, and each rebuild re-maps the whole part.
         const bool in_patch = s >= 0 && !r.stats.subregions[static_cast<std::size_t>(s)].mapped;
-        const bool severe = !folded && !pinned[q] && !in_patch &&
-                            (metrics.sj[q] < 0.5 * options.min_scaled_jacobian || metrics.edge_ratio[q] > 2.0 * options.max_edge_ratio);
-        if (folded || severe) {
+        if (folded || (!in_patch && severe(q) && !in_large_map(q))) {
           if (s >= 0)
             bad.emplace(s, "its map left a " + std::string(folded ? "folded" : "near-degenerate") + " quad at " +
                                at_text(r.mesh.nodes[r.mesh.quads[q][0]]) + " after smoothing and local patches");
           if (folded) continue;
         }
         ++poor_valid;
-        if (s < 0 || in_patch) continue;
+        if (s < 0 || in_patch || in_large_map(q)) continue;
         // Below 1 the quad fails a gate; the smaller, the further.
         const double ratio = std::min(options.min_scaled_jacobian > 0 ? metrics.sj[q] / options.min_scaled_jacobian : 1.0,
                                       options.max_edge_ratio / metrics.edge_ratio[q]);

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <iostream>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <set>
 #include <string>
@@ -338,6 +339,36 @@ TEST(LocalRepair, NewCoastsHoldTheInvariantsAndTheSummaryAccountsForEveryQuad) {
                 0.02) << name;
     EXPECT_EQ(summary["unstructured_subregions"].get<std::size_t>(), r.report["unstructured"].size()) << name;
   }
+}
+
+TEST(LocalRepair, ALargeMapKeepsItsMapForValidQuadsFarOutsideTheGates) {
+  // fjord_coast at 400 m in 4 subregions, under an SJ gate of 0.5 (so "far outside", below 0.25, occurs) with
+  // local patches off and every poor quad accepted: a map above keep_map_above_quads keeps its quads and
+  // reports them as poor; below it, the same quads cost their subregion its map (meshed again as a patch).
+  const Region region = load("fjord_coast");
+  auto run = [&](std::size_t keep_above) {
+    MeshOptions o;
+    o.size = 400.0;
+    o.parts = 4;
+    o.min_scaled_jacobian = 0.5;
+    o.max_poor_fraction = 1.0;
+    o.local_patch.enabled = false;
+    o.keep_map_above_quads = keep_above;
+    return mesh_region(region, o);
+  };
+  auto demoted_for_quads = [](const MeshResult& r) {
+    std::size_t n = 0;
+    for (const auto& u : r.report["unstructured"])
+      n += u["reason"].get<std::string>().find("near-degenerate") != std::string::npos;
+    return n;
+  };
+  const MeshResult keep = run(0), demote = run(std::numeric_limits<std::size_t>::max());
+  EXPECT_GT(demoted_for_quads(demote), 0u);
+  EXPECT_EQ(demoted_for_quads(keep), 0u);
+  EXPECT_GT(keep.report["summary"]["structured_fraction"].get<double>(),
+            demote.report["summary"]["structured_fraction"].get<double>());
+  EXPECT_GT(keep.report["summary"]["poor_quads"].get<std::size_t>(), 0u);
+  EXPECT_TRUE(check_invariants(keep.mesh).ok()) << check_invariants(keep.mesh).first_problem;
 }
 
 TEST(LocalRepair, APatchCrossedByFeaturesGetsEvenCountsFromItsMappedNeighbours) {
