@@ -168,7 +168,9 @@ void solve_joint(JointProblem& jp, IntegerProgram& P, const std::vector<SegmentC
   }
   std::size_t sides = 0;
   for (const Layout* layout : jp.layouts) sides += layout->segments.size();
-  const double dive_gap = options.dive_gap * std::max(1.0, static_cast<double>(sides) / 1000.0);
+  const double dive_gap = P.columns() > options.branch_and_cut_columns
+                              ? IntegerProgram::inf
+                              : options.dive_gap * std::max(1.0, static_cast<double>(sides) / 1000.0);
   const std::optional<std::vector<double>> x = P.solve(options.time_limit_ms / 1000.0, options.gap, dive_gap);
   if (!x)
     throw no_integer_solution(part_name);
@@ -364,7 +366,8 @@ bool closes_alone(const JointProblem& jp, std::size_t l, const std::vector<Separ
   for (const Separation& sep : separations)
     if (sep.layout == static_cast<int>(l))
       P.add_row({{one.col(0, sep.axis, sep.hi), 1.0}, {one.col(0, sep.axis, sep.lo), -1.0}}, 1.0, IntegerProgram::inf);
-  return P.solve(options.time_limit_ms / 1000.0).has_value();
+  // Any integer point answers: a dive's is taken at any cost.
+  return P.solve(options.time_limit_ms / 1000.0, options.gap, IntegerProgram::inf).has_value();
 }
 
 }  // namespace

@@ -25,6 +25,10 @@ struct QuantizeOptions {
   double dive_gap = 5.0;  ///< a fractional LP optimum is dived from (columns fixed one by one), and the dive's
                          ///< point kept when its cost is within this of the LP's per 1000 sides of the program
                          ///< (at least this: five elements of deviation on unit sides); else branch-and-cut
+  int branch_and_cut_columns = 5000;  ///< above this many columns a dive's integer point is kept at any cost:
+                                      ///< branch-and-cut ran to the time limit and kept the dive's point on
+                                      ///< each such program measured (25k columns, 20 s per solve), and what it
+                                      ///< returns at a time limit depends on the machine's speed
   bool screen_separations = true;  ///< when a round's separations leave the program without a solution, they are
                                    ///< tried on each layout alone; those that contradict its sides or each other
                                    ///< give way to the next choice for their conflict (false: the solve fails)
