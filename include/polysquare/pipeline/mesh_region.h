@@ -76,10 +76,10 @@ struct MeshOptions {
                                        ///< the SJ gate or above twice the edge-ratio gate), and a candidate with more is
                                        ///< refused. A candidate with none wins over one with some. 0 = every quad
                                        ///< must pass both gates (folded quads are never accepted)
-  std::size_t keep_map_above_quads = 2000;  ///< a mapped subregion of more quads keeps its map whatever valid quads
-                                           ///< it holds outside the gates (they get the widest local patches and are
-                                           ///< reported as poor quads): its patch would add more singular nodes
-                                           ///< than the quads it mends
+  std::size_t keep_map_above_quads = 300;  ///< a mapped subregion of more quads keeps its map whatever valid quads
+                                          ///< it holds outside the gates (they get the widest local patches and are
+                                          ///< reported as poor quads): its patch would add more singular nodes
+                                          ///< (about one per seven quads) than the quads it mends
   double feature_tolerance = 0.1;      ///< largest distance, as a fraction of size, between a feature curve and the
                                        ///< mesh edges along it that smoothing allows (SmoothOptions::feature_tolerance);
                                        ///< 0 = unbounded
