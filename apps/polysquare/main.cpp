@@ -507,6 +507,10 @@ int main(int argc, char** argv) {
                        "collapse the quad at a boundary node whose single corner there is flatter than this (degrees), "
                        "leaving an interior valence-3 node; 180 = off")
       ->capture_default_str();
+  cmd_mesh->add_option("--loop-corner-angle", mesh.options.refine.loop_corner_deg,
+                       "add a layer of quads inside a closed feature curve whose single corner there is flatter than "
+                       "this (degrees), leaving eight singular nodes; 180 = off")
+      ->capture_default_str();
   cmd_mesh->add_option("--feature-tolerance", mesh.options.feature_tolerance,
                        "largest distance between a feature curve and the mesh edges along it, as a fraction of the size (0 = unbounded)")
       ->capture_default_str();

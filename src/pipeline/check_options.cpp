@@ -39,6 +39,8 @@ void check_mesh_options(const MeshOptions& o) {
           "in [0, 180] degrees");
   require(within(o.refine.flat_corner_deg, 0.0, 180.0), "--flat-corner-angle", "refine.flat_corner_deg",
           o.refine.flat_corner_deg, "in [0, 180] degrees (180 = off)");
+  require(within(o.refine.loop_corner_deg, 0.0, 180.0), "--loop-corner-angle", "refine.loop_corner_deg",
+          o.refine.loop_corner_deg, "in [0, 180] degrees (180 = off)");
   require(std::isfinite(o.simplify) && o.simplify >= 0, "--simplify", "simplify", o.simplify,
           "a finite number >= 0 (0 = off)");
   require(std::isfinite(o.smooth_curves) && o.smooth_curves >= 0, "--smooth-curves", "smooth_curves", o.smooth_curves, "a finite fraction of the size, at least 0");

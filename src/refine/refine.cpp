@@ -185,7 +185,7 @@ RefineStats pillow_feature_loops(QuadMesh& mesh, const RefineOptions& options) {
         if (ok && side[s][i].size() == 1) {
           const Vec2 p = mesh.nodes[v];
           const double deg = corner_angle_deg(mesh.nodes[s == 0 ? next : prev] - p, mesh.nodes[s == 0 ? prev : next] - p);
-          flat[s] = flat[s] || deg > options.flat_corner_deg;
+          flat[s] = flat[s] || deg > options.loop_corner_deg;
         }
       }
     }

@@ -150,6 +150,7 @@ TEST(MeshOptionsCheck, DefaultsPassAndEveryNaNIsRefusedByName) {
       {"--boundary-weight", [](MeshOptions& o, double v) { o.map.deform.boundary_weight = v; }},
       {"--feature-weight", [](MeshOptions& o, double v) { o.map.deform.feature_weight = v; }},
       {"--flat-corner-angle", [](MeshOptions& o, double v) { o.refine.flat_corner_deg = v; }},
+      {"--loop-corner-angle", [](MeshOptions& o, double v) { o.refine.loop_corner_deg = v; }},
       {"--feature-tolerance", [](MeshOptions& o, double v) { o.feature_tolerance = v; }},
   };
   for (const Case& c : cases)

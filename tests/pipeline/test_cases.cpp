@@ -198,6 +198,14 @@ TEST(Pipeline, PillowingAFeatureLoopSplitsItsFlatCorners) {
     for (auto v : q) quads_at[v]++;
   for (const auto& e : m.feature_edges)
     for (auto v : e) EXPECT_GE(quads_at[v], 4) << "a loop node kept a single quad on one side";
+  // A loop whose flattest single-quad corner is under loop_corner_deg keeps its corners (and no eight
+  // singular nodes): the circle's are near 170 degrees.
+  RefineOptions flatter_only;
+  flatter_only.loop_corner_deg = 179.0;
+  QuadMesh kept = raw.mesh;
+  const RefineStats none = pillow_feature_loops(kept, flatter_only);
+  EXPECT_EQ(none.feature_loops, 0u);
+  EXPECT_EQ(kept.quads, raw.mesh.quads);
   // Through the pipeline (smoothing included) the worst quad, at those corners, improves.
   o.refine.enabled = true;
   const MeshResult refined = mesh_region(region, o);

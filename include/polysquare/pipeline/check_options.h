@@ -13,7 +13,7 @@ constexpr int kMaxThreads = 4096;
 
 /// Throws InputError for an option value the pipeline cannot honour, naming the option (by its CLI flag and its
 /// field) and the value: NaN or infinite values anywhere; size <= 0; min_scaled_jacobian outside [0, 1];
-/// max_edge_ratio below 1; max_poor_fraction outside [0, 1]; corner_threshold_deg and refine.flat_corner_deg outside [0, 180]; simplify,
+/// max_edge_ratio below 1; max_poor_fraction outside [0, 1]; corner_threshold_deg, refine.flat_corner_deg and refine.loop_corner_deg outside [0, 180]; simplify,
 /// map.deform.boundary_weight and map.deform.feature_weight below 0; feature_tolerance < 0 (0 leaves the chords unbounded); max_quads 0;
 /// threads outside [0, kMaxThreads]; parts below 0. A NaN gate would otherwise compare false and pass every mesh.
 void check_mesh_options(const MeshOptions& options);

@@ -17,6 +17,9 @@ struct RefineOptions {
   double flat_corner_deg = 135.0;  ///< a boundary node with one quad whose angle there exceeds this is collapsed
                                    ///< (sin 135 = SJ 0.71: flatter corners are worse than the valence-3 node
                                    ///< the template leaves)
+  double loop_corner_deg = 150.0;  ///< a closed feature loop is pillowed where a single-quad corner on one side is
+                                   ///< flatter than this (sin 150 = SJ 0.5): the layer leaves eight singular
+                                   ///< nodes, more than a corner of SJ 0.5 to 0.7 is worth; 180 = off
 };
 
 struct RefineStats {
