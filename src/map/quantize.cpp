@@ -284,17 +284,8 @@ QuantizeStats solve_with_separations(JointProblem& jp, const std::vector<Segment
         for (const auto& cand : mine) separations.push_back(cand.front());
         if (closes_alone(jp, l, separations, options, part_name)) continue;
         separations.resize(first_new);
-        // Each test solves the layout's program again: a budget in tries x sides keeps a layout of hundreds of
-        // sides (one poly-square for a whole coastal part) from spending a minute here, and leaves a
-        // subregion's layout all the tries it can use; the conflicts left over take no separation.
-        const long long sides = static_cast<long long>(jp.layouts[l]->segments.size());
-        long long budget = std::max<long long>(1, options.screen_sides / std::max(sides, 1LL));
         for (const auto& cand : mine)
           for (const Separation& sep : cand) {
-            if (budget-- <= 0) {
-              rejected.push_back(cand.front());
-              break;
-            }
             separations.push_back(sep);
             if (closes_alone(jp, l, separations, options, part_name)) break;
             separations.pop_back();

@@ -447,7 +447,7 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
         }
       }
       // A valid quad far outside a gate (below half the SJ gate, above twice the edge-ratio gate) costs a small
-      // subregion its map, not a large one: a patch adds about one singular node per ten quads (delta_box 40 m:
+      // subregion its map, not a large one: a patch adds about one singular node per seven quads (delta_box 40 m:
       // a 30,000-quad map was patched for one quad). In a map above options.keep_map_above_quads such quads get
       // the widest local patches first and, if they stay, are kept and reported like the poor quads below.
       auto severe = [&](std::size_t q) {
@@ -483,9 +483,10 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
         const int s = subregion_of(q);
         if (cracked[q] && s >= 0) bad.emplace(s, "its quads do not share their nodes with a neighbour's (a crack) at " + at_text(r.mesh.nodes[r.mesh.quads[q][0]]));
         if (!poor[q]) continue;
-        // Far outside a gate (severe) counts as folded but in large maps: the budget is for quads just outside,
-        // not for near-degenerate ones a patch can mend. A patch is not rebuilt for a valid quad however poor: its given nodes (the input's, the neighbours'
-        // interface nodes) fix that quad's shape for any construction, and each rebuild re-maps the whole part.
+        // Far outside a gate (severe) counts as folded outside large maps: the budget is for quads just outside,
+        // not for near-degenerate ones a patch can mend. A patch is not rebuilt for a valid quad however poor:
+        // its given nodes (the input's, the neighbours' interface nodes) fix that quad's shape for any
+        // construction, and each rebuild re-maps the whole part.
         const bool in_patch = s >= 0 && !r.stats.subregions[static_cast<std::size_t>(s)].mapped;
         if (folded || (!in_patch && severe(q) && !in_large_map(q))) {
           if (s >= 0)

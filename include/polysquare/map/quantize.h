@@ -25,6 +25,7 @@ struct QuantizeOptions {
   double dive_gap = 5.0;  ///< a fractional LP optimum is dived from (columns fixed one by one), and the dive's
                          ///< point kept when its cost is within this of the LP's per 1000 sides of the program
                          ///< (at least this: five elements of deviation on unit sides); else branch-and-cut
+                         ///< (only up to branch_and_cut_columns)
   int branch_and_cut_columns = 5000;  ///< above this many columns a dive's integer point is kept at any cost:
                                       ///< branch-and-cut ran to the time limit and kept the dive's point on
                                       ///< each such program measured (25k columns, 20 s per solve), and what it
@@ -32,7 +33,6 @@ struct QuantizeOptions {
   bool screen_separations = true;  ///< when a round's separations leave the program without a solution, they are
                                    ///< tried on each layout alone; those that contradict its sides or each other
                                    ///< give way to the next choice for their conflict (false: the solve fails)
-  int screen_sides = 20000;  ///< such tries per layout and round stop when tries x the layout's sides exceed this
   double broken_coupling_cost = 1e4;  ///< cost per element of an elastic coupling's mismatch (quantize_layouts
                                       ///< with `broken`): above any saving in deviation, so only what cannot agree breaks
 };
