@@ -619,6 +619,10 @@ int split_listed_subregions(const TriMesh& tri, std::vector<std::int32_t>& trian
     triangles[static_cast<std::size_t>(triangle_part[t])].push_back(static_cast<std::int32_t>(t));
   const std::vector<std::int32_t> before = triangle_part;
   const int parts_before = parts;
+  double part_area = 0.0;
+  for (const auto& tr : tri.triangles) part_area += 0.5 * orient2(tri.vertices[tr[0]], tri.vertices[tr[1]], tri.vertices[tr[2]]);
+  const double cap = std::max(static_cast<double>(options.split_max_subregions),
+                              part_area / (h * h) / static_cast<double>(std::max<std::size_t>(options.split_quads_per_subregion, 1)));
   for (const auto& [p, sides] : listed) {
     const auto& mine = triangles[static_cast<std::size_t>(p)];
     double area = 0.0;
@@ -628,7 +632,7 @@ int split_listed_subregions(const TriMesh& tri, std::vector<std::int32_t>& trian
     }
     const int k = std::clamp((sides + options.sides_per_split - 1) / options.sides_per_split, 2, 8);
     if (area / (h * h) < 16.0 * k || static_cast<int>(mine.size()) < 8 * k) continue;  // pieces of 4 x 4
-    if (parts + k - 1 > options.split_max_subregions) continue;
+    if (static_cast<double>(parts + k - 1) > cap) continue;
     // The subregion's triangles as a mesh of their own (global vertex numbers, the feature curves for the
     // partition energy); piece 0 keeps the number p, the others are appended.
     TriMesh piece;

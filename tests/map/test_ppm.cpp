@@ -286,6 +286,28 @@ TEST(PartitionRepair, FeaturePiecesAndCornerEndsAreSettledInOnePass) {
   }
 }
 
+TEST(PartitionRepair, TheSubregionCapGrowsWithThePartsQuads) {
+  // rect_feature at h = 3 in 4 subregions; subregion 0 listed with 24 sides is split in two. A cap of 4
+  // subregions blocks that split, unless the part's quads over split_quads_per_subregion allow more.
+  const auto [tri, tp] = partitioned("rect_feature", 3.0, 4);
+  double area = 0.0;
+  for (const auto& t : tri.triangles) area += 0.5 * orient2(tri.vertices[t[0]], tri.vertices[t[1]], tri.vertices[t[2]]);
+  PolysquareMapOptions o;
+  o.size = 3.0;
+  o.split_max_subregions = 4;
+  o.split_quads_per_subregion = static_cast<std::size_t>(area / 9.0) + 1;  // one subregion's worth: the cap stays 4
+  std::vector<std::int32_t> capped = tp;
+  int split = -1;
+  EXPECT_EQ(split_listed_subregions(tri, capped, 4, {{0, 24}}, o, "rect_feature", split), 4);
+  EXPECT_EQ(split, 0);
+  EXPECT_EQ(capped, tp);
+  o.split_quads_per_subregion = static_cast<std::size_t>(area / 9.0 / 8.0);  // the part holds 8 of them
+  std::vector<std::int32_t> grown = tp;
+  EXPECT_EQ(split_listed_subregions(tri, grown, 4, {{0, 24}}, o, "rect_feature", split), 5);
+  EXPECT_EQ(split, 1);
+  EXPECT_EQ(std::set<std::int32_t>(grown.begin(), grown.end()).size(), 5u);
+}
+
 namespace {
 MeshResult ppm(const char* name, double size, int parts, int threads = 0) {
   MeshOptions o;

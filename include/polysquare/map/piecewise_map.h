@@ -48,9 +48,10 @@ int split_unmappable_subregions(const TriMesh& tri, std::vector<std::int32_t>& t
 
 /// Splits each listed subregion (subregion, its poly-square side count or 0) by a k-way partition of its
 /// triangles, k = ceil(sides / options.sides_per_split) in [2, 8], unless its pieces would be smaller than 4 x 4
-/// elements or the part would pass options.split_max_subregions; then the partition clean-ups. Returns the new
-/// subregion count and sets `split` to the number split (0 and the partition unchanged when the pieces cannot be
-/// cut into subregions).
+/// elements or the part would pass its cap (options.split_max_subregions, or its quads over
+/// options.split_quads_per_subregion when that is more); then the partition clean-ups. Returns the new subregion
+/// count and sets `split` to the number split (0 and the partition unchanged when the pieces cannot be cut into
+/// subregions).
 int split_listed_subregions(const TriMesh& tri, std::vector<std::int32_t>& triangle_part, int parts,
                             const std::vector<std::pair<int, int>>& listed, const PolysquareMapOptions& options,
                             const std::string& name, int& split);

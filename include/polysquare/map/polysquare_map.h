@@ -65,9 +65,12 @@ struct PolysquareMapOptions {
                                   ///< a straight path cannot make pulled to their targets by stiffening springs
                                   ///< (DeformOptions::pull_when_path_fails), kept when more quads are structured;
                                   ///< last because a pulled map is more distorted than its split pieces' maps
-  int split_max_subregions = 512; ///< no split takes a part beyond this many subregions: the joint quantization's
-                                  ///< time grows with the count (delta_box 100 m: 322 subregions, 0.94 of its quads
+  int split_max_subregions = 512; ///< no split takes a part beyond this many subregions, or beyond its quads over
+                                  ///< split_quads_per_subregion when that is more: the joint quantization's time
+                                  ///< grows with the count (delta_box 100 m: 322 subregions, 0.94 of its quads
                                   ///< mapped; at a cap of 256, 0.84)
+  std::size_t split_quads_per_subregion = 2000;  ///< (see split_max_subregions) large parts may split down to
+                                                 ///< subregions of about this many quads
   int sides_per_split = 12; ///< a failed subregion with s poly-square sides is split into ceil(s / this) pieces
                             ///< (at least 2, at most 8)
   /// PPM: the subregion of every background triangle from an earlier map_part of the same part with the same
