@@ -7,6 +7,8 @@
 #include <unordered_map>
 #include <unordered_set>
 
+#include <oneapi/tbb/parallel_for.h>
+
 #include "polysquare/core/error.h"
 #include "polysquare/fallback/patch.h"
 
@@ -182,26 +184,33 @@ LocalPatchStats remesh_poor_quads(QuadMesh& mesh, const std::vector<std::uint8_t
   const std::size_t nq = mesh.quads.size();
   if (unstructured.size() != nq) unstructured.assign(nq, 0);
   const Cutter cutter(mesh);
-  std::vector<std::uint8_t> used(nq, 0), seen(nq, 0);
-  struct Done {
-    QuadRegion region;
-    QuadMesh patch;
-    std::int32_t part = 0;
-  };
-  std::vector<Done> done;
+  std::vector<std::uint8_t> seen(nq, 0);
+  // The clusters: flagged quads sharing a node, in quad order (poor quads and quads only to be mended apart).
+  std::vector<std::vector<std::int32_t>> clusters;
   for (std::size_t q0 = 0; q0 < nq; ++q0) {
     if (!poor[q0] || seen[q0]) continue;
-    // The cluster: flagged quads sharing a node, in quad order.
     std::vector<std::int32_t> cluster{static_cast<std::int32_t>(q0)};
     seen[q0] = 1;
     for (std::size_t k = 0; k < cluster.size(); ++k)
       for (std::int32_t v : mesh.quads[cluster[k]])
         for (std::int32_t n : cutter.quads_at(v))
-          if (poor[n] == poor[q0] && !seen[n]) {  // poor quads and quads only to be mended cluster apart
+          if (poor[n] == poor[q0] && !seen[n]) {
             seen[n] = 1;
             cluster.push_back(n);
           }
-    ++st.clusters;
+    clusters.push_back(std::move(cluster));
+  }
+  st.clusters = clusters.size();
+  struct Done {
+    QuadRegion region;
+    QuadMesh patch;
+    std::int32_t part = 0;
+  };
+  // The best patch of a cluster's region grown around it, not into quads `used` by the patches of clusters before
+  // it; `reached` receives the quads of the largest region tried.
+  auto search = [&](const std::vector<std::int32_t>& cluster, const std::vector<std::uint8_t>& used,
+                    std::vector<std::int32_t>& reached) {
+    std::optional<Done> best;
     std::vector<std::uint8_t> in(nq, 0);
     std::vector<std::int32_t> quads;
     for (std::int32_t q : cluster)
@@ -209,7 +218,8 @@ LocalPatchStats remesh_poor_quads(QuadMesh& mesh, const std::vector<std::uint8_t
         in[q] = 1;
         quads.push_back(q);
       }
-    if (quads.empty()) continue;  // already inside another cluster's region
+    reached = quads;
+    if (quads.empty()) return best;  // already inside another cluster's region
     // A cluster of valid quads flagged only to be mended (2) is replaced only by a patch whose worst corner
     // beats theirs: a patch always costs singular nodes.
     bool mend_only = true;
@@ -220,10 +230,10 @@ LocalPatchStats remesh_poor_quads(QuadMesh& mesh, const std::vector<std::uint8_t
       cluster_worst = std::min(cluster_worst, quad_min_sj(mesh.nodes[c[0]], mesh.nodes[c[1]], mesh.nodes[c[2]], mesh.nodes[c[3]]));
     }
     // Rings are added until a patch builds whose worst corner reaches the target; the best one seen is kept.
-    std::optional<Done> best;
     double best_worst = mend_only ? cluster_worst : 0.0;
     for (int ring = 1; ring <= options.max_rings; ++ring) {
       cutter.grow(in, quads, used);
+      reached = quads;
       if (quads.size() > options.max_quads) break;
       QuadRegion r;
       if (!cutter.cut(quads, in, r)) continue;
@@ -241,6 +251,24 @@ LocalPatchStats remesh_poor_quads(QuadMesh& mesh, const std::vector<std::uint8_t
       best_worst = worst;
       if (worst >= options.target_sj) break;
     }
+    return best;
+  };
+  // Each cluster is searched on its own, in parallel, as if no patch were made before it; then, in cluster
+  // order, a search that never reached a quad used by an earlier cluster's patch is the one the sequence would
+  // have made (growth is only ever blocked by used quads), and the others are searched again with the quads used
+  // so far: the result does not depend on the thread count.
+  const std::vector<std::uint8_t> none(nq, 0);
+  std::vector<std::optional<Done>> alone(clusters.size());
+  std::vector<std::vector<std::int32_t>> reached(clusters.size());
+  oneapi::tbb::parallel_for(std::size_t{0}, clusters.size(),
+                            [&](std::size_t c) { alone[c] = search(clusters[c], none, reached[c]); });
+  std::vector<std::uint8_t> used(nq, 0);
+  std::vector<Done> done;
+  for (std::size_t c = 0; c < clusters.size(); ++c) {
+    const bool clear = std::none_of(reached[c].begin(), reached[c].end(), [&](std::int32_t q) { return used[q] != 0; }) &&
+                       std::none_of(clusters[c].begin(), clusters[c].end(), [&](std::int32_t q) { return used[q] != 0; });
+    std::vector<std::int32_t> unused;
+    std::optional<Done> best = clear ? std::move(alone[c]) : search(clusters[c], used, unused);
     if (best) {
       for (std::int32_t q : best->region.quads) used[q] = 1;
       done.push_back(std::move(*best));
