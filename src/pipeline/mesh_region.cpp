@@ -479,6 +479,9 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
       std::size_t poor_valid = 0;
       for (std::size_t q = 0; q < metrics.sj.size(); ++q) {
         const bool folded = metrics.sj[q] <= 0.0;
+        // Below the untangling's target a quad counts as folded there, and no solver can use it: it costs even a
+        // large map (delta_box 20 m kept quads of SJ 1e-9 beside a feature crossing).
+        const bool degenerate = !folded && !pinned[q] && metrics.sj[q] < options.smooth.untangle.target_sj;
         if (folded && first_folded == metrics.sj.size()) first_folded = q;
         const int s = subregion_of(q);
         if (cracked[q] && s >= 0) bad.emplace(s, "its quads do not share their nodes with a neighbour's (a crack) at " + at_text(r.mesh.nodes[r.mesh.quads[q][0]]));
@@ -488,10 +491,11 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
         // its given nodes (the input's, the neighbours' interface nodes) fix that quad's shape for any
         // construction, and each rebuild re-maps the whole part.
         const bool in_patch = s >= 0 && !r.stats.subregions[static_cast<std::size_t>(s)].mapped;
-        if (folded || (!in_patch && severe(q) && !in_large_map(q))) {
+        if (folded || (!in_patch && ((severe(q) && !in_large_map(q)) || degenerate))) {
           if (s >= 0)
-            bad.emplace(s, "its map left a " + std::string(folded ? "folded" : "near-degenerate") + " quad at " +
-                               at_text(r.mesh.nodes[r.mesh.quads[q][0]]) + " after smoothing and local patches");
+            bad.emplace(s, "its map left a " +
+                               std::string(folded ? "folded" : degenerate ? "degenerate (SJ " + std::to_string(metrics.sj[q]) + ")" : "near-degenerate") +
+                               " quad at " + at_text(r.mesh.nodes[r.mesh.quads[q][0]]) + " after smoothing and local patches");
           if (folded) continue;
         }
         ++poor_valid;

@@ -23,6 +23,11 @@ MeshResult mesh_checked(const Region& region, const MeshOptions& o, QualityRepor
   EXPECT_TRUE(check_invariants(r.mesh).ok()) << check_invariants(r.mesh).first_problem;
   q = compute_quality(r.mesh);
   EXPECT_EQ(q.inverted, 0u);
+  // No quad is near-degenerate (below the untangling's target) unless an input corner sharper than the SJ gate pins it.
+  const QuadMetrics m = quad_metrics(r.mesh);
+  const std::vector<std::uint8_t> pinned = quads_pinned_by_sharp_input(r.mesh, o.min_scaled_jacobian, o.size);
+  for (std::size_t k = 0; k < m.sj.size(); ++k)
+    if (!pinned[k]) EXPECT_GE(m.sj[k], o.smooth.untangle.target_sj) << "quad " << k;
   return r;
 }
 

@@ -345,6 +345,7 @@ TEST(LocalRepair, ALargeMapKeepsItsMapForValidQuadsFarOutsideTheGates) {
   // fjord_coast at 400 m in 4 subregions, under an SJ gate of 0.5 (so "far outside", below 0.25, occurs) with
   // local patches off and every poor quad accepted: a map above keep_map_above_quads keeps its quads and
   // reports them as poor; below it, the same quads cost their subregion its map (meshed again as a patch).
+  // Degenerate quads (below the untangling's target) cost a map of any size, under another reason.
   const Region region = load("fjord_coast");
   auto run = [&](std::size_t keep_above) {
     MeshOptions o;
