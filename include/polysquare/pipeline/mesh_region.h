@@ -79,7 +79,9 @@ struct MeshOptions {
   std::size_t keep_map_above_quads = 300;  ///< a mapped subregion of more quads keeps its map whatever valid quads
                                           ///< it holds outside the gates (they get the widest local patches and are
                                           ///< reported as poor quads): its patch would add more singular nodes
-                                          ///< (about one per seven quads) than the quads it mends
+                                          ///< (about one per seven quads) than the quads it mends. Not for a quad
+                                          ///< below smooth.untangle.target_sj that no sharp input corner pins: that
+                                          ///< one counts as folded in any map
   double feature_tolerance = 0.1;      ///< largest distance, as a fraction of size, between a feature curve and the
                                        ///< mesh edges along it that smoothing allows (SmoothOptions::feature_tolerance);
                                        ///< 0 = unbounded
