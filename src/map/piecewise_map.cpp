@@ -615,21 +615,23 @@ int split_listed_subregions(const TriMesh& tri, std::vector<std::int32_t>& trian
   split = 0;
   const double h = options.size;
   std::vector<std::vector<std::int32_t>> triangles(static_cast<std::size_t>(parts));
-  for (std::size_t t = 0; t < triangle_part.size(); ++t)
-    triangles[static_cast<std::size_t>(triangle_part[t])].push_back(static_cast<std::int32_t>(t));
+  std::vector<double> sub_area(static_cast<std::size_t>(parts), 0.0);
+  double part_area = 0.0;
+  for (std::size_t t = 0; t < triangle_part.size(); ++t) {
+    const auto p = static_cast<std::size_t>(triangle_part[t]);
+    const auto& tr = tri.triangles[t];
+    const double a = 0.5 * orient2(tri.vertices[tr[0]], tri.vertices[tr[1]], tri.vertices[tr[2]]);
+    triangles[p].push_back(static_cast<std::int32_t>(t));
+    sub_area[p] += a;
+    part_area += a;
+  }
   const std::vector<std::int32_t> before = triangle_part;
   const int parts_before = parts;
-  double part_area = 0.0;
-  for (const auto& tr : tri.triangles) part_area += 0.5 * orient2(tri.vertices[tr[0]], tri.vertices[tr[1]], tri.vertices[tr[2]]);
   const double cap = std::max(static_cast<double>(options.split_max_subregions),
                               part_area / (h * h) / static_cast<double>(std::max<std::size_t>(options.split_quads_per_subregion, 1)));
   for (const auto& [p, sides] : listed) {
     const auto& mine = triangles[static_cast<std::size_t>(p)];
-    double area = 0.0;
-    for (std::int32_t t : mine) {
-      const auto& tr = tri.triangles[static_cast<std::size_t>(t)];
-      area += 0.5 * orient2(tri.vertices[tr[0]], tri.vertices[tr[1]], tri.vertices[tr[2]]);
-    }
+    const double area = sub_area[static_cast<std::size_t>(p)];
     const int k = std::clamp((sides + options.sides_per_split - 1) / options.sides_per_split, 2, 8);
     if (area / (h * h) < 16.0 * k || static_cast<int>(mine.size()) < 8 * k) continue;  // pieces of 4 x 4
     if (static_cast<double>(parts + k - 1) > cap) continue;

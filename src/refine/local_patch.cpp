@@ -7,6 +7,7 @@
 #include <unordered_map>
 #include <unordered_set>
 
+#include <oneapi/tbb/enumerable_thread_specific.h>
 #include <oneapi/tbb/parallel_for.h>
 
 #include "polysquare/core/error.h"
@@ -207,11 +208,11 @@ LocalPatchStats remesh_poor_quads(QuadMesh& mesh, const std::vector<std::uint8_t
     std::int32_t part = 0;
   };
   // The best patch of a cluster's region grown around it, not into quads `used` by the patches of clusters before
-  // it; `reached` receives the quads of the largest region tried.
+  // it; `reached` receives the quads of the largest region tried. `in` (#quads, all 0) is scratch, left all 0:
+  // one per thread, not one per cluster (thousands of clusters on a mesh of millions of quads).
   auto search = [&](const std::vector<std::int32_t>& cluster, const std::vector<std::uint8_t>& used,
-                    std::vector<std::int32_t>& reached) {
+                    std::vector<std::uint8_t>& in, std::vector<std::int32_t>& reached) {
     std::optional<Done> best;
-    std::vector<std::uint8_t> in(nq, 0);
     std::vector<std::int32_t> quads;
     for (std::int32_t q : cluster)
       if (!used[q]) {
@@ -251,6 +252,7 @@ LocalPatchStats remesh_poor_quads(QuadMesh& mesh, const std::vector<std::uint8_t
       best_worst = worst;
       if (worst >= options.target_sj) break;
     }
+    for (std::int32_t q : reached) in[q] = 0;
     return best;
   };
   // Each cluster is searched on its own, in parallel, as if no patch were made before it; then, in cluster
@@ -259,16 +261,16 @@ LocalPatchStats remesh_poor_quads(QuadMesh& mesh, const std::vector<std::uint8_t
   // so far: the result does not depend on the thread count.
   const std::vector<std::uint8_t> none(nq, 0);
   std::vector<std::optional<Done>> alone(clusters.size());
-  std::vector<std::vector<std::int32_t>> reached(clusters.size());
+  std::vector<std::vector<std::int32_t>> reached(clusters.size());  // each holds its cluster
+  oneapi::tbb::enumerable_thread_specific<std::vector<std::uint8_t>> scratch([nq] { return std::vector<std::uint8_t>(nq, 0); });
   oneapi::tbb::parallel_for(std::size_t{0}, clusters.size(),
-                            [&](std::size_t c) { alone[c] = search(clusters[c], none, reached[c]); });
+                            [&](std::size_t c) { alone[c] = search(clusters[c], none, scratch.local(), reached[c]); });
   std::vector<std::uint8_t> used(nq, 0);
   std::vector<Done> done;
+  std::vector<std::int32_t> again;
   for (std::size_t c = 0; c < clusters.size(); ++c) {
-    const bool clear = std::none_of(reached[c].begin(), reached[c].end(), [&](std::int32_t q) { return used[q] != 0; }) &&
-                       std::none_of(clusters[c].begin(), clusters[c].end(), [&](std::int32_t q) { return used[q] != 0; });
-    std::vector<std::int32_t> unused;
-    std::optional<Done> best = clear ? std::move(alone[c]) : search(clusters[c], used, unused);
+    const bool clear = std::none_of(reached[c].begin(), reached[c].end(), [&](std::int32_t q) { return used[q] != 0; });
+    std::optional<Done> best = clear ? std::move(alone[c]) : search(clusters[c], used, scratch.local(), again);
     if (best) {
       for (std::int32_t q : best->region.quads) used[q] = 1;
       done.push_back(std::move(*best));
