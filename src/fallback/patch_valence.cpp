@@ -6,6 +6,8 @@
 #include <random>
 #include <unordered_set>
 
+#include <oneapi/tbb/parallel_for.h>
+
 #include "polysquare/core/geometry.h"
 #include "polysquare/smooth/smooth.h"
 
@@ -13,7 +15,9 @@ namespace polysquare::patch_valence {
 namespace {
 
 using Quad = std::array<std::int32_t, 4>;
-using EdgeQuad = std::pair<std::uint64_t, std::int32_t>;
+
+// Patches of more quads than this search their moves in parallel, in blocks of about this many quads.
+constexpr std::size_t kQuadsPerBlock = 2048;
 
 Quad rotated_to(Quad q, std::int32_t first) {
   while (q[0] != first) std::rotate(q.begin(), q.begin() + 1, q.end());
@@ -21,12 +25,14 @@ Quad rotated_to(Quad q, std::int32_t first) {
 }
 
 // A candidate move: the quads it replaces and what replaces them, with the energy change.
+// A flip replaces two quads by two, a collapse removes one (fixed arrays: a pass finds tens of thousands).
 struct Move {
-  double gain = 0.0;               // energy decrease (> 0)
-  std::vector<std::int32_t> quads;  // indices of the quads replaced (the first ones are rewritten, the rest removed)
-  std::vector<Quad> by;             // new quads, as many as `quads` or one fewer (a collapse)
+  double gain = 0.0;                   // energy decrease (> 0)
+  std::array<std::int32_t, 2> quads{};  // the quads replaced: a flip's two (rewritten), a collapse's one (removed)
+  std::array<Quad, 2> by{};             // a flip's new quads
   std::int32_t merged = -1, removed = -1;  // a collapse: the node kept and the one merged into it
   Vec2 at{};                               // the kept node's new position
+  int replaced() const { return merged >= 0 ? 1 : 2; }
 };
 
 class Relaxer {
@@ -62,18 +68,27 @@ class Relaxer {
   std::size_t pass(Moves& moves, std::size_t budget, std::mt19937* plateau = nullptr) {
     min_gain_ = plateau ? -1e-9 : 1e-9;
     index();
-    std::vector<Move> found;
-    for (std::size_t i = 0; i < m_.quads.size(); ++i)
-      for (int k = 0; k < 4; ++k) {
-        const std::uint64_t key = edge_key(m_.quads[i][k], m_.quads[i][(k + 1) % 4]);
-        const auto [lo, hi] = edge_range(key);
-        if (hi - lo == 2 && lo->second == static_cast<std::int32_t>(i) && !kept_.count(key))
-          flip_candidates(lo->second, (lo + 1)->second, found);
+    // The candidates in a fixed order (flips by quad and side, then collapses by quad and diagonal), gathered
+    // in blocks of quads that large patches search in parallel and join in block order.
+    const std::size_t nq = m_.quads.size(), blocks = std::max<std::size_t>(1, nq / kQuadsPerBlock);
+    std::vector<std::vector<Move>> flips(blocks), collapses(blocks);
+    auto search = [&](std::size_t block) {
+      for (std::size_t i = block * nq / blocks; i < (block + 1) * nq / blocks; ++i) {
+        for (int k = 0; k < 4; ++k) {
+          const std::int32_t a = m_.quads[i][k], b = m_.quads[i][(k + 1) % 4];
+          std::array<std::int32_t, 2> two{};
+          if (edge_quads(a, b, two) == 2 && two[0] == static_cast<std::int32_t>(i) && !kept_.count(edge_key(a, b)))
+            flip_candidates(two[0], two[1], flips[block]);
+        }
+        collapse_candidate(static_cast<std::int32_t>(i), 0, collapses[block]);
+        collapse_candidate(static_cast<std::int32_t>(i), 1, collapses[block]);
       }
-    for (std::size_t i = 0; i < m_.quads.size(); ++i) {
-      collapse_candidate(static_cast<std::int32_t>(i), 0, found);
-      collapse_candidate(static_cast<std::int32_t>(i), 1, found);
-    }
+    };
+    if (blocks == 1) search(0);
+    else oneapi::tbb::parallel_for(std::size_t{0}, blocks, search);
+    std::vector<Move> found;
+    for (const auto* part : {&flips, &collapses})
+      for (const std::vector<Move>& b : *part) found.insert(found.end(), b.begin(), b.end());
     if (plateau) {
       found.erase(std::remove_if(found.begin(), found.end(), [](const Move& mv) { return mv.gain > 1e-9; }), found.end());
       std::shuffle(found.begin(), found.end(), *plateau);
@@ -86,15 +101,15 @@ class Relaxer {
     for (const Move& mv : found) {
       if (made >= budget) break;
       bool free = true;
-      for (std::int32_t q : mv.quads)
-        for (std::int32_t v : m_.quads[static_cast<std::size_t>(q)]) free = free && !touched[static_cast<std::size_t>(v)];
+      for (int j = 0; j < mv.replaced(); ++j)
+        for (std::int32_t v : m_.quads[static_cast<std::size_t>(mv.quads[static_cast<std::size_t>(j)])]) free = free && !touched[static_cast<std::size_t>(v)];
       if (mv.merged >= 0)  // a collapse changes every quad at both nodes
         for (std::int32_t v : {mv.merged, mv.removed})
           for (std::int32_t q : quads_at_[static_cast<std::size_t>(v)])
             for (std::int32_t u : m_.quads[static_cast<std::size_t>(q)]) free = free && !touched[static_cast<std::size_t>(u)];
       if (!free) continue;
-      for (std::int32_t q : mv.quads)
-        for (std::int32_t v : m_.quads[static_cast<std::size_t>(q)]) touched[static_cast<std::size_t>(v)] = 1;
+      for (int j = 0; j < mv.replaced(); ++j)
+        for (std::int32_t v : m_.quads[static_cast<std::size_t>(mv.quads[static_cast<std::size_t>(j)])]) touched[static_cast<std::size_t>(v)] = 1;
       if (mv.merged >= 0) {
         for (std::int32_t v : {mv.merged, mv.removed})
           for (std::int32_t q : quads_at_[static_cast<std::size_t>(v)])
@@ -103,12 +118,13 @@ class Relaxer {
           for (std::int32_t& v : m_.quads[static_cast<std::size_t>(q)])
             if (v == mv.removed) v = mv.merged;
         m_.nodes[static_cast<std::size_t>(mv.merged)] = mv.at;
-        gone.push_back(mv.quads.back());
+        gone.push_back(mv.quads[0]);
         ++moves.collapses;
       } else {
+        for (std::size_t k = 0; k < 2; ++k) m_.quads[static_cast<std::size_t>(mv.quads[k])] = mv.by[k];
         ++moves.flips;
       }
-      for (std::size_t k = 0; k < mv.by.size(); ++k) m_.quads[static_cast<std::size_t>(mv.quads[k])] = mv.by[k];
+      stale_ = true;
       ++made;
     }
     if (!gone.empty()) {  // one compaction, quad_part alongside
@@ -130,6 +146,7 @@ class Relaxer {
   }
 
   double energy_now() { index(); return energy(); }
+  void quads_replaced() { stale_ = true; }  // the caller put other quads into the mesh
   void finish(Moves& moves) {
     index();
     moves.energy_after = energy();
@@ -145,10 +162,12 @@ class Relaxer {
   Vec2 pos(std::int32_t v) const { return m_.nodes[static_cast<std::size_t>(v)]; }
   bool is_given(std::int32_t v) const { return static_cast<std::size_t>(v) < given_; }
 
-  // Rebuilt after every pass, so it keeps its allocations (the per-node lists are cleared, not freed) and the
-  // edges are one sorted array instead of a hash of lists: on a 30k-quad patch, allocation and hashing were
-  // three quarters of the moves' time.
+  // Rebuilt after every change of the quads (not of the positions), keeping its allocations: the per-node lists
+  // are cleared, not freed. An edge's quads are found from its end node's quads (about four), not from a table
+  // of all edges: sorting one was a fifth of the moves' time on 20-50k-quad patches.
   void index() {
+    if (!stale_) return;
+    stale_ = false;
     const std::size_t nn = m_.nodes.size();
     val_.assign(nn, 0);
     quads_at_.resize(nn);
@@ -157,31 +176,35 @@ class Relaxer {
       quads_at_[v].clear();
       neighbours_[v].clear();
     }
-    edge_quads_.clear();
-    edge_quads_.reserve(4 * m_.quads.size());
     for (std::size_t i = 0; i < m_.quads.size(); ++i) {
       const Quad& q = m_.quads[i];
       for (int k = 0; k < 4; ++k) {
         const auto v = static_cast<std::size_t>(q[k]);
         val_[v]++;
         quads_at_[v].push_back(static_cast<std::int32_t>(i));
-        edge_quads_.push_back({edge_key(q[k], q[(k + 1) % 4]), static_cast<std::int32_t>(i)});
         auto& nb = neighbours_[v];
         for (std::int32_t u : {q[(k + 1) % 4], q[(k + 3) % 4]})
           if (std::find(nb.begin(), nb.end(), u) == nb.end()) nb.push_back(u);
       }
     }
-    std::sort(edge_quads_.begin(), edge_quads_.end());  // by edge, each edge's quads in increasing order
   }
 
-  // The quads of the edge with `key`, in increasing order (an empty range when it is no edge).
-  std::pair<const EdgeQuad*, const EdgeQuad*> edge_range(std::uint64_t key) const {
-    const EdgeQuad* first = edge_quads_.data();
-    const EdgeQuad* last = first + edge_quads_.size();
-    const EdgeQuad* lo = std::lower_bound(first, last, EdgeQuad{key, std::numeric_limits<std::int32_t>::min()});
-    const EdgeQuad* hi = lo;
-    while (hi != last && hi->first == key) ++hi;
-    return {lo, hi};
+  // How many times the edge (a, b) is a side of a quad (a quad counted once per side), and the first two such
+  // quads in increasing order in `two`.
+  int edge_quads(std::int32_t a, std::int32_t b, std::array<std::int32_t, 2>& two) const {
+    int n = 0;
+    std::int32_t last = -1;
+    for (std::int32_t i : quads_at_[static_cast<std::size_t>(a)]) {
+      if (i == last) continue;  // a quad holding a twice is listed twice; its sides are counted once each
+      last = i;
+      const Quad& q = m_.quads[static_cast<std::size_t>(i)];
+      for (int k = 0; k < 4; ++k)
+        if ((q[k] == a && q[(k + 1) % 4] == b) || (q[k] == b && q[(k + 1) % 4] == a)) {
+          if (n < 2) two[static_cast<std::size_t>(n)] = i;
+          ++n;
+        }
+    }
+    return n;
   }
 
   // Positive area at the current positions (with `moved` at `to`), and no corner of three given nodes that is
@@ -207,8 +230,8 @@ class Relaxer {
   }
   bool may_lose_one(std::int32_t v) const { return val_[static_cast<std::size_t>(v)] > (is_given(v) ? 1 : 3); }
   bool is_edge(std::int32_t a, std::int32_t b) const {
-    const auto [lo, hi] = edge_range(edge_key(a, b));
-    return lo != hi;
+    std::array<std::int32_t, 2> two{};
+    return edge_quads(a, b, two) > 0;
   }
 
   void flip_candidates(std::int32_t i1, std::int32_t i2, std::vector<Move>& out) const {
@@ -273,7 +296,7 @@ class Relaxer {
         if (v == c) v = a;
       if (!valid(moved, a, to)) return;
     }
-    out.push_back({gain, {i}, {}, a, c, to});
+    out.push_back({gain, {i, -1}, {}, a, c, to});
   }
 
   // Laplacian sweeps over the free nodes still in a quad, so the next pass judges moves at sensible positions.
@@ -299,7 +322,7 @@ class Relaxer {
   std::vector<int> val_;
   std::vector<std::vector<std::int32_t>> quads_at_;
   std::vector<std::vector<std::int32_t>> neighbours_;
-  std::vector<EdgeQuad> edge_quads_;  // (edge key, quad), sorted
+  bool stale_ = true;  // the quads changed since index() ran
 };
 
 }  // namespace
@@ -349,6 +372,7 @@ Moves relax_valences(QuadMesh& mesh, std::size_t given, const std::vector<std::a
     }
   }
   mesh = std::move(best);
+  r.quads_replaced();
   moves = best_moves;
   r.finish(moves);
   return moves;

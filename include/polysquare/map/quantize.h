@@ -30,9 +30,9 @@ struct QuantizeOptions {
                                       ///< branch-and-cut ran to the time limit and kept the dive's point on
                                       ///< each such program measured (25k columns, 20 s per solve), and what it
                                       ///< returns at a time limit depends on the machine's speed
-  bool screen_separations = true;  ///< when a round's separations leave the program without a solution, they are
-                                   ///< tried on each layout alone; those that contradict its sides or each other
-                                   ///< give way to the next choice for their conflict (false: the solve fails)
+  bool screen_separations = true;  ///< each round's separations are tried on their layout alone before they join
+                                   ///< the program; those that contradict its sides or each other give way to the
+                                   ///< next choice for their conflict (false: added as found, and the solve fails)
   double broken_coupling_cost = 1e4;  ///< cost per element of an elastic coupling's mismatch (quantize_layouts
                                       ///< with `broken`): above any saving in deviation, so only what cannot agree breaks
 };
