@@ -319,12 +319,12 @@ QuantizeStats solve_with_separations(JointProblem& jp, const std::vector<Segment
     // solved again from scratch (3 s per solve at 30k columns, about ten times the warm solve).
     // Layouts are screened in parallel (each sees only its own separations), then joined in their order.
     if (options.screen_separations) {
+      std::vector<std::vector<Separation>> earlier(jp.layouts.size());  // each layout's from the rounds before
+      for (std::size_t k = 0; k < round_start; ++k) earlier[static_cast<std::size_t>(separations[k].layout)].push_back(separations[k]);
       std::vector<std::vector<Separation>> kept(choices.size()), refused(choices.size());
       oneapi::tbb::parallel_for(std::size_t{0}, choices.size(), [&](std::size_t i) {
         const auto& [l, mine] = choices[i];
-        std::vector<Separation> now;  // layout l's separations: the earlier rounds', then this round's
-        for (std::size_t k = 0; k < round_start; ++k)
-          if (separations[k].layout == static_cast<int>(l)) now.push_back(separations[k]);
+        std::vector<Separation> now = earlier[l];  // then this round's
         const std::size_t first_new = now.size();
         for (const auto& cand : mine) now.push_back(cand.front());
         if (!closes_alone(jp, l, now, options, part_name)) {
