@@ -67,18 +67,37 @@ class Relaxer {
   std::size_t pass(Moves& moves, std::size_t budget, std::mt19937* plateau = nullptr) {
     min_gain_ = plateau ? -1e-9 : 1e-9;
     index();
+    // A move changes the valence of the nodes of its quads only, and each node at its target adds at least 1 to
+    // the energy when it changes: a move that does not raise the energy has a node off its target among its
+    // quads' nodes. Quads with none (most of a large patch after the first passes) are not searched.
+    const std::size_t nn = m_.nodes.size();
+    off_quad_.assign(m_.quads.size(), 0);
+    near_off_.assign(nn, 0);
+    for (std::size_t i = 0; i < m_.quads.size(); ++i)
+      for (std::int32_t v : m_.quads[i]) {
+        const auto u = static_cast<std::size_t>(v);
+        if (std::abs(val_[u] - target_[u]) > 1e-9) off_quad_[i] = 1;
+      }
+    for (std::size_t i = 0; i < m_.quads.size(); ++i)
+      if (off_quad_[i])
+        for (std::int32_t v : m_.quads[i]) near_off_[static_cast<std::size_t>(v)] = 1;
     // The candidates in a fixed order (flips by quad and side, then collapses by quad and diagonal), gathered
     // in blocks of quads that large patches search in parallel and join in block order.
     const std::size_t nq = m_.quads.size(), blocks = std::max<std::size_t>(1, nq / kQuadsPerBlock);
     std::vector<std::vector<Move>> flips(blocks), collapses(blocks);
     auto search = [&](std::size_t block) {
       for (std::size_t i = block * nq / blocks; i < (block + 1) * nq / blocks; ++i) {
+        // A flip's second quad shares two nodes with quad i: none near an off node, no move from quad i.
+        if (std::none_of(m_.quads[i].begin(), m_.quads[i].end(), [&](std::int32_t v) { return near_off_[static_cast<std::size_t>(v)] != 0; }))
+          continue;
         for (int k = 0; k < 4; ++k) {
           const std::int32_t a = m_.quads[i][k], b = m_.quads[i][(k + 1) % 4];
           std::array<std::int32_t, 2> two{};
-          if (edge_quads(a, b, two) == 2 && two[0] == static_cast<std::int32_t>(i) && !kept_.count(edge_key(a, b)))
+          if (edge_quads(a, b, two) == 2 && two[0] == static_cast<std::int32_t>(i) &&
+              (off_quad_[i] || off_quad_[static_cast<std::size_t>(two[1])]) && !kept_.count(edge_key(a, b)))
             flip_candidates(two[0], two[1], flips[block]);
         }
+        if (!off_quad_[i]) continue;
         collapse_candidate(static_cast<std::int32_t>(i), 0, collapses[block]);
         collapse_candidate(static_cast<std::int32_t>(i), 1, collapses[block]);
       }
@@ -319,6 +338,7 @@ class Relaxer {
   std::unordered_set<std::uint64_t> kept_;
   std::vector<double> target_;
   std::vector<int> val_;
+  std::vector<std::uint8_t> off_quad_, near_off_;  // per pass: quads with a node off its target, nodes of those
   std::vector<std::vector<std::int32_t>> quads_at_;
   std::vector<std::vector<std::int32_t>> neighbours_;
   bool stale_ = true;  // the quads changed since index() ran
