@@ -54,6 +54,7 @@ struct MeshArgs {
   bool depth_given = false;
   std::string bathymetry, bathymetry_positive = "up";  ///< raster of elevations (up) or depths (down)
   std::string msh_version = "2.2", msh_features = "nodes";
+  std::size_t pieces = 0;  ///< --pieces: .vtu pieces of a .pvtu output (0 = one per million quads)
   InputOptions input_options;
   MeshOptions options;
   const MpiDriver* mpi = nullptr;  ///< the processes of this run (mpirun); only rank 0 writes and reports
@@ -105,7 +106,9 @@ int run_mesh(const MeshArgs& args) {
                      short_number(args.read_time_limit));
   check_outputs(args);  // before minutes of meshing
   const std::string out_ext = lower_extension(args.output);
-  if ((args.depth_given || !args.bathymetry.empty()) && (out_ext == ".msh" || out_ext == ".vtu"))
+  if (args.pieces > 0 && out_ext != ".pvtu")
+    throw InputError("--pieces writes a parallel VTK file: -o must end in .pvtu, not " + args.output);
+  if ((args.depth_given || !args.bathymetry.empty()) && (out_ext == ".msh" || out_ext == ".vtu" || out_ext == ".pvtu"))
     std::cerr << "warning: depths are written to .gr3, .nc and .2dm files only, not to " << args.output << "\n";
   if (args.depth_given && !args.bathymetry.empty()) throw InputError("--depth and --bathymetry exclude each other");
   if (!args.bathymetry.empty() && !fs::is_regular_file(args.bathymetry))
@@ -239,7 +242,8 @@ int run_mesh(const MeshArgs& args) {
                                : args.depth_given ? std::vector<double>(result.mesh.nodes.size(), args.depth)
                                                   : std::vector<double>{},
                                notes.input_crs,
-                               std::move(groups)};
+                               std::move(groups),
+                               args.pieces};
   write_mesh(args.output, result.mesh, write);
   if (!args.report.empty())
     write_file_atomically(args.report, [&](std::ostream& os) { os << report_text(result.report); }, false);
@@ -446,7 +450,7 @@ int main(int argc, char** argv) {
   cmd_mesh->add_option("--crs", mesh.input_options.crs,
                        "projected CRS to mesh geographic input in, e.g. EPSG:32615 (default: UTM zone of the centre)");
   cmd_mesh->add_option("--size", mesh.options.size, "target quad edge length h, in region units (metres for geographic input)")->required();
-  cmd_mesh->add_option("-o,--output", mesh.output, "output mesh (.msh Gmsh, .vtu VTK, .gr3 SCHISM hgrid, .nc D-Flow FM UGRID net file, .2dm SMS, .exo Exodus II)")->required();
+  cmd_mesh->add_option("-o,--output", mesh.output, "output mesh (.msh Gmsh, .vtu VTK, .pvtu VTK in pieces, .gr3 SCHISM hgrid, .nc D-Flow FM UGRID net file, .2dm SMS, .exo Exodus II)")->required();
   cmd_mesh->add_option("--depth", mesh.depth,
                        "constant water depth, positive down, for .gr3 (depth column), .nc (mesh2d_node_z = -depth) "
                        "and .2dm files");
@@ -515,6 +519,10 @@ int main(int argc, char** argv) {
                        "largest distance between a feature curve and the mesh edges along it, as a fraction of the size (0 = unbounded)")
       ->capture_default_str();
   cmd_mesh->add_flag("--binary", mesh.binary, "write binary MSH");
+  cmd_mesh->add_option("--pieces", mesh.pieces,
+                       "with -o X.pvtu: the number of .vtu pieces X_<k>.vtu (the quads in subregion order, in runs of "
+                       "equal length), written in parallel (0 = one per million quads)")
+      ->check(CLI::Range(std::size_t{0}, std::size_t{4096}))->capture_default_str();
   cmd_mesh->add_option("--msh-version", mesh.msh_version,
                        "MSH version: 2.2 (read by Gmsh, meshio, deal.II, MFEM, MOOSE, DUNE) or 4.1 (Gmsh's current; "
                        "not MFEM or DUNE)")

@@ -184,7 +184,7 @@ void write_2dm(const fs::path& path, const QuadMesh& mesh, const MeshWriteOption
 }
 
 const std::vector<std::string>& output_extensions() {
-  static const std::vector<std::string> known{".msh", ".vtu", ".gr3", ".nc", ".2dm", ".exo"};
+  static const std::vector<std::string> known{".msh", ".vtu", ".pvtu", ".gr3", ".nc", ".2dm", ".exo"};
   return known;
 }
 

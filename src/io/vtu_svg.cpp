@@ -1,5 +1,10 @@
 // VTK XML unstructured grid (write; read ASCII), the SVG picture, and the extension dispatch.
 #include <algorithm>
+#include <cstring>
+#include <numeric>
+#include <unordered_map>
+
+#include <oneapi/tbb/parallel_for.h>
 #include <fstream>
 #include <sstream>
 
@@ -97,9 +102,12 @@ QuadMesh parse_vtu(const std::string& xml, const std::string& name) {
   return mesh;
 }
 
-void write_vtu(const std::filesystem::path& path, const QuadMesh& mesh) {
+namespace {
+
+// The XML of one VTU file (a whole mesh, or one piece of a .pvtu).
+void vtu_text(std::ostream& os, const QuadMesh& mesh) {
   const QuadMetrics q = quad_metrics(mesh);
-  write_file_atomically(path, [&](std::ostream& os) {
+  {
     os.precision(17);
     os << "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\">\n"
        << "<UnstructuredGrid>\n";
@@ -140,15 +148,134 @@ void write_vtu(const std::filesystem::path& path, const QuadMesh& mesh) {
       if (info.known) os << "<!-- crs_name: " << comment_text(info.name) << " -->\n<!-- crs_wkt: " << comment_text(info.wkt) << " -->\n";
     }
     os << "</VTKFile>\n";
+  }
+}
+
+// Piece k of `pieces` of a .pvtu: `<stem>_<k>.vtu` beside it.
+std::filesystem::path piece_path(const std::filesystem::path& pvtu, std::size_t k) {
+  return pvtu.parent_path() / (pvtu.stem().string() + "_" + std::to_string(k) + ".vtu");
+}
+
+// The quads of a mesh cut into `pieces` runs of (nearly) equal length in the order of their subregion (quad_part),
+// so each piece is a few whole neighbouring subregions; each piece with the nodes its quads use.
+std::vector<QuadMesh> cut_into_pieces(const QuadMesh& mesh, std::size_t pieces) {
+  std::vector<std::size_t> order(mesh.quads.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  if (mesh.quad_part.size() == mesh.quads.size())
+    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return mesh.quad_part[a] < mesh.quad_part[b]; });
+  std::vector<QuadMesh> out(pieces);
+  oneapi::tbb::parallel_for(std::size_t{0}, pieces, [&](std::size_t k) {
+    QuadMesh& piece = out[k];
+    piece.crs = mesh.crs;
+    piece.units = mesh.units;
+    std::unordered_map<std::int32_t, std::int32_t> local;
+    const std::size_t from = k * order.size() / pieces, to = (k + 1) * order.size() / pieces;
+    for (std::size_t i = from; i < to; ++i) {
+      const std::size_t q = order[i];
+      std::array<std::int32_t, 4> quad{};
+      for (int c = 0; c < 4; ++c) {
+        const std::int32_t v = mesh.quads[q][static_cast<std::size_t>(c)];
+        auto [it, added] = local.try_emplace(v, static_cast<std::int32_t>(piece.nodes.size()));
+        if (added) {
+          piece.nodes.push_back(mesh.nodes[static_cast<std::size_t>(v)]);
+          if (!mesh.node_kind.empty()) piece.node_kind.push_back(mesh.node_kind[static_cast<std::size_t>(v)]);
+        }
+        quad[static_cast<std::size_t>(c)] = it->second;
+      }
+      piece.quads.push_back(quad);
+      if (!mesh.quad_part.empty()) piece.quad_part.push_back(mesh.quad_part[q]);
+    }
+  });
+  return out;
+}
+
+}  // namespace
+
+void write_vtu(const std::filesystem::path& path, const QuadMesh& mesh) {
+  write_file_atomically(path, [&](std::ostream& os) { vtu_text(os, mesh); }, false);
+}
+
+std::size_t pvtu_pieces(const QuadMesh& mesh, std::size_t pieces) {
+  if (pieces == 0) pieces = (mesh.quads.size() + kQuadsPerPiece - 1) / kQuadsPerPiece;
+  return std::clamp<std::size_t>(pieces, 1, std::max<std::size_t>(1, mesh.quads.size()));
+}
+
+void write_pvtu(const std::filesystem::path& path, const QuadMesh& mesh, std::size_t pieces) {
+  pieces = pvtu_pieces(mesh, pieces);
+  const std::vector<QuadMesh> cut = cut_into_pieces(mesh, pieces);
+  // Pieces are written in parallel, each to its own temporary; all are committed with the .pvtu (atomic_file.h).
+  oneapi::tbb::parallel_for(std::size_t{0}, pieces, [&](std::size_t k) { write_vtu(piece_path(path, k), cut[k]); });
+  write_file_atomically(path, [&](std::ostream& os) {
+    os << "<?xml version=\"1.0\"?>\n<VTKFile type=\"PUnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\">\n"
+       << "<PUnstructuredGrid GhostLevel=\"0\">\n";
+    if (!mesh.crs.empty()) os << "<PFieldData>\n<PDataArray type=\"Int32\" Name=\"crs_epsg\"/>\n</PFieldData>\n";
+    os << "<PPoints>\n<PDataArray type=\"Float64\" NumberOfComponents=\"3\"/>\n</PPoints>\n"
+       << "<PCells>\n<PDataArray type=\"Int64\" Name=\"connectivity\"/>\n<PDataArray type=\"Int64\" Name=\"offsets\"/>\n"
+       << "<PDataArray type=\"UInt8\" Name=\"types\"/>\n</PCells>\n<PCellData Scalars=\"scaled_jacobian\">\n";
+    for (const char* name : {"scaled_jacobian", "eta", "skewness", "edge_ratio"})
+      os << "<PDataArray type=\"Float64\" Name=\"" << name << "\"/>\n";
+    os << "<PDataArray type=\"Int32\" Name=\"part\"/>\n</PCellData>\n"
+       << "<PPointData>\n<PDataArray type=\"UInt8\" Name=\"node_kind\"/>\n</PPointData>\n";
+    for (std::size_t k = 0; k < pieces; ++k) os << "<Piece Source=\"" << piece_path(path, k).filename().string() << "\"/>\n";
+    os << "</PUnstructuredGrid>\n";
+    if (!mesh.crs.empty()) os << "<!-- crs: " << comment_text(mesh.crs) << " -->\n";
+    os << "</VTKFile>\n";
   }, false);
 }
+
+QuadMesh read_pvtu(const std::filesystem::path& path) {
+  const std::string xml = read_file(path);
+  if (xml.find("<PUnstructuredGrid") == std::string::npos)
+    throw InputError(path.string() + ": not a VTK PUnstructuredGrid file");
+  // The pieces, their nodes merged where they coincide (a piece's nodes on its seams are the same coordinates,
+  // written with 17 digits, in its neighbours).
+  QuadMesh mesh;
+  std::unordered_map<std::uint64_t, std::vector<std::int32_t>> at;  // hash of a position -> nodes there
+  auto key = [](Vec2 p) {
+    std::uint64_t a = 0, b = 0;
+    std::memcpy(&a, &p.x, sizeof a);
+    std::memcpy(&b, &p.y, sizeof b);
+    return a * 0x9E3779B97F4A7C15ull ^ b;
+  };
+  std::size_t pieces = 0;
+  for (std::size_t from = xml.find("<Piece"); from != std::string::npos; from = xml.find("<Piece", from + 1)) {
+    const std::size_t src = xml.find("Source=\"", from), end = xml.find('>', from);
+    if (src == std::string::npos || src > end) throw InputError(path.string() + ": a Piece without a Source");
+    const std::size_t close = xml.find('"', src + 8);
+    if (close == std::string::npos || close > end) throw InputError(path.string() + ": a Piece with an unterminated Source");
+    const std::filesystem::path source = path.parent_path() / xml.substr(src + 8, close - src - 8);
+    const QuadMesh piece = read_vtu(source);
+    std::vector<std::int32_t> index(piece.nodes.size());
+    for (std::size_t v = 0; v < piece.nodes.size(); ++v) {
+      const Vec2 p = piece.nodes[v];
+      auto& there = at[key(p)];
+      std::int32_t found = -1;
+      for (std::int32_t u : there)
+        if (mesh.nodes[static_cast<std::size_t>(u)].x == p.x && mesh.nodes[static_cast<std::size_t>(u)].y == p.y) found = u;
+      if (found < 0) {
+        found = static_cast<std::int32_t>(mesh.nodes.size());
+        mesh.nodes.push_back(p);
+        there.push_back(found);
+      }
+      index[v] = found;
+    }
+    for (const auto& q : piece.quads) mesh.quads.push_back({index[q[0]], index[q[1]], index[q[2]], index[q[3]]});
+    for (const auto& t : piece.triangles) mesh.triangles.push_back({index[t[0]], index[t[1]], index[t[2]]});
+    if (mesh.crs.empty()) mesh.crs = piece.crs;
+    ++pieces;
+  }
+  if (pieces == 0) throw InputError(path.string() + ": no Piece");
+  return mesh;
+}
+
 
 QuadMesh read_mesh(const std::filesystem::path& path) {
   const std::string ext = lower_extension(path);
   QuadMesh mesh;
   if (ext == ".msh") mesh = read_msh(path);
   else if (ext == ".vtu") mesh = read_vtu(path);
-  else throw InputError(path.string() + ": unsupported mesh format '" + ext + "' (supported: .msh, .vtu)");
+  else if (ext == ".pvtu") mesh = read_pvtu(path);
+  else throw InputError(path.string() + ": unsupported mesh format '" + ext + "' (supported: .msh, .vtu, .pvtu)");
   // Orientation by majority of signed cell areas: individual inverted cells stay inverted.
   double area = 0.0;
   for (const auto& q : mesh.quads)
@@ -165,11 +292,12 @@ void write_mesh(const std::filesystem::path& path, const QuadMesh& mesh, const M
   const std::string ext = lower_extension(path);
   if (ext == ".msh") return write_msh(path, mesh, options);
   if (ext == ".vtu") return write_vtu(path, mesh);
+  if (ext == ".pvtu") return write_pvtu(path, mesh, options.pieces);
   if (ext == ".gr3") return write_gr3(path, mesh, options);
   if (ext == ".nc") return write_ugrid(path, mesh, options);
   if (ext == ".2dm") return write_2dm(path, mesh, options);
   if (ext == ".exo") return write_exodus(path, mesh, options);
-  throw InputError(path.string() + ": unsupported output format '" + ext + "' (supported: .msh, .vtu, .gr3, .nc, .2dm, .exo)");
+  throw InputError(path.string() + ": unsupported output format '" + ext + "' (supported: .msh, .vtu, .pvtu, .gr3, .nc, .2dm, .exo)");
 }
 
 void write_svg(const std::filesystem::path& path, const QuadMesh& mesh, const Region* region, const SvgOptions& options) {

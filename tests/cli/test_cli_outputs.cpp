@@ -146,7 +146,7 @@ TEST(CliOutputs, OptionValuesAreValidatedBeforeReading) {
       {"--feature-tolerance nan", "--feature-tolerance"}, {"--feature-tolerance -1", "--feature-tolerance"},
       {"--max-quads -5", "--max-quads"},     {"--max-quads nan", "--max-quads"},
       {"--threads 1000000000", "--threads"}, {"--size nan", "--size"},
-      {"--depth nan", "--depth"},
+      {"--depth nan", "--depth"},            {"--pieces 3", "--pieces"},  // pieces need a .pvtu output
   };
   for (const auto& [opt, flag] : bad) {
     // --size is given first; a repeated --size is the last one CLI11 keeps.

@@ -178,6 +178,71 @@ TEST(MeshIo, VtuRoundTrip) {
   fs::remove(p);
 }
 
+// A .pvtu's pieces hold every quad exactly once, in runs of subregions; meshio reads each piece, and the pieces
+// read back together give the mesh (nodes on the seams merged).
+TEST(MeshIo, PvtuPiecesHoldEveryQuadOnce) {
+  const QuadMesh m = sample_mesh();
+  ASSERT_EQ(m.quad_part.size(), m.quads.size());
+  const fs::path p = temp("pieces.pvtu");
+  MeshWriteOptions o;
+  o.pieces = 3;
+  write_mesh(p, m, o);
+  std::ifstream in(p);
+  const std::string xml((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  using Corners = std::array<std::pair<double, double>, 4>;
+  auto corners = [](const QuadMesh& mesh, std::size_t q) {
+    Corners c;
+    for (int k = 0; k < 4; ++k) {
+      const Vec2 v = mesh.nodes[static_cast<std::size_t>(mesh.quads[q][static_cast<std::size_t>(k)])];
+      c[static_cast<std::size_t>(k)] = {v.x, v.y};
+    }
+    std::sort(c.begin(), c.end());
+    return c;
+  };
+  std::map<Corners, int> seen;
+  std::size_t quads = 0;
+  int last_part = -1;
+  for (int k = 0; k < 3; ++k) {
+    const std::string name = p.stem().string() + "_" + std::to_string(k) + ".vtu";
+    EXPECT_NE(xml.find("Source=\"" + name + "\""), std::string::npos) << name;
+    const fs::path piece = p.parent_path() / name;
+    ASSERT_TRUE(fs::exists(piece)) << piece;
+    const QuadMesh r = read_vtu(piece);
+    EXPECT_GT(r.quads.size(), m.quads.size() / 4);  // nearly equal runs
+    quads += r.quads.size();
+    for (std::size_t q = 0; q < r.quads.size(); ++q) seen[corners(r, q)]++;
+    // Subregions in order: a piece starts at or after the last subregion of the one before.
+    std::ifstream pin(piece);
+    const std::string pxml((std::istreambuf_iterator<char>(pin)), std::istreambuf_iterator<char>());
+    const std::size_t at = pxml.find("Name=\"part\"");
+    ASSERT_NE(at, std::string::npos);
+    std::istringstream parts(pxml.substr(pxml.find('>', at) + 1));
+    int part = 0, first = -1, last = -1;
+    for (std::size_t q = 0; q < r.quads.size() && parts >> part; ++q) {
+      if (first < 0) first = part;
+      EXPECT_GE(part, last);
+      last = part;
+    }
+    EXPECT_GE(first, last_part);
+    last_part = last;
+    const std::string py = "/usr/bin/python3 -c \"import meshio,sys; m=meshio.read('" + piece.string() +
+                           "'); sys.exit(0 if sum(len(c.data) for c in m.cells if c.type=='quad')==" +
+                           std::to_string(r.quads.size()) + " else 1)\" 2>/dev/null";
+    if (std::system("/usr/bin/python3 -c 'import meshio' 2>/dev/null") == 0) EXPECT_EQ(std::system(py.c_str()), 0);
+  }
+  EXPECT_EQ(quads, m.quads.size());
+  ASSERT_EQ(seen.size(), m.quads.size());
+  for (std::size_t q = 0; q < m.quads.size(); ++q) EXPECT_EQ(seen[corners(m, q)], 1);
+  const QuadMesh whole = read_mesh(p);
+  EXPECT_EQ(whole.nodes.size(), m.nodes.size());
+  const QualityReport a = compute_quality(whole), b = compute_quality(m);
+  EXPECT_EQ(a.quads, b.quads);
+  EXPECT_EQ(a.interior_singularities, b.interior_singularities);
+  EXPECT_EQ(a.sj.min, b.sj.min);
+  fs::remove(p);
+  for (int k = 0; k < 3; ++k) fs::remove(p.parent_path() / (p.stem().string() + "_" + std::to_string(k) + ".vtu"));
+}
+
 TEST(MeshIo, GmshAndMeshioReadOurMsh) {
   const QuadMesh m = sample_mesh();
   const fs::path p = temp("g.msh"), out = temp("g_out.msh");

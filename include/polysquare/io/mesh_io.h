@@ -39,9 +39,14 @@ struct MeshWriteOptions {
   /// Named groups (mesh_groups(mesh, &region)): physical names and tags in MSH, open/land boundaries in gr3,
   /// nodestrings in 2dm, side sets in Exodus. Empty: mesh_groups(mesh), the generated names.
   MeshGroups groups;
+  /// .pvtu: the number of .vtu pieces (0: one per kQuadsPerPiece quads, at least one).
+  std::size_t pieces = 0;
 };
 
-/// Reads a mesh by extension (.msh, .vtu). Quads and triangles are kept; lines of physical curves named
+/// Quads per piece of a .pvtu when MeshWriteOptions::pieces is 0.
+inline constexpr std::size_t kQuadsPerPiece = 1000000;
+
+/// Reads a mesh by extension (.msh, .vtu, .pvtu: its pieces, nodes merged where they coincide). Quads and triangles are kept; lines of physical curves named
 /// "boundary*" / "feature*" become tagged edges, and so do the cell edges joining two nodes of one physical point
 /// group named "feature*" (how MshFeatures::nodes writes a curve; exact unless a curve comes back within one
 /// element of itself, where such an edge may join two nodes that are not consecutive along it). A mesh whose cells are mostly clockwise (a surface with normal
@@ -51,6 +56,7 @@ QuadMesh read_mesh(const std::filesystem::path& path);
 /// read_mesh for one format, whatever the extension.
 QuadMesh read_msh(const std::filesystem::path& path);
 QuadMesh read_vtu(const std::filesystem::path& path);
+QuadMesh read_pvtu(const std::filesystem::path& path);
 /// The same readers on file contents already in memory; `name` is used in messages (fuzzing, pipes).
 QuadMesh parse_msh(const std::string& data, const std::string& name);
 QuadMesh parse_vtu(const std::string& xml, const std::string& name);
@@ -61,7 +67,7 @@ QuadMesh parse_vtu(const std::string& xml, const std::string& name);
 /// order, which deal.II and MFEM take as boundary ids; with segments, the part of the ring no segment covers),
 /// feature curve c is "feature_<c>" or its name (the next tags) as options say, then every named boundary
 /// segment a physical curve of line elements; .exo = Exodus II (write_exodus);
-/// .vtu = VTK XML with per-cell quality fields; .gr3 = SCHISM hgrid (write_gr3), .nc = D-Flow FM UGRID-1.0 net
+/// .vtu = VTK XML with per-cell quality fields; .pvtu = the same in pieces (write_pvtu); .gr3 = SCHISM hgrid (write_gr3), .nc = D-Flow FM UGRID-1.0 net
 /// file (write_ugrid), .2dm = SMS (write_2dm), see solver_files.h.
 void write_mesh(const std::filesystem::path& path, const QuadMesh& mesh, const MeshWriteOptions& options = {});
 /// The extension of `path` in lower case, with its dot (".msh"; empty when there is none).
@@ -70,6 +76,12 @@ std::string lower_extension(const std::filesystem::path& path);
 /// write_mesh for one format, whatever the extension.
 void write_msh(const std::filesystem::path& path, const QuadMesh& mesh, const MeshWriteOptions& options = {});
 void write_vtu(const std::filesystem::path& path, const QuadMesh& mesh);
+/// A parallel VTK file: `pvtu_pieces(mesh, pieces)` pieces `<stem>_<k>.vtu` beside `path`: the quads in the order
+/// of their subregion (quad_part) cut into runs of nearly equal length, each with the nodes its quads use (nodes
+/// on a seam are in both pieces), written in parallel; `path` lists them. All are committed together.
+void write_pvtu(const std::filesystem::path& path, const QuadMesh& mesh, std::size_t pieces);
+/// The number of pieces write_pvtu makes of `mesh` when asked for `pieces` (0: automatic).
+std::size_t pvtu_pieces(const QuadMesh& mesh, std::size_t pieces);
 /// Exodus II (.exo) through netCDF (classic, 64-bit offset; no Debian package has an Exodus library): one element
 /// block of QUAD4 per surface group (eb_names, ids = tags), one side set per boundary group (the rest of each ring
 /// and every named segment; side k joins a quad's local nodes k-1 and k, 1-based), one node set per boundary and
