@@ -80,6 +80,10 @@ struct Reader {
   int source = -1;
   const OGRCoordinateTransformation* transform = nullptr;
   std::string name, kind;  // the feature's `name` and `kind` attributes (empty when absent)
+  // ESRI Shapefile stores outer rings clockwise and holes counter-clockwise: a writer turns rings of the other
+  // orientation (GeoJSON's) around, keeping the first point. Such rings are turned back keeping it too, so the
+  // ring has its original order and start, and the mesh is the one of the file it was converted from.
+  bool clockwise_outer_rings = false;
 
   [[noreturn]] void fail(const std::string& what) const { throw InputError(where + ": " + what); }
 
@@ -113,6 +117,7 @@ struct Reader {
       fail("ring " + std::to_string(index) + " is not closed: first point " + point_text(pts.front()) + " differs from last point " +
            point_text(pts.back()));
     pts.pop_back();
+    if (clockwise_outer_rings && (ring_signed_area(pts) < 0) == (index == 0)) std::reverse(pts.begin() + 1, pts.end());
     return pts;
   }
 
@@ -274,6 +279,7 @@ void read_gdal(const std::filesystem::path& path, LayerRole default_role, const 
       Reader reader{region, feature_names,
                     file + ", layer '" + name + "', FID " + std::to_string(feature->GetFID()),
                     static_cast<int>(feature_names.size()), transform.get()};
+      reader.clockwise_outer_rings = EQUAL(ds->GetDriverName(), "ESRI Shapefile");
       feature_names.push_back(reader.where);
       if (name_field >= 0 && feature->IsFieldSetAndNotNull(name_field)) reader.name = feature->GetFieldAsString(name_field);
       if (kind_field >= 0 && feature->IsFieldSetAndNotNull(kind_field)) reader.kind = feature->GetFieldAsString(kind_field);
