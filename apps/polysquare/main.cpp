@@ -95,6 +95,43 @@ void check_outputs(const MeshArgs& args) {
   check_distinct_files(outputs, inputs);
 }
 
+// A .pvtu meshed by several processes: each writes its own pieces (write_pvtu's piece_rank), and all commit
+// them only when every process wrote its share. Every process calls agree() once, also when its part failed
+// (the destructor says so for it), so none waits for another that has stopped.
+class PieceAgreement {
+ public:
+  explicit PieceAgreement(const WorkSharing* sharing) : sharing_(sharing) {}
+  ~PieceAgreement() {
+    if (sharing_ && !agreed_) {
+      try {
+        agree("stopped before writing its pieces");
+      } catch (...) {
+      }
+    }
+  }
+  PieceAgreement(const PieceAgreement&) = delete;
+  PieceAgreement& operator=(const PieceAgreement&) = delete;
+  /// `mine` empty: this process wrote its pieces. Returns the first other process's failure, or empty.
+  std::string agree(const std::string& mine) {
+    agreed_ = true;
+    if (!sharing_) return {};
+    const int n = sharing_->processes();
+    std::vector<std::string> status(static_cast<std::size_t>(n));
+    std::vector<int> owner(static_cast<std::size_t>(n));
+    for (int r = 0; r < n; ++r) owner[static_cast<std::size_t>(r)] = r;
+    status[static_cast<std::size_t>(sharing_->rank())] = mine;
+    sharing_->all_gather(status, owner, "pvtu pieces");
+    for (int r = 0; r < n; ++r)
+      if (r != sharing_->rank() && !status[static_cast<std::size_t>(r)].empty())
+        return "process " + std::to_string(r) + ": " + status[static_cast<std::size_t>(r)];
+    return {};
+  }
+
+ private:
+  const WorkSharing* sharing_;
+  bool agreed_ = false;
+};
+
 int run_mesh(const MeshArgs& args) {
   check_mesh_options(args.options);
   if (args.depth_given && !std::isfinite(args.depth))
@@ -175,7 +212,32 @@ int run_mesh(const MeshArgs& args) {
                        short_number(origin.y) + "))");
   }
   if (moved) result.report["input"]["local_origin"] = {origin.x, origin.y};
-  if (args.mpi && args.mpi->rank() != 0) return 0;  // every process holds the mesh; rank 0 measures and writes it
+  // Every process holds the mesh; rank 0 measures and writes it, but for the pieces of a .pvtu, which each
+  // process writes its share of.
+  const bool pieces_by_process = args.mpi && args.mpi->active() && out_ext == ".pvtu";
+  const std::size_t pieces =
+      args.pieces > 0 ? args.pieces
+                      : std::max<std::size_t>(pvtu_pieces(result.mesh, 0), pieces_by_process ? static_cast<std::size_t>(args.mpi->processes()) : 1);
+  PieceAgreement agreement(pieces_by_process ? args.mpi->sharing().get() : nullptr);
+  if (args.mpi && args.mpi->rank() != 0) {
+    if (!pieces_by_process) return 0;
+    std::string failed;
+    OutputBatch batch;
+    try {
+      translate(result.mesh, origin);
+      MeshWriteOptions write;
+      write.pieces = pieces;
+      write.piece_rank = static_cast<std::size_t>(args.mpi->rank());
+      write.piece_processes = static_cast<std::size_t>(args.mpi->processes());
+      write_mesh(args.output, result.mesh, write);
+    } catch (const std::exception& e) {
+      failed = e.what();
+    }
+    // Rank 0 says what failed, here or there; this process commits only when all wrote their share.
+    if (failed.empty() && agreement.agree(failed).empty()) batch.commit();
+    else if (!failed.empty()) agreement.agree(failed);
+    return 0;
+  }
   if (args.mpi && args.mpi->active()) result.report["summary"]["processes"] = args.mpi->processes();
   progress.start("quality");
   QualityReport quality = compute_quality(result.mesh);
@@ -243,7 +305,9 @@ int run_mesh(const MeshArgs& args) {
                                                   : std::vector<double>{},
                                notes.input_crs,
                                std::move(groups),
-                               args.pieces};
+                               pieces,
+                               0,
+                               pieces_by_process ? static_cast<std::size_t>(args.mpi->processes()) : 1};
   write_mesh(args.output, result.mesh, write);
   if (!args.report.empty())
     write_file_atomically(args.report, [&](std::ostream& os) { os << report_text(result.report); }, false);
@@ -253,6 +317,8 @@ int run_mesh(const MeshArgs& args) {
     partition.triangle_part = result.background_part;
     write_partition_svg(args.partition_picture, result.background, partition);
   }
+  if (const std::string other = agreement.agree(""); !other.empty())
+    throw InputError(args.output + ": a process could not write its pieces (" + other + ")");
   batch.commit();
   progress.finish("write");
   if (out_ext == ".nc" && fv.orthogonality_above > 0)

@@ -200,11 +200,16 @@ std::size_t pvtu_pieces(const QuadMesh& mesh, std::size_t pieces) {
   return std::clamp<std::size_t>(pieces, 1, std::max<std::size_t>(1, mesh.quads.size()));
 }
 
-void write_pvtu(const std::filesystem::path& path, const QuadMesh& mesh, std::size_t pieces) {
+void write_pvtu(const std::filesystem::path& path, const QuadMesh& mesh, std::size_t pieces, std::size_t piece_rank,
+                std::size_t piece_processes) {
   pieces = pvtu_pieces(mesh, pieces);
+  for (std::size_t k = piece_rank; k < pieces; k += piece_processes) check_output_file(piece_path(path, k), "a piece of " + path.string(), {".vtu"});
   const std::vector<QuadMesh> cut = cut_into_pieces(mesh, pieces);
   // Pieces are written in parallel, each to its own temporary; all are committed with the .pvtu (atomic_file.h).
-  oneapi::tbb::parallel_for(std::size_t{0}, pieces, [&](std::size_t k) { write_vtu(piece_path(path, k), cut[k]); });
+  oneapi::tbb::parallel_for(std::size_t{0}, pieces, [&](std::size_t k) {
+    if (k % piece_processes == piece_rank) write_vtu(piece_path(path, k), cut[k]);
+  });
+  if (piece_rank != 0) return;
   write_file_atomically(path, [&](std::ostream& os) {
     os << "<?xml version=\"1.0\"?>\n<VTKFile type=\"PUnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\">\n"
        << "<PUnstructuredGrid GhostLevel=\"0\">\n";
@@ -292,7 +297,7 @@ void write_mesh(const std::filesystem::path& path, const QuadMesh& mesh, const M
   const std::string ext = lower_extension(path);
   if (ext == ".msh") return write_msh(path, mesh, options);
   if (ext == ".vtu") return write_vtu(path, mesh);
-  if (ext == ".pvtu") return write_pvtu(path, mesh, options.pieces);
+  if (ext == ".pvtu") return write_pvtu(path, mesh, options.pieces, options.piece_rank, std::max<std::size_t>(1, options.piece_processes));
   if (ext == ".gr3") return write_gr3(path, mesh, options);
   if (ext == ".nc") return write_ugrid(path, mesh, options);
   if (ext == ".2dm") return write_2dm(path, mesh, options);

@@ -120,3 +120,31 @@ TEST(Mpi, ErrorsEndEveryProcessWithTheirExitCodeAndNoFile) {
   EXPECT_FALSE(fs::exists(dir / "b.msh"));
   fs::remove_all(dir);
 }
+
+// A .pvtu on several processes: each writes its share of the pieces (k % processes == rank), and the files are
+// those of one process, byte for byte. A piece one process cannot write stops all of them: nothing is written.
+TEST(Mpi, PvtuPiecesAreWrittenByEachProcessAndMatchOneProcess) {
+  if (std::string(POLYSQUARE_MPIRUN).empty()) GTEST_SKIP() << "built without MPI";
+  const fs::path dir = scratch("pvtu");
+  const std::string in = data("cases/smile.geojson") + " --size 2.5 --pieces 3 -o ";
+  ASSERT_EQ(mesh(0, in + (dir / "one.pvtu").string(), dir).code, 0);
+  const MpiRun two = mesh(2, in + (dir / "two.pvtu").string(), dir);
+  ASSERT_EQ(two.code, 0) << two.err;
+  for (int k = 0; k < 3; ++k) {
+    const std::string a = bytes(dir / ("one_" + std::to_string(k) + ".vtu"));
+    ASSERT_GT(a.size(), 1000u) << k;
+    EXPECT_EQ(a, bytes(dir / ("two_" + std::to_string(k) + ".vtu"))) << "piece " << k;
+  }
+  std::string index = bytes(dir / "two.pvtu");
+  for (std::size_t at; (at = index.find("two_")) != std::string::npos;) index.replace(at, 4, "one_");
+  EXPECT_EQ(index, bytes(dir / "one.pvtu"));
+  // Piece 1 is process 1's (of two): a directory in its place fails that process, and so the run.
+  const fs::path fail = dir / "fail";
+  fs::create_directories(fail / "m_1.vtu");
+  const MpiRun bad = mesh(2, in + (fail / "m.pvtu").string() + " --report " + (fail / "r.json").string(), dir);
+  EXPECT_EQ(bad.code, 2) << bad.err;
+  EXPECT_NE(bad.err.find("process 1"), std::string::npos) << bad.err;
+  EXPECT_NE(bad.err.find("m_1.vtu"), std::string::npos) << bad.err;
+  for (const char* f : {"m.pvtu", "m_0.vtu", "m_2.vtu", "r.json"}) EXPECT_FALSE(fs::exists(fail / f)) << f;
+  fs::remove_all(dir);
+}

@@ -41,6 +41,9 @@ struct MeshWriteOptions {
   MeshGroups groups;
   /// .pvtu: the number of .vtu pieces (0: one per kQuadsPerPiece quads, at least one).
   std::size_t pieces = 0;
+  /// .pvtu written by several processes: this one writes the pieces k with k % piece_processes == piece_rank,
+  /// and the .pvtu itself when piece_rank is 0.
+  std::size_t piece_rank = 0, piece_processes = 1;
 };
 
 /// Quads per piece of a .pvtu when MeshWriteOptions::pieces is 0.
@@ -79,7 +82,8 @@ void write_vtu(const std::filesystem::path& path, const QuadMesh& mesh);
 /// A parallel VTK file: `pvtu_pieces(mesh, pieces)` pieces `<stem>_<k>.vtu` beside `path`: the quads in the order
 /// of their subregion (quad_part) cut into runs of nearly equal length, each with the nodes its quads use (nodes
 /// on a seam are in both pieces), written in parallel; `path` lists them. All are committed together.
-void write_pvtu(const std::filesystem::path& path, const QuadMesh& mesh, std::size_t pieces);
+void write_pvtu(const std::filesystem::path& path, const QuadMesh& mesh, std::size_t pieces, std::size_t piece_rank = 0,
+                std::size_t piece_processes = 1);
 /// The number of pieces write_pvtu makes of `mesh` when asked for `pieces` (0: automatic).
 std::size_t pvtu_pieces(const QuadMesh& mesh, std::size_t pieces);
 /// Exodus II (.exo) through netCDF (classic, 64-bit offset; no Debian package has an Exodus library): one element
