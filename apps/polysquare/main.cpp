@@ -79,6 +79,14 @@ void check_outputs(const MeshArgs& args) {
   std::vector<std::pair<fs::path, std::string>> outputs{{args.output, "-o"}}, inputs{{args.input, "input"}};
   if (lower_extension(args.output) == ".gr3")
     outputs.push_back({fs::path(args.output).replace_extension(".ll"), "the .ll companion of -o"});
+  // A .pvtu's pieces: those asked for, or the first (their number follows the mesh); the others are checked
+  // when they are written, before anything is committed.
+  if (lower_extension(args.output) == ".pvtu")
+    for (std::size_t k = 0; k < std::max<std::size_t>(args.pieces, 1); ++k) {
+      const fs::path piece = pvtu_piece_path(args.output, k);
+      check_output_file(piece, "a piece of -o", {".vtu"});
+      outputs.push_back({piece, "a piece of -o"});
+    }
   auto optional = [&](const std::string& path, const char* what, const char* ext) {
     if (path.empty()) return;
     check_output_file(path, what, {ext});

@@ -151,11 +151,6 @@ void vtu_text(std::ostream& os, const QuadMesh& mesh) {
   }
 }
 
-// Piece k of `pieces` of a .pvtu: `<stem>_<k>.vtu` beside it.
-std::filesystem::path piece_path(const std::filesystem::path& pvtu, std::size_t k) {
-  return pvtu.parent_path() / (pvtu.stem().string() + "_" + std::to_string(k) + ".vtu");
-}
-
 // The quads of a mesh cut into `pieces` runs of (nearly) equal length in the order of their subregion (quad_part),
 // so each piece is a few whole neighbouring subregions; each piece with the nodes its quads use.
 std::vector<QuadMesh> cut_into_pieces(const QuadMesh& mesh, std::size_t pieces) {
@@ -191,6 +186,10 @@ std::vector<QuadMesh> cut_into_pieces(const QuadMesh& mesh, std::size_t pieces) 
 
 }  // namespace
 
+std::filesystem::path pvtu_piece_path(const std::filesystem::path& pvtu, std::size_t k) {
+  return pvtu.parent_path() / (pvtu.stem().string() + "_" + std::to_string(k) + ".vtu");
+}
+
 void write_vtu(const std::filesystem::path& path, const QuadMesh& mesh) {
   write_file_atomically(path, [&](std::ostream& os) { vtu_text(os, mesh); }, false);
 }
@@ -203,11 +202,11 @@ std::size_t pvtu_pieces(const QuadMesh& mesh, std::size_t pieces) {
 void write_pvtu(const std::filesystem::path& path, const QuadMesh& mesh, std::size_t pieces, std::size_t piece_rank,
                 std::size_t piece_processes) {
   pieces = pvtu_pieces(mesh, pieces);
-  for (std::size_t k = piece_rank; k < pieces; k += piece_processes) check_output_file(piece_path(path, k), "a piece of " + path.string(), {".vtu"});
+  for (std::size_t k = piece_rank; k < pieces; k += piece_processes) check_output_file(pvtu_piece_path(path, k), "a piece of " + path.string(), {".vtu"});
   const std::vector<QuadMesh> cut = cut_into_pieces(mesh, pieces);
   // Pieces are written in parallel, each to its own temporary; all are committed with the .pvtu (atomic_file.h).
   oneapi::tbb::parallel_for(std::size_t{0}, pieces, [&](std::size_t k) {
-    if (k % piece_processes == piece_rank) write_vtu(piece_path(path, k), cut[k]);
+    if (k % piece_processes == piece_rank) write_vtu(pvtu_piece_path(path, k), cut[k]);
   });
   if (piece_rank != 0) return;
   write_file_atomically(path, [&](std::ostream& os) {
@@ -221,7 +220,7 @@ void write_pvtu(const std::filesystem::path& path, const QuadMesh& mesh, std::si
       os << "<PDataArray type=\"Float64\" Name=\"" << name << "\"/>\n";
     os << "<PDataArray type=\"Int32\" Name=\"part\"/>\n</PCellData>\n"
        << "<PPointData>\n<PDataArray type=\"UInt8\" Name=\"node_kind\"/>\n</PPointData>\n";
-    for (std::size_t k = 0; k < pieces; ++k) os << "<Piece Source=\"" << piece_path(path, k).filename().string() << "\"/>\n";
+    for (std::size_t k = 0; k < pieces; ++k) os << "<Piece Source=\"" << pvtu_piece_path(path, k).filename().string() << "\"/>\n";
     os << "</PUnstructuredGrid>\n";
     if (!mesh.crs.empty()) os << "<!-- crs: " << comment_text(mesh.crs) << " -->\n";
     os << "</VTKFile>\n";

@@ -95,6 +95,12 @@ TEST(CliOutputs, EveryOutputIsRefusedBeforeMeshingAndNothingIsWritten) {
     EXPECT_EQ(dir.entries(), std::vector<std::string>{"in.json"}) << c.args;
   }
   EXPECT_EQ(slurp(dir.path / "in.json"), input_before);
+  // A .pvtu's first piece (or every piece asked for) in a directory's place.
+  fs::create_directories(dir.path / "m_0.vtu");
+  const CliResult r = run("mesh " + kSlowInput + " -o " + d + "/m.pvtu");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("m_0.vtu: is a directory"), std::string::npos) << r.err;
+  EXPECT_EQ(dir.entries(), (std::vector<std::string>{"in.json", "m_0.vtu"}));
 }
 
 TEST(CliOutputs, LongOutputNamesAreWrittenWithShortTemporaries) {

@@ -84,6 +84,8 @@ void write_vtu(const std::filesystem::path& path, const QuadMesh& mesh);
 /// on a seam are in both pieces), written in parallel; `path` lists them. All are committed together.
 void write_pvtu(const std::filesystem::path& path, const QuadMesh& mesh, std::size_t pieces, std::size_t piece_rank = 0,
                 std::size_t piece_processes = 1);
+/// Piece k of a .pvtu: `<stem>_<k>.vtu` beside it.
+std::filesystem::path pvtu_piece_path(const std::filesystem::path& pvtu, std::size_t k);
 /// The number of pieces write_pvtu makes of `mesh` when asked for `pieces` (0: automatic).
 std::size_t pvtu_pieces(const QuadMesh& mesh, std::size_t pieces);
 /// Exodus II (.exo) through netCDF (classic, 64-bit offset; no Debian package has an Exodus library): one element
