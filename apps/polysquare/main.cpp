@@ -242,8 +242,8 @@ int run_mesh(const MeshArgs& args) {
       failed = e.what();
     }
     // Rank 0 says what failed, here or there; this process commits only when all wrote their share.
-    if (failed.empty() && agreement.agree(failed).empty()) batch.commit();
-    else if (!failed.empty()) agreement.agree(failed);
+    const bool others_wrote = agreement.agree(failed).empty();
+    if (failed.empty() && others_wrote) batch.commit();
     return 0;
   }
   if (args.mpi && args.mpi->active()) result.report["summary"]["processes"] = args.mpi->processes();
@@ -302,7 +302,7 @@ int run_mesh(const MeshArgs& args) {
                        "; use a larger size or move the input nearer the origin");
   }
   OutputBatch batch;
-  const MeshWriteOptions write{args.binary,
+  MeshWriteOptions write{args.binary,
                                args.msh_features == "lines" ? MshFeatures::lines
                                : args.msh_features == "none" ? MshFeatures::none : MshFeatures::nodes,
                                args.msh_version == "4.1" ? MshVersion::v4_1 : MshVersion::v2_2,
@@ -312,10 +312,9 @@ int run_mesh(const MeshArgs& args) {
                                : args.depth_given ? std::vector<double>(result.mesh.nodes.size(), args.depth)
                                                   : std::vector<double>{},
                                notes.input_crs,
-                               std::move(groups),
-                               pieces,
-                               0,
-                               pieces_by_process ? static_cast<std::size_t>(args.mpi->processes()) : 1};
+                               std::move(groups)};
+  write.pieces = pieces;
+  if (pieces_by_process) write.piece_processes = static_cast<std::size_t>(args.mpi->processes());
   write_mesh(args.output, result.mesh, write);
   if (!args.report.empty())
     write_file_atomically(args.report, [&](std::ostream& os) { os << report_text(result.report); }, false);

@@ -1,12 +1,12 @@
 // VTK XML unstructured grid (write; read ASCII), the SVG picture, and the extension dispatch.
 #include <algorithm>
 #include <cstring>
+#include <fstream>
 #include <numeric>
+#include <sstream>
 #include <unordered_map>
 
 #include <oneapi/tbb/parallel_for.h>
-#include <fstream>
-#include <sstream>
 
 #include "crs_info.h"
 #include "polysquare/core/error.h"
@@ -107,81 +107,80 @@ namespace {
 // The XML of one VTU file (a whole mesh, or one piece of a .pvtu).
 void vtu_text(std::ostream& os, const QuadMesh& mesh) {
   const QuadMetrics q = quad_metrics(mesh);
-  {
-    os.precision(17);
-    os << "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\">\n"
-       << "<UnstructuredGrid>\n";
-    // The CRS as field data readers keep (VTK, ParaView, meshio's field_data): its EPSG code, 0 when none is
-    // identified. The CRS itself (any PROJ string or WKT) goes into a comment at the end: a String array would be
-    // VTK's way, but meshio 5 refuses String arrays.
-    const crs::CrsInfo info = crs::crs_info(mesh.crs);
-    if (!mesh.crs.empty())
-      os << "<FieldData>\n<DataArray type=\"Int32\" Name=\"crs_epsg\" NumberOfTuples=\"1\" format=\"ascii\">\n"
-         << info.epsg << "\n</DataArray>\n</FieldData>\n";
-    os << "<Piece NumberOfPoints=\"" << mesh.nodes.size() << "\" NumberOfCells=\"" << mesh.quads.size() << "\">\n"
-       << "<Points>\n<DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n";
-    for (Vec2 p : mesh.nodes) os << p.x << " " << p.y << " 0\n";
-    os << "</DataArray>\n</Points>\n<Cells>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n";
-    for (const auto& c : mesh.quads) os << c[0] << " " << c[1] << " " << c[2] << " " << c[3] << "\n";
-    os << "</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n";
-    for (std::size_t i = 1; i <= mesh.quads.size(); ++i) os << 4 * i << "\n";
-    os << "</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n";
-    for (std::size_t i = 0; i < mesh.quads.size(); ++i) os << "9\n";
-    os << "</DataArray>\n</Cells>\n<CellData Scalars=\"scaled_jacobian\">\n";
-    auto field = [&](const char* name, const std::vector<double>& v) {
-      os << "<DataArray type=\"Float64\" Name=\"" << name << "\" format=\"ascii\">\n";
-      for (double x : v) os << x << "\n";
-      os << "</DataArray>\n";
-    };
-    field("scaled_jacobian", q.sj);
-    field("eta", q.eta);
-    field("skewness", q.skew);
-    field("edge_ratio", q.edge_ratio);
-    os << "<DataArray type=\"Int32\" Name=\"part\" format=\"ascii\">\n";
-    for (std::size_t i = 0; i < mesh.quads.size(); ++i) os << (mesh.quad_part.empty() ? 0 : mesh.quad_part[i]) << "\n";
-    os << "</DataArray>\n</CellData>\n<PointData>\n<DataArray type=\"UInt8\" Name=\"node_kind\" format=\"ascii\">\n";
-    for (std::size_t i = 0; i < mesh.nodes.size(); ++i)
-      os << (mesh.node_kind.empty() ? 0 : static_cast<int>(mesh.node_kind[i])) << "\n";
-    os << "</DataArray>\n</PointData>\n</Piece>\n</UnstructuredGrid>\n";
-    if (!mesh.crs.empty()) {
-      os << "<!-- crs: " << comment_text(mesh.crs) << " -->\n";
-      if (info.known) os << "<!-- crs_name: " << comment_text(info.name) << " -->\n<!-- crs_wkt: " << comment_text(info.wkt) << " -->\n";
-    }
-    os << "</VTKFile>\n";
+  os.precision(17);
+  os << "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\">\n"
+     << "<UnstructuredGrid>\n";
+  // The CRS as field data readers keep (VTK, ParaView, meshio's field_data): its EPSG code, 0 when none is
+  // identified. The CRS itself (any PROJ string or WKT) goes into a comment at the end: a String array would be
+  // VTK's way, but meshio 5 refuses String arrays.
+  const crs::CrsInfo info = crs::crs_info(mesh.crs);
+  if (!mesh.crs.empty())
+    os << "<FieldData>\n<DataArray type=\"Int32\" Name=\"crs_epsg\" NumberOfTuples=\"1\" format=\"ascii\">\n"
+       << info.epsg << "\n</DataArray>\n</FieldData>\n";
+  os << "<Piece NumberOfPoints=\"" << mesh.nodes.size() << "\" NumberOfCells=\"" << mesh.quads.size() << "\">\n"
+     << "<Points>\n<DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n";
+  for (Vec2 p : mesh.nodes) os << p.x << " " << p.y << " 0\n";
+  os << "</DataArray>\n</Points>\n<Cells>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n";
+  for (const auto& c : mesh.quads) os << c[0] << " " << c[1] << " " << c[2] << " " << c[3] << "\n";
+  os << "</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n";
+  for (std::size_t i = 1; i <= mesh.quads.size(); ++i) os << 4 * i << "\n";
+  os << "</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n";
+  for (std::size_t i = 0; i < mesh.quads.size(); ++i) os << "9\n";
+  os << "</DataArray>\n</Cells>\n<CellData Scalars=\"scaled_jacobian\">\n";
+  auto field = [&](const char* name, const std::vector<double>& v) {
+    os << "<DataArray type=\"Float64\" Name=\"" << name << "\" format=\"ascii\">\n";
+    for (double x : v) os << x << "\n";
+    os << "</DataArray>\n";
+  };
+  field("scaled_jacobian", q.sj);
+  field("eta", q.eta);
+  field("skewness", q.skew);
+  field("edge_ratio", q.edge_ratio);
+  os << "<DataArray type=\"Int32\" Name=\"part\" format=\"ascii\">\n";
+  for (std::size_t i = 0; i < mesh.quads.size(); ++i) os << (mesh.quad_part.empty() ? 0 : mesh.quad_part[i]) << "\n";
+  os << "</DataArray>\n</CellData>\n<PointData>\n<DataArray type=\"UInt8\" Name=\"node_kind\" format=\"ascii\">\n";
+  for (std::size_t i = 0; i < mesh.nodes.size(); ++i)
+    os << (mesh.node_kind.empty() ? 0 : static_cast<int>(mesh.node_kind[i])) << "\n";
+  os << "</DataArray>\n</PointData>\n</Piece>\n</UnstructuredGrid>\n";
+  if (!mesh.crs.empty()) {
+    os << "<!-- crs: " << comment_text(mesh.crs) << " -->\n";
+    if (info.known) os << "<!-- crs_name: " << comment_text(info.name) << " -->\n<!-- crs_wkt: " << comment_text(info.wkt) << " -->\n";
   }
+  os << "</VTKFile>\n";
 }
 
-// The quads of a mesh cut into `pieces` runs of (nearly) equal length in the order of their subregion (quad_part),
-// so each piece is a few whole neighbouring subregions; each piece with the nodes its quads use.
-std::vector<QuadMesh> cut_into_pieces(const QuadMesh& mesh, std::size_t pieces) {
+// The quads in the order of their subregion (quad_part): a .pvtu's pieces are runs of it of nearly equal length,
+// so each piece is a few neighbouring subregions.
+std::vector<std::size_t> piece_order(const QuadMesh& mesh) {
   std::vector<std::size_t> order(mesh.quads.size());
   std::iota(order.begin(), order.end(), std::size_t{0});
   if (mesh.quad_part.size() == mesh.quads.size())
     std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return mesh.quad_part[a] < mesh.quad_part[b]; });
-  std::vector<QuadMesh> out(pieces);
-  oneapi::tbb::parallel_for(std::size_t{0}, pieces, [&](std::size_t k) {
-    QuadMesh& piece = out[k];
-    piece.crs = mesh.crs;
-    piece.units = mesh.units;
-    std::unordered_map<std::int32_t, std::int32_t> local;
-    const std::size_t from = k * order.size() / pieces, to = (k + 1) * order.size() / pieces;
-    for (std::size_t i = from; i < to; ++i) {
-      const std::size_t q = order[i];
-      std::array<std::int32_t, 4> quad{};
-      for (int c = 0; c < 4; ++c) {
-        const std::int32_t v = mesh.quads[q][static_cast<std::size_t>(c)];
-        auto [it, added] = local.try_emplace(v, static_cast<std::int32_t>(piece.nodes.size()));
-        if (added) {
-          piece.nodes.push_back(mesh.nodes[static_cast<std::size_t>(v)]);
-          if (!mesh.node_kind.empty()) piece.node_kind.push_back(mesh.node_kind[static_cast<std::size_t>(v)]);
-        }
-        quad[static_cast<std::size_t>(c)] = it->second;
+  return order;
+}
+
+// Piece k of `pieces`: its run of `order`, with the nodes its quads use.
+QuadMesh piece_of(const QuadMesh& mesh, const std::vector<std::size_t>& order, std::size_t k, std::size_t pieces) {
+  QuadMesh piece;
+  piece.crs = mesh.crs;
+  piece.units = mesh.units;
+  std::unordered_map<std::int32_t, std::int32_t> local;
+  for (std::size_t i = k * order.size() / pieces; i < (k + 1) * order.size() / pieces; ++i) {
+    const std::size_t q = order[i];
+    std::array<std::int32_t, 4> quad{};
+    for (std::size_t c = 0; c < 4; ++c) {
+      const std::int32_t v = mesh.quads[q][c];
+      auto [it, added] = local.try_emplace(v, static_cast<std::int32_t>(piece.nodes.size()));
+      if (added) {
+        piece.nodes.push_back(mesh.nodes[static_cast<std::size_t>(v)]);
+        if (!mesh.node_kind.empty()) piece.node_kind.push_back(mesh.node_kind[static_cast<std::size_t>(v)]);
       }
-      piece.quads.push_back(quad);
-      if (!mesh.quad_part.empty()) piece.quad_part.push_back(mesh.quad_part[q]);
+      quad[c] = it->second;
     }
-  });
-  return out;
+    piece.quads.push_back(quad);
+    if (!mesh.quad_part.empty()) piece.quad_part.push_back(mesh.quad_part[q]);
+  }
+  return piece;
 }
 
 }  // namespace
@@ -203,10 +202,11 @@ void write_pvtu(const std::filesystem::path& path, const QuadMesh& mesh, std::si
                 std::size_t piece_processes) {
   pieces = pvtu_pieces(mesh, pieces);
   for (std::size_t k = piece_rank; k < pieces; k += piece_processes) check_output_file(pvtu_piece_path(path, k), "a piece of " + path.string(), {".vtu"});
-  const std::vector<QuadMesh> cut = cut_into_pieces(mesh, pieces);
-  // Pieces are written in parallel, each to its own temporary; all are committed with the .pvtu (atomic_file.h).
+  const std::vector<std::size_t> order = piece_order(mesh);
+  // This process's pieces are built and written in parallel, each to its own temporary, one at a time per thread
+  // (not all held at once); all are committed with the .pvtu (atomic_file.h).
   oneapi::tbb::parallel_for(std::size_t{0}, pieces, [&](std::size_t k) {
-    if (k % piece_processes == piece_rank) write_vtu(pvtu_piece_path(path, k), cut[k]);
+    if (k % piece_processes == piece_rank) write_vtu(pvtu_piece_path(path, k), piece_of(mesh, order, k, pieces));
   });
   if (piece_rank != 0) return;
   write_file_atomically(path, [&](std::ostream& os) {
