@@ -90,7 +90,7 @@ IntegerProgram::~IntegerProgram() = default;
 IntegerProgram::IntegerProgram(IntegerProgram&&) noexcept = default;
 IntegerProgram& IntegerProgram::operator=(IntegerProgram&&) noexcept = default;
 
-bool IntegerProgram::solve_relaxation(double seconds) {
+bool IntegerProgram::solve_relaxation(double seconds, bool large) {
   ClpSimplex* model = nullptr;
   if (lp_ && lp_->columns == columns()) {
     // Rows added since the last solve join its model, the bounds a dive fixed are restored, and the dual
@@ -120,8 +120,13 @@ bool IntegerProgram::solve_relaxation(double seconds) {
                        cost_.data(), row_lo_.data(), row_hi_.data());
     model->setMaximumSeconds(seconds);
     // The primal simplex: on the small cases its choice among equal-cost optima gave the same meshes as the
-    // GLPK primal simplex used before (turtle_shell SJ min 0.72; the dual simplex's choice 0.69).
-    model->primal(0);
+    // GLPK primal simplex used before (turtle_shell SJ min 0.72; the dual simplex's choice 0.69). Large
+    // programs (a coast's joint quantization, in the compact form) take the dual simplex, several times faster
+    // there.
+    if (large)
+      model->dual(0);
+    else
+      model->primal(0);
   }
   lp_->columns = columns();
   lp_->rows = rows();
@@ -129,7 +134,7 @@ bool IntegerProgram::solve_relaxation(double seconds) {
   return model->status() == 0;  // 0: optimal
 }
 
-std::optional<std::vector<double>> IntegerProgram::solve(double seconds, double gap, double dive_gap) {
+std::optional<std::vector<double>> IntegerProgram::solve(double seconds, double gap, double dive_gap, bool large) {
   const std::size_t n = cost_.size();
   // The LP relaxation first: the quantization's matrices are network matrices apart from a few coupling and
   // parity rows, so its optimum is often integral already (then it is the integer optimum too), and Clp finds
@@ -138,10 +143,10 @@ std::optional<std::vector<double>> IntegerProgram::solve(double seconds, double 
   // proved the rows just added infeasible (status 1): the cold solve only agreed, at the cost of a whole solve
   // (delta_box 40 m: 105 such restarts of 28-36k-column programs).
   const bool warm = lp_ != nullptr;
-  if (!solve_relaxation(seconds)) {
+  if (!solve_relaxation(seconds, large)) {
     if (!warm || lp_->model->status() == 1) return std::nullopt;
     lp_.reset();
-    if (!solve_relaxation(seconds)) return std::nullopt;
+    if (!solve_relaxation(seconds, large)) return std::nullopt;
   }
   ClpSimplex* const lp = lp_->model.get();
   auto fractional = [&] {  // the integer column nearest an integer without being one, or -1
@@ -170,13 +175,33 @@ std::optional<std::vector<double>> IntegerProgram::solve(double seconds, double 
   // (startFinishOptions 1: keep them at the end, 2: start from them) instead of refactorizing a matrix of tens
   // of thousands of columns each time; they are released when the dive ends (it takes at least one step: the
   // relaxation was fractional).
+  // In a large program the fractional columns are mostly independent halves (a coast's parity choices, each
+  // fixed alone took a re-solve of its own: 20-40 steps per dive), so a step first fixes them all, each to its
+  // nearest integer, and falls back to the one column when that has no solution.
   const double bound = lp->objectiveValue();
   std::optional<std::vector<double>> dived;
   int keep = 1;
+  std::vector<int> all_fractional;
   for (int c; (c = fractional()) >= 0;) {
     double* lo = lp->columnLower();
     double* hi = lp->columnUpper();
     const double v = lp->getColSolution()[c], near = std::round(v);
+    if (large) {
+      const double* x = lp->getColSolution();
+      all_fractional.clear();
+      for (std::size_t k = 0; k < n; ++k)
+        if (integer_[k] && std::abs(x[k] - std::round(x[k])) > 1e-9) all_fractional.push_back(static_cast<int>(k));
+      if (all_fractional.size() > 1) {
+        for (int k : all_fractional) lo[k] = hi[k] = std::round(x[k]);
+        lp->dual(0, keep);
+        keep = 1 | 2;
+        if (lp->status() == 0) continue;
+        for (int k : all_fractional) {
+          lo[k] = col_lo_[static_cast<std::size_t>(k)];
+          hi[k] = col_hi_[static_cast<std::size_t>(k)];
+        }
+      }
+    }
     lo[c] = hi[c] = near;
     lp->dual(0, keep);
     keep = 1 | 2;

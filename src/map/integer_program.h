@@ -32,7 +32,9 @@ class IntegerProgram {
   /// feasible point when stopped by the time limit); nullopt when the program is infeasible or no feasible point
   /// was found within `seconds` (per solve).
   /// Solving again after rows were added starts from the last solve's LP basis (the dual simplex).
-  std::optional<std::vector<double>> solve(double seconds, double gap = 0.0, double dive_gap = 0.0);
+  /// `large`: the relaxation is solved from scratch by the dual simplex instead of the primal, and each step of
+  /// the dive fixes every fractional column at once (one at a time only when that is infeasible).
+  std::optional<std::vector<double>> solve(double seconds, double gap = 0.0, double dive_gap = 0.0, bool large = false);
 
   IntegerProgram();
   ~IntegerProgram();
@@ -41,7 +43,7 @@ class IntegerProgram {
 
  private:
   struct Lp;  // the LP relaxation's model as the last solve left it
-  bool solve_relaxation(double seconds);
+  bool solve_relaxation(double seconds, bool large);
   std::unique_ptr<Lp> lp_;
   std::vector<double> col_lo_, col_hi_, cost_;
   std::vector<char> integer_;

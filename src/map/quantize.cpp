@@ -76,6 +76,12 @@ IntegerProgram joint_program(JointProblem& jp, const std::vector<SegmentCoupling
   IntegerProgram P;
   const bool integer = !couplings.empty() || !even_groups.empty();
   constexpr double inf = IntegerProgram::inf;
+  // Large programs take the compact form (see QuantizeOptions::large_program_columns): the same costs, so the
+  // same optimal cost, with the deviations as bounded columns of one equality row instead of inequality rows.
+  std::size_t inequality_columns = (elastic ? 2 : 0) * couplings.size() + even_groups.size();
+  for (std::size_t l = 0; l < jp.layouts.size(); ++l)
+    inequality_columns += 2 * static_cast<std::size_t>(jp.ncls[l][0] + jp.ncls[l][1]) + 2 * jp.layouts[l]->segments.size();
+  const bool compact = inequality_columns > static_cast<std::size_t>(std::max(options.large_program_columns, 0));
   const std::vector<std::vector<double>> target = coupled_targets(jp, couplings);
   // Class coordinate columns with the weak pull of each class towards its mean deformed coordinate (anchors
   // pieces, such as interior features, that no segment ties to the boundary).
@@ -92,10 +98,15 @@ IntegerProgram joint_program(JointProblem& jp, const std::vector<SegmentCoupling
         anchor[jp.cls[l][axis][b]] += axis == 0 ? p.x : p.y;
         members[jp.cls[l][axis][b]]++;
       }
-      const int v0 = P.add_columns(ncls, 0.0, inf, options.position_weight);
+      // v >= |X - a|; compact: X - a = above - below.
+      const int v0 = P.add_columns(compact ? 2 * ncls : ncls, 0.0, inf, options.position_weight);
       for (int c = 0; c < ncls; ++c) {
         const int xc = jp.col0[l][axis] + c;
         const double a = std::round(anchor[c] / members[c]);
+        if (compact) {
+          P.add_row({{xc, 1.0}, {v0 + 2 * c, -1.0}, {v0 + 2 * c + 1, 1.0}}, a, a);
+          continue;
+        }
         P.add_row({{v0 + c, 1.0}, {xc, -1.0}}, -a, inf);
         P.add_row({{v0 + c, 1.0}, {xc, 1.0}}, a, inf);
       }
@@ -109,15 +120,28 @@ IntegerProgram joint_program(JointProblem& jp, const std::vector<SegmentCoupling
         throw MeshingError(part_name + ": quantization is infeasible: a side of the poly-square (chain " +
                            std::to_string(s.chain) + ") would have zero length");
       const double sg = label_sign(s.label);
-      // u: deviation from t; w: deviation beyond the band [lo, hi]
-      const int u = P.add_columns(1, 0.0, inf, 1.0 / std::max(target_k, 1.0));
-      const int w = P.add_columns(1, 0.0, inf, options.outside_band_weight / std::max(target_k, 1.0));
+      const double unit = 1.0 / std::max(target_k, 1.0);
       // Integer right-hand sides keep the LP vertex integral (the matrix is totally unimodular).
       const double t = std::max(std::round(target_k), 1.0);
       // n = sg (X_b - X_a) >= 1 ; u >= |n - t| ; w >= n - hi, w >= lo - n. The band is soft: a layout that only
       // closes with a stretched side still gets counts, and the quality checks downstream judge the result.
       const double lo = std::max(1.0, std::ceil(t / options.max_side_change));
       const double hi = std::max(lo, std::floor(t * options.max_side_change));
+      if (compact) {
+        // n = t + longer within the band + longer beyond it - shorter within - shorter beyond; beyond the band
+        // costs u's and w's weights together and the costs are convex, so the band fills first. The bounds
+        // keep n >= 1.
+        const double beyond = unit * (1.0 + options.outside_band_weight);
+        const int d = P.add_columns(1, 0.0, hi - t, unit);
+        P.add_columns(1, 0.0, inf, beyond);
+        P.add_columns(1, 0.0, t - lo, unit);
+        P.add_columns(1, 0.0, lo - 1.0, beyond);
+        P.add_row({{xb, sg}, {xa, -sg}, {d, -1.0}, {d + 1, -1.0}, {d + 2, 1.0}, {d + 3, 1.0}}, t, t);
+        continue;
+      }
+      // u: deviation from t; w: deviation beyond the band [lo, hi]
+      const int u = P.add_columns(1, 0.0, inf, unit);
+      const int w = P.add_columns(1, 0.0, inf, options.outside_band_weight / std::max(target_k, 1.0));
       P.add_row({{xb, sg}, {xa, -sg}}, 1.0, inf);
       P.add_row({{u, 1.0}, {xb, -sg}, {xa, sg}}, -t, inf);
       P.add_row({{u, 1.0}, {xb, sg}, {xa, -sg}}, t, inf);
@@ -170,10 +194,10 @@ void solve_joint(JointProblem& jp, IntegerProgram& P, const std::vector<SegmentC
   }
   std::size_t sides = 0;
   for (const Layout* layout : jp.layouts) sides += layout->segments.size();
-  const double dive_gap = P.columns() > options.branch_and_cut_columns
-                              ? IntegerProgram::inf
-                              : options.dive_gap * std::max(1.0, static_cast<double>(sides) / 1000.0);
-  const std::optional<std::vector<double>> x = P.solve(options.time_limit_ms / 1000.0, options.gap, dive_gap);
+  const bool large = P.columns() > options.large_program_columns;
+  const double dive_gap = large ? IntegerProgram::inf
+                                : options.dive_gap * std::max(1.0, static_cast<double>(sides) / 1000.0);
+  const std::optional<std::vector<double>> x = P.solve(options.time_limit_ms / 1000.0, options.gap, dive_gap, large);
   if (!x)
     throw no_integer_solution(part_name);
   for (std::size_t l = 0; l < jp.layouts.size(); ++l) {

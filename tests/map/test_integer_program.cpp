@@ -132,3 +132,32 @@ TEST(IntegerProgram, RowsAddedAfterASolveAreSolvedFromItsBasis) {
   p.add_row({{2, 1.0}}, -IntegerProgram::inf, 5.0);  // x2 <= 5 contradicts x2 >= 8
   EXPECT_FALSE(p.solve(10.0));
 }
+
+TEST(IntegerProgram, ALargeProgramDivesFromItsDualSolutionToTheOptimum) {
+  // Eight independent copies of half_integral's program: the relaxation is fractional in each (x + y = 1.5), and
+  // a large program's dive fixes the fractional columns of all copies in one step. Its point must be integral,
+  // feasible and optimal (x + y = 1 in each copy), as the one-column-at-a-time dive's is; an infeasible step of
+  // all at once (2x + 2y <= 3 with x = y = 1 after rounding halves up) must fall back to single fixes.
+  constexpr int copies = 8;
+  auto program = [] {
+    IntegerProgram p;
+    for (int k = 0; k < copies; ++k) {
+      const int x = p.add_columns(2, 0.0, 10.0, -1.0, true);
+      p.add_row({{x, 2.0}, {x + 1, 2.0}}, -IntegerProgram::inf, 3.0);
+    }
+    return p;
+  };
+  const auto large = program().solve(10.0, 0.0, 1e9, true), one_by_one = program().solve(10.0, 0.0, 1e9, false);
+  ASSERT_TRUE(large && one_by_one);
+  double sum_large = 0.0, sum_one = 0.0;
+  for (int k = 0; k < copies; ++k) {
+    const double x = (*large)[2 * k], y = (*large)[2 * k + 1];
+    EXPECT_NEAR(x, std::round(x), 1e-9);
+    EXPECT_NEAR(y, std::round(y), 1e-9);
+    EXPECT_LE(2 * x + 2 * y, 3.0 + 1e-9);
+    sum_large += x + y;
+    sum_one += (*one_by_one)[2 * k] + (*one_by_one)[2 * k + 1];
+  }
+  EXPECT_NEAR(sum_large, copies, 1e-9);
+  EXPECT_NEAR(sum_one, copies, 1e-9);
+}

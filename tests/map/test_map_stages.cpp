@@ -279,3 +279,23 @@ TEST(Quantization, OverlappingSidesAreReported) {
   L.lattice[3] = L.lattice[1];  // fold the notch onto another corner
   EXPECT_NE(check_layout(L), "");
 }
+
+TEST(Quantization, TheCompactFormOfALargeProgramHasTheSameOptimum) {
+  // Above QuantizeOptions::large_program_columns the program is built with one equality row per side (bounded
+  // deviation columns) and solved by the dual simplex; the L-shape's optimum (the counts nearest its targets)
+  // must not depend on the form.
+  std::vector<Vec2> deformed;
+  Layout inequality = l_shape(deformed), compact = inequality;
+  quantize_layout(inequality, deformed, QuantizeOptions{}, "test");
+  QuantizeOptions all_large;
+  all_large.large_program_columns = 0;
+  quantize_layout(compact, deformed, all_large, "test");
+  EXPECT_EQ(check_layout(compact), "");
+  for (const auto& s : compact.segments) {
+    auto count = [&](const Layout& L) {
+      const auto a = L.lattice[s.break_a], b = L.lattice[s.break_b];
+      return std::abs(b[0] - a[0]) + std::abs(b[1] - a[1]);
+    };
+    EXPECT_EQ(count(compact), count(inequality));
+  }
+}

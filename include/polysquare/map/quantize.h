@@ -25,11 +25,14 @@ struct QuantizeOptions {
   double dive_gap = 5.0;  ///< a fractional LP optimum is dived from (columns fixed one by one), and the dive's
                          ///< point kept when its cost is within this of the LP's per 1000 sides of the program
                          ///< (at least this: five elements of deviation on unit sides); else branch-and-cut
-                         ///< (only up to branch_and_cut_columns)
-  int branch_and_cut_columns = 5000;  ///< above this many columns a dive's integer point is kept at any cost:
-                                      ///< branch-and-cut ran to the time limit and kept the dive's point on
-                                      ///< each such program measured (25k columns, 20 s per solve), and what it
-                                      ///< returns at a time limit depends on the machine's speed
+                         ///< (only up to large_program_columns)
+  int large_program_columns = 5000;  ///< above this many columns (counted in the inequality form) a program is
+                                     ///< built in a compact form (one equality row per side and per anchor:
+                                     ///< about a third of the rows) and solved by the dual simplex, its dive fixes
+                                     ///< every fractional column at once, and the dive's integer point is
+                                     ///< kept at any cost: branch-and-cut ran to the time limit and kept the
+                                     ///< dive's point on each such program measured (25k columns, 20 s per
+                                     ///< solve), and what it returns at a time limit depends on the machine
   bool screen_separations = true;  ///< each round's separations are tried on their layout alone before they join
                                    ///< the program; those that contradict its sides or each other give way to the
                                    ///< next choice for their conflict (false: added as found, and the solve fails)
