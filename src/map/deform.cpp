@@ -1,5 +1,7 @@
 #include "polysquare/map/deform.h"
 
+#include "core/digest.h"
+
 #include <Eigen/Sparse>
 #include <Eigen/SparseCholesky>
 #include <oneapi/tbb/blocked_range.h>
@@ -395,55 +397,24 @@ int minimize(const Energy& energy, const DeformProblem& pr, std::vector<Vec2>& x
   return it;
 }
 
-// Two independent 64-bit lanes over the 64-bit words of everything a solve reads: the memo's key.
-struct Digest {
-  std::uint64_t a = 0x9e3779b97f4a7c15ull, b = 0x6a09e667f3bcc909ull;
-  void word(std::uint64_t w) {
-    a = (a ^ w) * 0xff51afd7ed558ccdull;
-    a ^= a >> 33;
-    b = (b + w) * 0xc4ceb9fe1a85ec53ull;
-    b ^= b >> 29;
-    b = (b << 21) | (b >> 43);
+// Everything a solve reads, into the memo's key.
+void digest_problem(Digest& d, const DeformProblem& p, const DeformOptions& o, const std::vector<Vec2>& x) {
+  for (double v : {o.amips_alpha, o.amips_s, o.relative_tolerance}) d.real(v);
+  d.word(static_cast<std::uint64_t>(o.max_iterations));
+  d.word(static_cast<std::uint64_t>(o.lbfgs_memory));
+  d.word(o.precondition ? 1u : 0u);
+  d.raw(o.eps_schedule);
+  d.raw(p.rest);
+  d.raw(p.triangles);
+  d.word(p.aligned.size());
+  for (const AlignedEdge& e : p.aligned) {  // field by field: the struct has padding
+    d.word(static_cast<std::uint64_t>(static_cast<std::uint32_t>(e.a)) << 32 | static_cast<std::uint32_t>(e.b));
+    d.real(e.weight);
+    d.word(static_cast<std::uint64_t>(e.label + 1));
   }
-  void real(double v) {
-    std::uint64_t w;
-    std::memcpy(&w, &v, sizeof w);
-    word(w);
-  }
-  template <typename T>
-  void raw(const std::vector<T>& v) {  // types without padding only
-    word(v.size());
-    const auto* bytes = reinterpret_cast<const unsigned char*>(v.data());
-    const std::size_t n = v.size() * sizeof(T);
-    std::size_t i = 0;
-    for (; i + 8 <= n; i += 8) {
-      std::uint64_t w;
-      std::memcpy(&w, bytes + i, 8);
-      word(w);
-    }
-    std::uint64_t tail = 0;
-    if (n > i) std::memcpy(&tail, bytes + i, n - i);  // an empty vector's data() may be null
-    word(tail);
-  }
-  void problem(const DeformProblem& p, const DeformOptions& o, const std::vector<Vec2>& x) {
-    for (double v : {o.amips_alpha, o.amips_s, o.relative_tolerance}) real(v);
-    word(static_cast<std::uint64_t>(o.max_iterations));
-    word(static_cast<std::uint64_t>(o.lbfgs_memory));
-    word(o.precondition ? 1u : 0u);
-    raw(o.eps_schedule);
-    raw(p.rest);
-    raw(p.triangles);
-    word(p.aligned.size());
-    for (const AlignedEdge& e : p.aligned) {  // field by field: the struct has padding
-      word(static_cast<std::uint64_t>(static_cast<std::uint32_t>(e.a)) << 32 | static_cast<std::uint32_t>(e.b));
-      real(e.weight);
-      word(static_cast<std::uint64_t>(e.label + 1));
-    }
-    raw(p.fixed);
-    raw(x);
-  }
-  DeformMemo::Key key() const { return {a, b}; }
-};
+  d.raw(p.fixed);
+  d.raw(x);
+}
 
 }  // namespace
 
@@ -497,7 +468,7 @@ DeformStats deform_to_polysquare(const DeformProblem& problem, const DeformOptio
   if (options.memo) {
     Digest d;
     d.word(1);  // which solve
-    d.problem(problem, options, x);
+    digest_problem(d, problem, options, x);
     key = d.key();
     bool ok = false;
     if (options.memo->find(key, x, stats, ok)) return stats;
@@ -533,7 +504,7 @@ bool move_constrained_vertices(const DeformProblem& problem, const DeformOptions
   Digest d;
   d.word(2);  // which solve
   d.word(options.pull_when_path_fails ? 1 : 0);
-  d.problem(problem, options, x);
+  digest_problem(d, problem, options, x);
   d.raw(target_mask);
   d.raw(targets);
   const DeformMemo::Key key = d.key();

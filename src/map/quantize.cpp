@@ -1,6 +1,8 @@
 #include "polysquare/map/quantize.h"
 
 #include <algorithm>
+#include <map>
+#include <mutex>
 #include <cmath>
 #include <numeric>
 #include <optional>
@@ -8,6 +10,7 @@
 
 #include <oneapi/tbb/parallel_for.h>
 
+#include "core/digest.h"
 #include "map/integer_program.h"
 #include "polysquare/core/error.h"
 #include "polysquare/core/union_find.h"
@@ -270,6 +273,73 @@ JointProblem joint_problem(const std::vector<Layout*>& layouts, const std::vecto
 
 }  // namespace
 
+struct QuantizeMemo::Impl {
+  struct Entry {
+    std::vector<Separation> own;          // the separations the layout needs alone
+    std::optional<std::string> why_not;   // or why it cannot close alone
+  };
+  mutable std::mutex mutex;
+  std::map<std::array<std::uint64_t, 2>, Entry> entries;
+  mutable std::size_t hits = 0;
+};
+
+QuantizeMemo::QuantizeMemo() : impl_(std::make_unique<Impl>()) {}
+QuantizeMemo::~QuantizeMemo() = default;
+
+std::size_t QuantizeMemo::hits() const {
+  const std::lock_guard<std::mutex> lock(impl_->mutex);
+  return impl_->hits;
+}
+
+struct QuantizeMemoAccess {
+  static bool find(const QuantizeMemo& memo, const std::array<std::uint64_t, 2>& key, std::vector<Separation>& own,
+                   std::optional<std::string>& why_not) {
+    QuantizeMemo::Impl& m = *memo.impl_;
+    const std::lock_guard<std::mutex> lock(m.mutex);
+    const auto it = m.entries.find(key);
+    if (it == m.entries.end()) return false;
+    own = it->second.own;
+    why_not = it->second.why_not;
+    ++m.hits;
+    return true;
+  }
+  static void store(const QuantizeMemo& memo, const std::array<std::uint64_t, 2>& key, const std::vector<Separation>& own,
+                    const std::optional<std::string>& why_not) {
+    QuantizeMemo::Impl& m = *memo.impl_;
+    const std::lock_guard<std::mutex> lock(m.mutex);
+    m.entries.try_emplace(key, QuantizeMemo::Impl::Entry{own, why_not});
+  }
+};
+
+namespace {
+
+// Everything the quantization of `layout` alone reads (find_conflicts and check-free solves read its sides and
+// break points, the program their deformed positions), into the memo's key.
+std::array<std::uint64_t, 2> alone_key(const Layout& layout, const std::vector<Vec2>& deformed,
+                                       const QuantizeOptions& o, const std::string& part_name) {
+  Digest d;
+  auto integer = [&](long long v) { d.word(static_cast<std::uint64_t>(v)); };
+  d.text(part_name);
+  for (double v : {o.position_weight, o.max_side_change, o.outside_band_weight, o.gap, o.dive_gap, o.broken_coupling_cost})
+    d.real(v);
+  for (long long v : {static_cast<long long>(o.max_separation_rounds), static_cast<long long>(o.time_limit_ms),
+                      static_cast<long long>(o.large_program_columns), static_cast<long long>(o.screen_separations)})
+    integer(v);
+  d.raw(layout.break_vertex);
+  integer(static_cast<long long>(layout.segments.size()));
+  for (const LayoutSegment& s : layout.segments) {  // field by field: the struct has padding
+    for (int v : {s.chain, s.first, s.count, s.label, s.break_a, s.break_b}) integer(v);
+    d.real(s.target);
+  }
+  for (std::int32_t v : layout.break_vertex) {
+    d.real(deformed[static_cast<std::size_t>(v)].x);
+    d.real(deformed[static_cast<std::size_t>(v)].y);
+  }
+  return d.key();
+}
+
+}  // namespace
+
 namespace {
 
 // Solves the program; where sides overlap or corners coincide, adds the separation the deformed layout shows and
@@ -427,6 +497,11 @@ QuantizeStats quantize_layouts(const std::vector<Layout*>& layouts, const std::v
     std::vector<std::vector<Separation>> own(layouts.size());
     std::vector<std::optional<std::string>> why_not(layouts.size());
     oneapi::tbb::parallel_for(std::size_t{0}, layouts.size(), [&](std::size_t l) {
+      std::array<std::uint64_t, 2> key{};
+      if (options.memo) {
+        key = alone_key(*layouts[l], *deformed[l], options, part_name);
+        if (QuantizeMemoAccess::find(*options.memo, key, own[l], why_not[l])) return;
+      }
       Layout alone = *layouts[l];
       JointProblem one = joint_problem({&alone}, {deformed[l]});
       try {
@@ -436,6 +511,7 @@ QuantizeStats quantize_layouts(const std::vector<Layout*>& layouts, const std::v
         if (why.starts_with(part_name + ": ")) why.erase(0, part_name.size() + 2);
         why_not[l] = std::move(why);
       }
+      if (options.memo) QuantizeMemoAccess::store(*options.memo, key, own[l], why_not[l]);
     });
     for (std::size_t l = 0; l < layouts.size(); ++l) {
       if (why_not[l]) {

@@ -814,6 +814,7 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
   progress.finish("simplify");
   PolysquareMapOptions map = options.map;
   map.deform.memo = std::make_shared<DeformMemo>();  // this run's solved deformations (repair rounds repeat them)
+  map.quantize.memo = std::make_shared<QuantizeMemo>();  // and its layouts quantized alone
   map.size = options.size;
   map.layout.corner_threshold_deg = options.corner_threshold_deg;
   map.keep_partition = options.keep_partition;

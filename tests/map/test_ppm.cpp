@@ -396,3 +396,45 @@ TEST(Ppm, BentInterfacesShareTheirBreakPointsAndStitch) {
     EXPECT_EQ(q.boundary_edges, m.boundary_edges.size()) << name;
   }
 }
+
+TEST(InterfaceQuantization, EachLayoutAloneIsQuantizedOncePerRun) {
+  // With a memo (the pipeline sets one per run), a layout met again (a later joint map, a re-solve, a repair
+  // round) takes its quantization alone from it: the same joint result, and the same refusal of layouts that
+  // cannot close, without solving them again; a layout that differs (here one side's target) is solved anew.
+  RectLayout A = rectangle({0, 0}, {4.3, 6.2}, {2.4}), B = rectangle({0, 0}, {5.1, 2.6}), C = rectangle({0, 0}, {5.4, 3.6});
+  const std::vector<SegmentCoupling> couplings{{0, 1, 2, 3}, {0, 2, 1, 3}, {1, 0, 2, 2}};
+  auto solve = [&](const QuantizeOptions& o, RectLayout a, RectLayout b, RectLayout c) {
+    quantize_layouts({&a.layout, &b.layout, &c.layout}, {&a.deformed, &b.deformed, &c.deformed}, couplings, o, "T");
+    return std::vector<std::vector<std::array<long long, 2>>>{a.layout.lattice, b.layout.lattice, c.layout.lattice};
+  };
+  QuantizeOptions with_memo;
+  with_memo.memo = std::make_shared<QuantizeMemo>();
+  const auto plain = solve(QuantizeOptions{}, A, B, C);
+  EXPECT_EQ(solve(with_memo, A, B, C), plain);
+  EXPECT_EQ(with_memo.memo->hits(), 0u);
+  EXPECT_EQ(solve(with_memo, A, B, C), plain);
+  EXPECT_EQ(with_memo.memo->hits(), 3u);
+  RectLayout longer = B;
+  longer.layout.segments[1].target += 0.5;
+  EXPECT_EQ(solve(with_memo, A, longer, C), solve(QuantizeOptions{}, A, longer, C));
+  EXPECT_EQ(with_memo.memo->hits(), 5u);  // A and C again; the changed B solved
+
+  // A layout whose labels contradict each other is refused again from the memo, with the same reason.
+  RectLayout bad = rectangle({0, 0}, {4, 3});
+  bad.layout.segments[2].label = 0;
+  std::vector<std::string> reasons;
+  for (int run = 0; run < 2; ++run) {
+    RectLayout a = A, b = bad;
+    try {
+      quantize_layouts({&a.layout, &b.layout}, {&a.deformed, &b.deformed}, {{0, 0, 1, 0}}, with_memo, "bad");
+      ADD_FAILURE() << "a layout with contradictory labels was quantized";
+    } catch (const LayoutsCannotClose& e) {
+      EXPECT_EQ(e.layouts, std::vector<std::size_t>{1});
+      reasons.push_back(e.reasons.at(0));
+    }
+  }
+  ASSERT_EQ(reasons.size(), 2u);
+  EXPECT_EQ(reasons[0], reasons[1]);
+  // The first run's A belongs to another part (its messages name the part), so it is solved anew; then A and bad.
+  EXPECT_EQ(with_memo.memo->hits(), 5u + 2u);
+}

@@ -1,6 +1,7 @@
 // Stage 5: integer quantization of a poly-square layout (interval assignment).
 #pragma once
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -10,6 +11,8 @@
 #include "polysquare/map/layout.h"
 
 namespace polysquare {
+
+class QuantizeMemo;
 
 struct QuantizeOptions {
   double position_weight = 1e-3;  ///< weak pull of each break point towards its deformed position (anchors
@@ -38,6 +41,27 @@ struct QuantizeOptions {
                                    ///< next choice for their conflict (false: added as found, and the solve fails)
   double broken_coupling_cost = 1e4;  ///< cost per element of an elastic coupling's mismatch (quantize_layouts
                                       ///< with `broken`): above any saving in deviation, so only what cannot agree breaks
+  /// Each layout's quantization alone (the separations it needs, or why it cannot close), shared by the copies of
+  /// these options within one run (the pipeline sets it; null = none): every joint solve starts from them, and
+  /// the joint maps, their re-solves and the repair rounds meet the same layouts again.
+  std::shared_ptr<QuantizeMemo> memo;
+};
+
+/// Each layout's quantization alone (see QuantizeOptions::memo), by a 128-bit digest of what it reads (the
+/// layout's sides and break points, their deformed positions, the options, the part's name); the solve is
+/// deterministic, so a reused result is the one a new solve would give. Thread-safe.
+class QuantizeMemo {
+ public:
+  QuantizeMemo();
+  ~QuantizeMemo();
+  QuantizeMemo(const QuantizeMemo&) = delete;
+  QuantizeMemo& operator=(const QuantizeMemo&) = delete;
+  std::size_t hits() const;
+
+ private:
+  friend struct QuantizeMemoAccess;
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
 };
 
 struct QuantizeStats {
