@@ -149,14 +149,18 @@ std::optional<std::vector<double>> IntegerProgram::solve(double seconds, double 
     if (!solve_relaxation(seconds, large)) return std::nullopt;
   }
   ClpSimplex* const lp = lp_->model.get();
-  auto fractional = [&] {  // the integer column nearest an integer without being one, or -1
+  // The integer column nearest an integer without being one, or -1; with `all`, every such column into it.
+  auto fractional = [&](std::vector<int>* all = nullptr) {
     const double* x = lp->getColSolution();
     int best = -1;
     double off_best = 1.0;
+    if (all) all->clear();
     for (std::size_t c = 0; c < n; ++c) {
       if (!integer_[c]) continue;
       const double off = std::abs(x[c] - std::round(x[c]));
-      if (off > 1e-9 && off < off_best) {
+      if (off <= 1e-9) continue;
+      if (all) all->push_back(static_cast<int>(c));
+      if (off < off_best) {
         off_best = off;
         best = static_cast<int>(c);
       }
@@ -182,24 +186,19 @@ std::optional<std::vector<double>> IntegerProgram::solve(double seconds, double 
   std::optional<std::vector<double>> dived;
   int keep = 1;
   std::vector<int> all_fractional;
-  for (int c; (c = fractional()) >= 0;) {
+  for (int c; (c = fractional(large ? &all_fractional : nullptr)) >= 0;) {
     double* lo = lp->columnLower();
     double* hi = lp->columnUpper();
     const double v = lp->getColSolution()[c], near = std::round(v);
-    if (large) {
+    if (all_fractional.size() > 1) {
       const double* x = lp->getColSolution();
-      all_fractional.clear();
-      for (std::size_t k = 0; k < n; ++k)
-        if (integer_[k] && std::abs(x[k] - std::round(x[k])) > 1e-9) all_fractional.push_back(static_cast<int>(k));
-      if (all_fractional.size() > 1) {
-        for (int k : all_fractional) lo[k] = hi[k] = std::round(x[k]);
-        lp->dual(0, keep);
-        keep = 1 | 2;
-        if (lp->status() == 0) continue;
-        for (int k : all_fractional) {
-          lo[k] = col_lo_[static_cast<std::size_t>(k)];
-          hi[k] = col_hi_[static_cast<std::size_t>(k)];
-        }
+      for (int k : all_fractional) lo[k] = hi[k] = std::round(x[k]);
+      lp->dual(0, keep);
+      keep = 1 | 2;
+      if (lp->status() == 0) continue;
+      for (int k : all_fractional) {
+        lo[k] = col_lo_[static_cast<std::size_t>(k)];
+        hi[k] = col_hi_[static_cast<std::size_t>(k)];
       }
     }
     lo[c] = hi[c] = near;

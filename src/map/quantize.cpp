@@ -50,6 +50,7 @@ struct JointProblem {
   std::vector<const std::vector<Vec2>*> deformed;
   std::vector<std::array<std::vector<int>, 2>> cls;  // per layout, per axis: class of each break point
   std::vector<std::array<int, 2>> ncls, col0;        // class counts and first column per layout and axis
+  bool large = false;  // its program is built in the compact form and solved as large (joint_program decides)
   // The program's column of break point b's coordinate along `axis` in layout l.
   int col(std::size_t l, int axis, int b) const { return col0[l][axis] + cls[l][axis][b]; }
 };
@@ -84,7 +85,8 @@ IntegerProgram joint_program(JointProblem& jp, const std::vector<SegmentCoupling
   std::size_t inequality_columns = (elastic ? 2 : 0) * couplings.size() + even_groups.size();
   for (std::size_t l = 0; l < jp.layouts.size(); ++l)
     inequality_columns += 2 * static_cast<std::size_t>(jp.ncls[l][0] + jp.ncls[l][1]) + 2 * jp.layouts[l]->segments.size();
-  const bool compact = inequality_columns > static_cast<std::size_t>(std::max(options.large_program_columns, 0));
+  jp.large = inequality_columns > static_cast<std::size_t>(std::max(options.large_program_columns, 0));
+  const bool compact = jp.large;
   const std::vector<std::vector<double>> target = coupled_targets(jp, couplings);
   // Class coordinate columns with the weak pull of each class towards its mean deformed coordinate (anchors
   // pieces, such as interior features, that no segment ties to the boundary).
@@ -144,6 +146,7 @@ IntegerProgram joint_program(JointProblem& jp, const std::vector<SegmentCoupling
       }
       // u: deviation from t; w: deviation beyond the band [lo, hi]
       const int u = P.add_columns(1, 0.0, inf, unit);
+      // Divided, not `* unit`: bit for bit the cost the small cases' meshes were made with.
       const int w = P.add_columns(1, 0.0, inf, options.outside_band_weight / std::max(target_k, 1.0));
       P.add_row({{xb, sg}, {xa, -sg}}, 1.0, inf);
       P.add_row({{u, 1.0}, {xb, -sg}, {xa, sg}}, -t, inf);
@@ -197,10 +200,9 @@ void solve_joint(JointProblem& jp, IntegerProgram& P, const std::vector<SegmentC
   }
   std::size_t sides = 0;
   for (const Layout* layout : jp.layouts) sides += layout->segments.size();
-  const bool large = P.columns() > options.large_program_columns;
-  const double dive_gap = large ? IntegerProgram::inf
-                                : options.dive_gap * std::max(1.0, static_cast<double>(sides) / 1000.0);
-  const std::optional<std::vector<double>> x = P.solve(options.time_limit_ms / 1000.0, options.gap, dive_gap, large);
+  const double dive_gap = jp.large ? IntegerProgram::inf
+                                   : options.dive_gap * std::max(1.0, static_cast<double>(sides) / 1000.0);
+  const std::optional<std::vector<double>> x = P.solve(options.time_limit_ms / 1000.0, options.gap, dive_gap, jp.large);
   if (!x)
     throw no_integer_solution(part_name);
   for (std::size_t l = 0; l < jp.layouts.size(); ++l) {
@@ -473,7 +475,7 @@ bool closes_alone(const JointProblem& jp, std::size_t l, const std::vector<Separ
     if (sep.layout == static_cast<int>(l))
       P.add_row({{one.col(0, sep.axis, sep.hi), 1.0}, {one.col(0, sep.axis, sep.lo), -1.0}}, 1.0, IntegerProgram::inf);
   // Any integer point answers: a dive's is taken at any cost.
-  return P.solve(options.time_limit_ms / 1000.0, options.gap, IntegerProgram::inf).has_value();
+  return P.solve(options.time_limit_ms / 1000.0, options.gap, IntegerProgram::inf, one.large).has_value();
 }
 
 }  // namespace
