@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <limits>
 #include <map>
 #include <numeric>
 #include <chrono>
@@ -299,6 +300,52 @@ std::vector<std::uint8_t> nodes_near(const QuadMesh& mesh, Changed changed, int 
   return near;
 }
 
+// Cuts the quads of the subregions `cut` out of a finished part mesh and meshes each hole again as one patch on
+// its boundary loop (refine/local_patch.h, the subregion's quads alone first), so that the rest of the part keeps
+// its quads, their smoothing and their local patches: a repair round that mapped the part again redid all three
+// (delta_box 10 m: 350 s a round). `local_patched` (#quads) is carried; the new quads are the subregions' own.
+// False when a subregion keeps some of its quads (the mesh may have changed: the caller maps the part again).
+bool patch_subregions_in_place(QuadMesh& mesh, const std::map<int, std::string>& cut, const MeshOptions& options,
+                               std::vector<std::uint8_t>& local_patched) {
+  if (mesh.quad_part.size() != mesh.quads.size()) return false;
+  const std::size_t nq = mesh.quads.size();
+  std::vector<std::int32_t> region(nq, -1);
+  std::vector<std::uint8_t> made(nq, 0);
+  for (std::size_t q = 0; q < nq; ++q) {
+    if (cut.count(mesh.quad_part[q])) region[q] = mesh.quad_part[q];  // each subregion a patch of its own
+    made[q] = q < local_patched.size() && local_patched[q] ? 2 : 0;  // the new quads come back as 1
+  }
+  LocalPatchOptions lp = options.local_patch;
+  lp.size = options.size;
+  lp.min_rings = 0;
+  lp.holes = true;   // a subregion around an island
+  lp.max_rings = 1;  // one ring of neighbours when the subregion alone is no disk or its patch does not build
+  lp.max_quads = std::numeric_limits<std::size_t>::max();
+  lp.target_sj = 0.0;  // the first patch that builds: smoothing follows, and each try costs a whole patch
+  remesh_regions(mesh, region, lp, made);
+  for (std::size_t q = 0; q < mesh.quads.size(); ++q)
+    if (cut.count(mesh.quad_part[q]) && made[q] != 1) return false;
+  local_patched.assign(mesh.quads.size(), 0);
+  for (std::size_t q = 0; q < mesh.quads.size(); ++q) local_patched[q] = made[q] == 2;
+  return true;
+}
+
+// #subregions (of `count`): 1 for the subregions of the quads `changed(q)` and of the quads sharing a node with them.
+template <typename Changed>
+std::vector<std::uint8_t> subregions_touching(const QuadMesh& mesh, Changed changed, std::size_t count) {
+  std::vector<std::uint8_t> node(mesh.nodes.size(), 0), touched(count, 0);
+  for (std::size_t q = 0; q < mesh.quads.size(); ++q)
+    if (changed(q))
+      for (std::int32_t v : mesh.quads[q]) node[static_cast<std::size_t>(v)] = 1;
+  for (std::size_t q = 0; q < mesh.quads.size(); ++q) {
+    const auto& x = mesh.quads[q];
+    const int s = q < mesh.quad_part.size() ? mesh.quad_part[q] : -1;
+    if (s >= 0 && static_cast<std::size_t>(s) < count && (node[x[0]] || node[x[1]] || node[x[2]] || node[x[3]]))
+      touched[static_cast<std::size_t>(s)] = 1;
+  }
+  return touched;
+}
+
 // Meshes a part with `make_mesh` (a map candidate or the fallback), then smooths, checks and measures it.
 template <typename MakeMesh>
 Candidate finish_candidate(const Region& region, const RegionPart& part, const MeshOptions& options,
@@ -330,111 +377,152 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
              (r.stats.subregions[static_cast<std::size_t>(s)].mapped ? " (mapped)" : " (patch)");
     };
     // Where the candidate's time goes, summed over its repair rounds (the report's `stage_seconds`).
-    double t_map = 0.0, t_first_map = 0.0, t_refine = 0.0, t_smooth = 0.0, t_local = 0.0, t_relax = 0.0, t_measure = 0.0;
+    double t_map = 0.0, t_first_map = 0.0, t_refine = 0.0, t_smooth = 0.0, t_local = 0.0, t_relax = 0.0, t_measure = 0.0,
+           t_repair_patches = 0.0;
     nlohmann::json first_map;  // the first round's map: partition, split rounds, joint maps
     auto timed = [](double& total, auto&& f) {
       const auto t0 = std::chrono::steady_clock::now();
       f();
       total += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     };
+    SmoothOptions smooth = options.smooth;
+    smooth.feature_tolerance = options.feature_tolerance * options.size;
+    // Folded quads, and unpinned ones outside the SJ or edge-ratio gate. The gates judge the quads the mesher controls: quads
+    // pinned by an input corner sharper than the SJ gate are only counted (no conforming mesh does better).
+    std::vector<std::uint8_t> poor;
+    auto measure = [&] {
+      timed(t_measure, [&] {
+        metrics = quad_metrics(r.mesh);
+        pinned = quads_pinned_by_sharp_input(r.mesh, options.min_scaled_jacobian, options.size);
+      });
+      poor.assign(metrics.sj.size(), 0);
+      bool any = false;
+      for (std::size_t q = 0; q < metrics.sj.size(); ++q) {
+        poor[q] = metrics.sj[q] <= 0.0 || (!pinned[q] && (metrics.sj[q] < options.min_scaled_jacobian ||
+                                                          metrics.edge_ratio[q] > options.max_edge_ratio));
+        any = any || poor[q];
+      }
+      return any;
+    };
+    // The mesh's smoothing again near the quads `changed`: the new quads' seams with the rest are smoothed from
+    // both sides.
+    auto smooth_near = [&](auto changed) {
+      const std::vector<std::uint8_t> near = nodes_near(r.mesh, changed, kResmoothRings);
+      timed(t_smooth, [&] { c.smooth = smooth_quads(r.mesh, smooth, &region, &near); });
+    };
+    // First the neighbourhoods of the poor quads are meshed again (a few rings of quads, the rest of their
+    // subregions keeps its map), then smoothed near them.
+    // Local patches around the flagged quads, `rings` and `max_quads` as far as they may grow; then the mesh
+    // is smoothed near them (smooth_near) and measured again. Returns whether poor quads remain.
+    auto patch_locally = [&](const std::vector<std::uint8_t>& flagged, int rings, std::size_t max_quads) {
+      LocalPatchOptions lp = options.local_patch;
+      lp.size = options.size;
+      lp.max_rings = rings;
+      lp.max_quads = max_quads;
+      LocalPatchStats done;
+      timed(t_local, [&] { done = remesh_poor_quads(r.mesh, flagged, lp, local_patched); });
+      local_stats.clusters += done.clusters;
+      local_stats.patched += done.patched;
+      local_stats.quads_added += done.quads_added;
+      local_stats.quads_removed += done.quads_removed;
+      if (done.patched == 0) return true;  // the flagged quads are as they were
+      smooth_near(
+          [&](std::size_t q) { return local_patched[q] != 0 || quad_min_corner_sj(r.mesh, q) < kResmoothBelowSj; });
+      return measure();
+    };
+    // Mapped subregions a repair round cuts out of the finished mesh and patches in place, with why (empty: the
+    // round maps the part again).
+    std::map<int, std::string> in_place;
     for (int round = 0;; ++round) {
-      timed(t_map, [&] { r = make_mesh(repairs); });
-      if (round == 0) {
-        t_first_map = t_map;
-        first_map = {{"partition", r.stats.seconds_partition}, {"split_rounds", r.stats.split.seconds},
-                     {"joint_maps", r.stats.joint_maps}, {"joint_maps_seconds", r.stats.seconds_joint_maps}};
+      // #subregions: 1 where this round changed the mesh, the rest kept from the round before; empty: everywhere.
+      std::vector<std::uint8_t> scope;
+      if (!in_place.empty()) {
+        bool done = false;
+        timed(t_repair_patches, [&] { done = patch_subregions_in_place(r.mesh, in_place, options, local_patched); });
+        if (done) {
+          for (const auto& [s, why] : in_place) {
+            SubregionStats& sr = r.stats.subregions[static_cast<std::size_t>(s)];
+            sr.mapped = false;
+            sr.reason = name + ": subregion " + std::to_string(s) + ": " + why + " (meshed again as a patch)";
+          }
+          auto cut = [&](std::size_t q) { return in_place.count(subregion_of(q)) > 0; };
+          scope = subregions_touching(r.mesh, cut, r.stats.subregions.size());
+          smooth_near(cut);
+        }
+        in_place.clear();
       }
-      RefineStats refined;
-      timed(t_refine, [&] { refined = refine_flat_corners(r.mesh, options.refine); });
-      if (r.stats.split.tested > 0 || r.stats.joint_splits > 0)
-        c.summary["split"] = {{"rounds", r.stats.split.rounds}, {"subregions_split", r.stats.split.split},
-                              {"maps_tried", r.stats.split.tested}, {"pieces_mapped", r.stats.split.pieces_mapped},
-                              {"seconds", r.stats.split.seconds}, {"after_joint_map", r.stats.joint_splits}};
-      c.summary["flat_corners"] = refined.flat_corners;
-      c.summary["flat_corners_collapsed"] = refined.collapsed;
-      RefineStats loops;
-      timed(t_refine, [&] { loops = pillow_feature_loops(r.mesh, options.refine); });
-      if (loops.feature_loops > 0) {
-        c.summary["feature_loops_flat"] = loops.feature_loops;
-        c.summary["feature_loops_pillowed"] = loops.pillowed;
+      if (scope.empty()) {
+        timed(t_map, [&] { r = make_mesh(repairs); });
+        if (round == 0) {
+          t_first_map = t_map;
+          first_map = {{"partition", r.stats.seconds_partition}, {"split_rounds", r.stats.split.seconds},
+                       {"joint_maps", r.stats.joint_maps}, {"joint_maps_seconds", r.stats.seconds_joint_maps}};
+        }
+        RefineStats refined;
+        timed(t_refine, [&] { refined = refine_flat_corners(r.mesh, options.refine); });
+        if (r.stats.split.tested > 0 || r.stats.joint_splits > 0)
+          c.summary["split"] = {{"rounds", r.stats.split.rounds}, {"subregions_split", r.stats.split.split},
+                                {"maps_tried", r.stats.split.tested}, {"pieces_mapped", r.stats.split.pieces_mapped},
+                                {"seconds", r.stats.split.seconds}, {"after_joint_map", r.stats.joint_splits}};
+        c.summary["flat_corners"] = refined.flat_corners;
+        c.summary["flat_corners_collapsed"] = refined.collapsed;
+        RefineStats loops;
+        timed(t_refine, [&] { loops = pillow_feature_loops(r.mesh, options.refine); });
+        if (loops.feature_loops > 0) {
+          c.summary["feature_loops_flat"] = loops.feature_loops;
+          c.summary["feature_loops_pillowed"] = loops.pillowed;
+        }
+        timed(t_smooth, [&] { c.smooth = smooth_quads(r.mesh, smooth, &region); });
+        local_patched.clear();
       }
-      SmoothOptions smooth = options.smooth;
-      smooth.feature_tolerance = options.feature_tolerance * options.size;
-      timed(t_smooth, [&] { c.smooth = smooth_quads(r.mesh, smooth, &region); });
+      auto in_scope = [&](std::size_t q) {
+        if (scope.empty()) return true;
+        const int s = subregion_of(q);
+        return s >= 0 && scope[static_cast<std::size_t>(s)] != 0;
+      };
       InvariantReport inv;
-      // Folded quads, and unpinned ones outside the SJ or edge-ratio gate. The gates judge the quads the mesher controls: quads
-      // pinned by an input corner sharper than the SJ gate are only counted (no conforming mesh does better).
-      std::vector<std::uint8_t> poor;
-      auto measure = [&] {
-        timed(t_measure, [&] {
-          metrics = quad_metrics(r.mesh);
-          pinned = quads_pinned_by_sharp_input(r.mesh, options.min_scaled_jacobian, options.size);
-        });
-        poor.assign(metrics.sj.size(), 0);
-        bool any = false;
-        for (std::size_t q = 0; q < metrics.sj.size(); ++q) {
-          poor[q] = metrics.sj[q] <= 0.0 || (!pinned[q] && (metrics.sj[q] < options.min_scaled_jacobian ||
-                                                            metrics.edge_ratio[q] > options.max_edge_ratio));
-          any = any || poor[q];
-        }
-        return any;
-      };
-      // The mesh's smoothing again near the quads `changed`: the new quads' seams with the rest are smoothed from
-      // both sides.
-      auto smooth_near = [&](auto changed) {
-        const std::vector<std::uint8_t> near = nodes_near(r.mesh, changed, kResmoothRings);
-        timed(t_smooth, [&] { c.smooth = smooth_quads(r.mesh, smooth, &region, &near); });
-      };
-      local_patched.clear();
-      // First the neighbourhoods of the poor quads are meshed again (a few rings of quads, the rest of their
-      // subregions keeps its map), then smoothed near them.
-      // Local patches around the flagged quads, `rings` and `max_quads` as far as they may grow; then the mesh
-      // is smoothed near them (smooth_near) and measured again. Returns whether poor quads remain.
-      auto patch_locally = [&](const std::vector<std::uint8_t>& flagged, int rings, std::size_t max_quads) {
-        LocalPatchOptions lp = options.local_patch;
-        lp.size = options.size;
-        lp.max_rings = rings;
-        lp.max_quads = max_quads;
-        LocalPatchStats done;
-        timed(t_local, [&] { done = remesh_poor_quads(r.mesh, flagged, lp, local_patched); });
-        local_stats.clusters += done.clusters;
-        local_stats.patched += done.patched;
-        local_stats.quads_added += done.quads_added;
-        local_stats.quads_removed += done.quads_removed;
-        if (done.patched == 0) return true;  // the flagged quads are as they were
-        smooth_near(
-            [&](std::size_t q) { return local_patched[q] != 0 || quad_min_corner_sj(r.mesh, q) < kResmoothBelowSj; });
-        return measure();
-      };
       // The first pass also mends valid quads under local_patch.mend_below_sj where a patch does better.
-      bool any_flagged = measure();
-      std::vector<std::uint8_t> flagged = poor;
-      for (std::size_t q = 0; q < flagged.size(); ++q)
-        if (!flagged[q] && !pinned[q] && metrics.sj[q] < options.local_patch.mend_below_sj) {
-          flagged[q] = 2;
-          any_flagged = true;
-        }
+      // Outside the scope the quads are the last round's, local patches tried already.
+      measure();
+      bool any_flagged = false;
+      std::vector<std::uint8_t> flagged(poor.size(), 0);
+      for (std::size_t q = 0; q < flagged.size(); ++q) {
+        if (!in_scope(q)) continue;
+        flagged[q] = poor[q] ? 1 : !pinned[q] && metrics.sj[q] < options.local_patch.mend_below_sj ? 2 : 0;
+        any_flagged = any_flagged || flagged[q];
+      }
+      auto poor_in_scope = [&] {
+        std::vector<std::uint8_t> f(poor.size(), 0);
+        for (std::size_t q = 0; q < f.size(); ++q) f[q] = poor[q] && in_scope(q);
+        return f;
+      };
       if (any_flagged && options.local_patch.enabled &&
           patch_locally(flagged, options.local_patch.max_rings, options.local_patch.max_quads))
-        patch_locally(poor, options.local_patch.second_rings, options.local_patch.second_max_quads);
+        patch_locally(poor_in_scope(), options.local_patch.second_rings, options.local_patch.second_max_quads);
       {
         // The unstructured quads (patched subregions, local patches) cleaned up across their seams, where each
         // patch alone could only guess what its neighbours put at its boundary nodes.
         std::vector<std::uint8_t> unstructured_quads(r.mesh.quads.size(), 0);
         for (std::size_t q = 0; q < unstructured_quads.size(); ++q) {
           const int s = subregion_of(q);
-          unstructured_quads[q] = (q < local_patched.size() && local_patched[q]) ||
-                      (s >= 0 && !r.stats.subregions[static_cast<std::size_t>(s)].mapped);
+          unstructured_quads[q] = in_scope(q) && ((q < local_patched.size() && local_patched[q]) ||
+                                                  (s >= 0 && !r.stats.subregions[static_cast<std::size_t>(s)].mapped));
         }
         std::vector<std::size_t> origin;
         RelaxValencesStats relaxed;
         RelaxValencesOptions ro = options.relax_valences;
         ro.poor_sj = options.min_scaled_jacobian;
         timed(t_relax, [&] { relaxed = relax_region_valences(r.mesh, unstructured_quads, ro, smooth, origin); });
-        if (relaxed.region_quads > 0)
-          c.summary["relax_valences"] = {{"quads", relaxed.region_quads}, {"flips", relaxed.flips},
-                                         {"collapses", relaxed.collapses}, {"energy_before", relaxed.energy_before},
-                                         {"energy_after", relaxed.energy_after}};
+        if (relaxed.region_quads > 0) {
+          // A round in place adds its scope's figures to the round before's (a mapped round's cover the part).
+          nlohmann::json& rv = c.summary["relax_valences"];
+          if (scope.empty() || !rv.is_object()) rv = {{"quads", 0}, {"flips", 0}, {"collapses", 0}, {"energy_before", 0.0}, {"energy_after", 0.0}};
+          rv["quads"] = rv["quads"].get<std::size_t>() + relaxed.region_quads;
+          rv["flips"] = rv["flips"].get<std::size_t>() + relaxed.flips;
+          rv["collapses"] = rv["collapses"].get<std::size_t>() + relaxed.collapses;
+          rv["energy_before"] = rv["energy_before"].get<double>() + relaxed.energy_before;
+          rv["energy_after"] = rv["energy_after"].get<double>() + relaxed.energy_after;
+        }
         if (relaxed.kept) {
           if (!local_patched.empty()) {
             std::vector<std::uint8_t> moved(origin.size(), 0);
@@ -462,7 +550,7 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
       if (options.local_patch.enabled) {
         std::vector<std::uint8_t> wide(metrics.sj.size(), 0);
         bool any = false;
-        for (std::size_t q = 0; q < wide.size(); ++q) any |= (wide[q] = severe(q) && in_large_map(q)) != 0;
+        for (std::size_t q = 0; q < wide.size(); ++q) any |= (wide[q] = severe(q) && in_large_map(q) && in_scope(q)) != 0;
         if (any) patch_locally(wide, options.local_patch.wide_rings, options.local_patch.wide_max_quads);
       }
       // Quads beside a crack (pieces that do not share their nodes) count as folded: their subregions are meshed
@@ -474,6 +562,7 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
       // only beyond the max_poor_fraction budget, worst subregion first: a 400-quad map is not traded for a
       // quad at SJ 0.18.
       std::map<int, std::string> bad;
+      std::set<int> cracked_subregion;
       std::size_t first_folded = metrics.sj.size();
       std::map<int, std::pair<double, std::size_t>> poor_in;  // subregion -> (worst gate ratio, poor valid quads)
       std::size_t poor_valid = 0;
@@ -484,6 +573,7 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
         const bool degenerate = !folded && !pinned[q] && metrics.sj[q] < options.smooth.untangle.target_sj;
         if (folded && first_folded == metrics.sj.size()) first_folded = q;
         const int s = subregion_of(q);
+        if (cracked[q] && s >= 0) cracked_subregion.insert(s);
         if (cracked[q] && s >= 0) bad.emplace(s, "its quads do not share their nodes with a neighbour's (a crack) at " + at_text(r.mesh.nodes[r.mesh.quads[q][0]]));
         if (!poor[q]) continue;
         // Far outside a gate (severe) counts as folded outside large maps: the budget is for quads just outside,
@@ -531,7 +621,18 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
                                                  return v;
                                                }()}});
       }
-      if (round < options.repair_rounds && repairs.add(bad, r.stats)) continue;
+      if (round < options.repair_rounds) {
+        // Mapped subregions becoming patches are patched in place, unless a crack beside one asks for new nodes
+        // on its interfaces; a patch to be rebuilt otherwise (matching, grown) needs the part mapped again.
+        const bool in_place_only =
+            options.repair_in_place && std::all_of(bad.begin(), bad.end(), [&](const auto& b) {
+              return r.stats.subregions[static_cast<std::size_t>(b.first)].mapped && !cracked_subregion.count(b.first);
+            });
+        if (repairs.add(bad, r.stats)) {
+          if (in_place_only) in_place = bad;
+          continue;
+        }
+      }
       // The invariants are checked once the repair rounds are over (a round that continues never reads them).
       inv = check_invariants(r.mesh);
       if (!inv.ok() && first_folded < metrics.sj.size() && options.local_patch.enabled) {
@@ -569,6 +670,7 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
       break;
     }
     c.summary["stage_seconds"] = {{"map", t_first_map}, {"map_of", first_map}, {"repair_maps", t_map - t_first_map},
+                                  {"repair_patches", t_repair_patches},
                                   {"refine", t_refine}, {"smooth", t_smooth}, {"local_patches", t_local},
                                   {"relax_valences", t_relax},
                                   {"measure", t_measure}};

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <map>
 #include <optional>
+#include <span>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -11,6 +12,7 @@
 #include <oneapi/tbb/parallel_for.h>
 
 #include "polysquare/core/error.h"
+#include "polysquare/core/quad_topology.h"
 #include "polysquare/fallback/patch.h"
 
 namespace polysquare {
@@ -23,39 +25,42 @@ double worst_corner(const QuadMesh& m) {
   return worst;
 }
 
-// A region of quads that can be meshed again: one simple boundary loop (counter-clockwise, the region on its
-// left), no feature edge inside, every interior node of kind interior.
+// A region of quads that can be meshed again: simple boundary loops (the outer one counter-clockwise, holes
+// clockwise, the region on their left), no feature edge inside, every interior node of kind interior.
 struct QuadRegion {
   std::vector<std::int32_t> quads;
-  std::vector<std::int32_t> loop;      // boundary nodes in order
-  std::vector<std::int32_t> interior;  // nodes of the region not on its loop
+  std::vector<std::int32_t> loop;        // boundary nodes in order, loop after loop
+  std::vector<std::size_t> loop_sizes;   // nodes of each loop, the outer one first
+  std::vector<std::int32_t> interior;    // nodes of the region not on its loops
 };
 
 class Cutter {
  public:
-  explicit Cutter(const QuadMesh& m) : m_(m) {
-    for (std::size_t q = 0; q < m.quads.size(); ++q)
-      for (int i = 0; i < 4; ++i) {
-        const auto key = edge_key(m.quads[q][i], m.quads[q][(i + 1) % 4]);
-        auto [it, inserted] = across_.try_emplace(key, std::array<std::int32_t, 2>{static_cast<std::int32_t>(q), -1});
-        if (!inserted) it->second[1] = static_cast<std::int32_t>(q);
-      }
+  // Quads are found across edges through the quads at each node (compressed), not a hash map of every edge: at
+  // millions of quads that map's nodes were most of a local-patch pass (three passes a round).
+  explicit Cutter(const QuadMesh& m) : m_(m), node_quads_(node_quads(m)) {
     for (std::size_t e = 0; e < m.feature_edges.size(); ++e)
       feature_[edge_key(m.feature_edges[e][0], m.feature_edges[e][1])] = m.feature_edge_curve[e];
     for (std::size_t e = 0; e < m.boundary_edges.size(); ++e)
       boundary_[edge_key(m.boundary_edges[e][0], m.boundary_edges[e][1])] = m.boundary_edge_ring[e];
-    node_quads_.resize(m.nodes.size());
-    for (std::size_t q = 0; q < m.quads.size(); ++q)
-      for (auto v : m.quads[q]) node_quads_[static_cast<std::size_t>(v)].push_back(static_cast<std::int32_t>(q));
   }
 
   // The quad across edge i of quad q, or -1.
   std::int32_t neighbour(std::int32_t q, int i) const {
-    const auto& o = across_.at(edge_key(m_.quads[q][i], m_.quads[q][(i + 1) % 4]));
-    return o[0] == q ? o[1] : o[0];
+    const std::int32_t a = m_.quads[q][i], b = m_.quads[q][(i + 1) % 4];
+    for (const std::int32_t n : quads_at(a)) {
+      if (n == q) continue;
+      const auto& x = m_.quads[static_cast<std::size_t>(n)];
+      for (int j = 0; j < 4; ++j)
+        if (x[j] == b && (x[(j + 1) % 4] == a || x[(j + 3) % 4] == a)) return n;
+    }
+    return -1;
   }
   bool feature_edge(std::int32_t a, std::int32_t b) const { return feature_.count(edge_key(a, b)) > 0; }
-  const std::vector<std::int32_t>& quads_at(std::int32_t v) const { return node_quads_[static_cast<std::size_t>(v)]; }
+  std::span<const std::int32_t> quads_at(std::int32_t v) const {
+    const auto at = static_cast<std::size_t>(v);
+    return {node_quads_.quads.data() + node_quads_.offset[at], node_quads_.offset[at + 1] - node_quads_.offset[at]};
+  }
 
   // Grows `in` by one ring of edge neighbours (not across feature edges, not into `blocked`), then fills quads
   // with two or more edges on the region (notches that would pinch its loop).
@@ -87,8 +92,9 @@ class Cutter {
     }
   }
 
-  // The region of `quads` when it is a disk with one simple loop and nothing tagged inside.
-  bool cut(const std::vector<std::int32_t>& quads, const std::vector<std::uint8_t>& in, QuadRegion& r) const {
+  // The region of `quads` when it is a disk with one simple loop (with `holes`, a connected region with any
+  // number of holes) and nothing tagged inside.
+  bool cut(const std::vector<std::int32_t>& quads, const std::vector<std::uint8_t>& in, bool holes, QuadRegion& r) const {
     std::unordered_map<std::int32_t, std::int32_t> next;
     std::unordered_set<std::int32_t> nodes;
     for (std::int32_t q : quads)
@@ -102,17 +108,43 @@ class Cutter {
         if (!next.try_emplace(a, b).second) return false;  // the region touches itself at a
       }
     if (next.empty()) return false;
-    std::int32_t start = next.begin()->first;
-    for (const auto& [a, b] : next) start = std::min(start, a);
     r = QuadRegion{};
     r.quads = quads;
-    for (std::int32_t v = start;;) {
-      r.loop.push_back(v);
-      v = next.at(v);
-      if (v == start) break;
-      if (r.loop.size() > next.size()) return false;
+    // Every boundary node has one edge out; the loops, each from its smallest node, in order of that node.
+    std::vector<std::int32_t> starts;
+    for (const auto& [a, b] : next) starts.push_back(a);
+    std::sort(starts.begin(), starts.end());
+    std::unordered_set<std::int32_t> visited;
+    std::vector<std::vector<std::int32_t>> loops;
+    for (std::int32_t start : starts) {
+      if (visited.count(start)) continue;
+      std::vector<std::int32_t> loop;
+      for (std::int32_t v = start;;) {
+        if (!visited.insert(v).second) return false;  // two edges into v: a pinch
+        loop.push_back(v);
+        v = next.at(v);
+        if (v == start) break;
+      }
+      loops.push_back(std::move(loop));
     }
-    if (r.loop.size() != next.size()) return false;  // more than one loop: a hole
+    if (loops.size() > 1 && !holes) return false;  // more than one loop: a hole
+    // One counter-clockwise loop (the outer one), the others clockwise: a connected region.
+    std::size_t outer = loops.size() == 1 ? 0 : loops.size();
+    for (std::size_t k = 0; k < loops.size() && loops.size() > 1; ++k) {
+      double area = 0.0;
+      const auto& l = loops[k];
+      const Vec2 o = m_.nodes[l[0]];
+      for (std::size_t i = 0; i < l.size(); ++i) area += cross(m_.nodes[l[i]] - o, m_.nodes[l[(i + 1) % l.size()]] - o);
+      if (area <= 0.0) continue;
+      if (outer != loops.size()) return false;
+      outer = k;
+    }
+    if (outer == loops.size()) return false;
+    std::rotate(loops.begin(), loops.begin() + static_cast<std::ptrdiff_t>(outer), loops.begin() + static_cast<std::ptrdiff_t>(outer) + 1);
+    for (const auto& l : loops) {
+      r.loop.insert(r.loop.end(), l.begin(), l.end());
+      r.loop_sizes.push_back(l.size());
+    }
     for (std::int32_t v : nodes) {
       if (next.count(v)) continue;
       if (!m_.node_kind.empty() && m_.node_kind[static_cast<std::size_t>(v)] != NodeKind::interior) return false;
@@ -124,35 +156,37 @@ class Cutter {
 
   PatchInput patch_input(const QuadRegion& r) const {
     PatchInput in;
-    PatchCurve c;
-    c.closed = c.loop = true;
-    const std::size_t n = r.loop.size();
-    for (std::size_t i = 0; i < n; ++i) {
-      const std::int32_t a = r.loop[i], b = r.loop[(i + 1) % n];
-      in.nodes.push_back(m_.nodes[static_cast<std::size_t>(a)]);
-      in.kind.push_back(m_.node_kind.empty() ? NodeKind::interior : m_.node_kind[static_cast<std::size_t>(a)]);
-      c.nodes.push_back(static_cast<std::int32_t>(i));
-      const auto key = edge_key(a, b);
-      if (auto it = boundary_.find(key); it != boundary_.end()) {
-        c.role.push_back(PatchEdgeRole::boundary);
-        c.tag.push_back(it->second);
-      } else if (auto f = feature_.find(key); f != feature_.end()) {
-        c.role.push_back(PatchEdgeRole::feature);
-        c.tag.push_back(f->second);
-      } else {
-        c.role.push_back(PatchEdgeRole::none);
-        c.tag.push_back(-1);
+    std::size_t first = 0;
+    for (const std::size_t n : r.loop_sizes) {
+      PatchCurve c;
+      c.closed = c.loop = true;
+      for (std::size_t i = 0; i < n; ++i) {
+        const std::int32_t a = r.loop[first + i], b = r.loop[first + (i + 1) % n];
+        in.nodes.push_back(m_.nodes[static_cast<std::size_t>(a)]);
+        in.kind.push_back(m_.node_kind.empty() ? NodeKind::interior : m_.node_kind[static_cast<std::size_t>(a)]);
+        c.nodes.push_back(static_cast<std::int32_t>(first + i));
+        const auto key = edge_key(a, b);
+        if (auto it = boundary_.find(key); it != boundary_.end()) {
+          c.role.push_back(PatchEdgeRole::boundary);
+          c.tag.push_back(it->second);
+        } else if (auto f = feature_.find(key); f != feature_.end()) {
+          c.role.push_back(PatchEdgeRole::feature);
+          c.tag.push_back(f->second);
+        } else {
+          c.role.push_back(PatchEdgeRole::none);
+          c.tag.push_back(-1);
+        }
       }
+      first += n;
+      in.curves.push_back(std::move(c));
     }
-    in.curves.push_back(std::move(c));
     return in;
   }
 
  private:
   const QuadMesh& m_;
-  std::unordered_map<std::uint64_t, std::array<std::int32_t, 2>> across_;
+  NodeQuads node_quads_;
   std::unordered_map<std::uint64_t, std::int32_t> feature_, boundary_;
-  std::vector<std::vector<std::int32_t>> node_quads_;
 };
 
 // The better of the two patch constructions on `in`, or nothing when neither builds without a folded quad.
@@ -177,30 +211,13 @@ bool best_patch(const PatchInput& in, double size, QuadMesh& out) {
   return found;
 }
 
-}  // namespace
-
-LocalPatchStats remesh_poor_quads(QuadMesh& mesh, const std::vector<std::uint8_t>& poor, const LocalPatchOptions& options,
-                                  std::vector<std::uint8_t>& unstructured) {
+// Meshes again the region around each of `clusters` (quads; `poor` flags them, 2 = to be mended only), in order.
+LocalPatchStats remesh_clusters(QuadMesh& mesh, const Cutter& cutter, const std::vector<std::vector<std::int32_t>>& clusters,
+                                const std::vector<std::uint8_t>& poor, const LocalPatchOptions& options,
+                                std::vector<std::uint8_t>& unstructured) {
   LocalPatchStats st;
   const std::size_t nq = mesh.quads.size();
   if (unstructured.size() != nq) unstructured.assign(nq, 0);
-  const Cutter cutter(mesh);
-  std::vector<std::uint8_t> seen(nq, 0);
-  // The clusters: flagged quads sharing a node, in quad order (poor quads and quads only to be mended apart).
-  std::vector<std::vector<std::int32_t>> clusters;
-  for (std::size_t q0 = 0; q0 < nq; ++q0) {
-    if (!poor[q0] || seen[q0]) continue;
-    std::vector<std::int32_t> cluster{static_cast<std::int32_t>(q0)};
-    seen[q0] = 1;
-    for (std::size_t k = 0; k < cluster.size(); ++k)
-      for (std::int32_t v : mesh.quads[cluster[k]])
-        for (std::int32_t n : cutter.quads_at(v))
-          if (poor[n] == poor[q0] && !seen[n]) {
-            seen[n] = 1;
-            cluster.push_back(n);
-          }
-    clusters.push_back(std::move(cluster));
-  }
   st.clusters = clusters.size();
   struct Done {
     QuadRegion region;
@@ -232,12 +249,12 @@ LocalPatchStats remesh_poor_quads(QuadMesh& mesh, const std::vector<std::uint8_t
     }
     // Rings are added until a patch builds whose worst corner reaches the target; the best one seen is kept.
     double best_worst = mend_only ? cluster_worst : 0.0;
-    for (int ring = 1; ring <= options.max_rings; ++ring) {
-      cutter.grow(in, quads, used);
+    for (int ring = std::max(options.min_rings, 0); ring <= options.max_rings; ++ring) {
+      if (ring > 0) cutter.grow(in, quads, used);
       reached = quads;
       if (quads.size() > options.max_quads) break;
       QuadRegion r;
-      if (!cutter.cut(quads, in, r)) continue;
+      if (!cutter.cut(quads, in, options.holes, r)) continue;
       QuadMesh patch;
       if (!best_patch(cutter.patch_input(r), options.size, patch)) continue;
       const double worst = worst_corner(patch);
@@ -335,6 +352,46 @@ LocalPatchStats remesh_poor_quads(QuadMesh& mesh, const std::vector<std::uint8_t
   mesh = std::move(out);
   unstructured = std::move(flags);
   return st;
+}
+
+}  // namespace
+
+LocalPatchStats remesh_poor_quads(QuadMesh& mesh, const std::vector<std::uint8_t>& poor, const LocalPatchOptions& options,
+                                  std::vector<std::uint8_t>& unstructured) {
+  const std::size_t nq = mesh.quads.size();
+  const Cutter cutter(mesh);
+  std::vector<std::uint8_t> seen(nq, 0);
+  // The clusters: flagged quads sharing a node, in quad order (poor quads and quads only to be mended apart).
+  std::vector<std::vector<std::int32_t>> clusters;
+  for (std::size_t q0 = 0; q0 < nq; ++q0) {
+    if (!poor[q0] || seen[q0]) continue;
+    std::vector<std::int32_t> cluster{static_cast<std::int32_t>(q0)};
+    seen[q0] = 1;
+    for (std::size_t k = 0; k < cluster.size(); ++k)
+      for (std::int32_t v : mesh.quads[cluster[k]])
+        for (std::int32_t n : cutter.quads_at(v))
+          if (poor[n] == poor[q0] && !seen[n]) {
+            seen[n] = 1;
+            cluster.push_back(n);
+          }
+    clusters.push_back(std::move(cluster));
+  }
+  return remesh_clusters(mesh, cutter, clusters, poor, options, unstructured);
+}
+
+LocalPatchStats remesh_regions(QuadMesh& mesh, const std::vector<std::int32_t>& region, const LocalPatchOptions& options,
+                               std::vector<std::uint8_t>& unstructured) {
+  const Cutter cutter(mesh);
+  std::map<std::int32_t, std::vector<std::int32_t>> by_id;
+  std::vector<std::uint8_t> flagged(mesh.quads.size(), 0);
+  for (std::size_t q = 0; q < region.size() && q < mesh.quads.size(); ++q)
+    if (region[q] >= 0) {
+      by_id[region[q]].push_back(static_cast<std::int32_t>(q));
+      flagged[q] = 1;
+    }
+  std::vector<std::vector<std::int32_t>> clusters;
+  for (auto& [id, quads] : by_id) clusters.push_back(std::move(quads));
+  return remesh_clusters(mesh, cutter, clusters, flagged, options, unstructured);
 }
 
 }  // namespace polysquare

@@ -158,3 +158,75 @@ TEST(LocalPatch, ValidQuadsFlaggedToMendGiveWayOnlyToABetterPatch) {
   EXPECT_GT(worst(m), before);
   EXPECT_NEAR(area(m), n * n, 1e-9);
 }
+
+TEST(LocalPatch, WithNoRingFirstTheFlaggedRegionAloneIsMeshedAgainHolesIfAllowed) {
+  // A 6 x 4 block of the grid's lower half flagged (as a whole subregion is by a repair in place): with
+  // min_rings 0 exactly those quads are replaced and every node outside them keeps its place; with the default
+  // (a ring first) the region grows past them.
+  const int n = 12;
+  auto flag_block = [&](const QuadMesh& m) {
+    std::vector<std::uint8_t> f(m.quads.size(), 0);
+    for (std::size_t q = 0; q < m.quads.size(); ++q) {
+      const Vec2 c = 0.25 * (m.nodes[m.quads[q][0]] + m.nodes[m.quads[q][1]] + m.nodes[m.quads[q][2]] + m.nodes[m.quads[q][3]]);
+      f[q] = c.x > 3 && c.x < 9 && c.y > 1 && c.y < 5;
+    }
+    return f;
+  };
+  QuadMesh m = grid_with_feature(n);
+  const QuadMesh before = m;
+  std::vector<std::uint8_t> made;
+  LocalPatchOptions o;
+  o.size = 1.0;
+  o.min_rings = 0;
+  o.max_rings = 0;
+  const LocalPatchStats st = remesh_poor_quads(m, flag_block(m), o, made);
+  ASSERT_EQ(st.patched, 1u);
+  EXPECT_EQ(st.quads_removed, 24u);
+  EXPECT_TRUE(check_invariants(m).ok()) << check_invariants(m).first_problem;
+  EXPECT_NEAR(area(m), n * n, 1e-9);
+  // Every quad outside the block is still there, on the same places.
+  std::set<std::array<double, 8>> kept;
+  for (std::size_t q = 0; q < m.quads.size(); ++q) {
+    if (made[q]) continue;
+    const auto& x = m.quads[q];
+    kept.insert({m.nodes[x[0]].x, m.nodes[x[0]].y, m.nodes[x[1]].x, m.nodes[x[1]].y, m.nodes[x[2]].x, m.nodes[x[2]].y,
+                 m.nodes[x[3]].x, m.nodes[x[3]].y});
+  }
+  const std::vector<std::uint8_t> block = flag_block(before);
+  std::size_t outside = 0;
+  for (std::size_t q = 0; q < before.quads.size(); ++q) {
+    if (block[q]) continue;
+    ++outside;
+    const auto& x = before.quads[q];
+    EXPECT_TRUE(kept.count({before.nodes[x[0]].x, before.nodes[x[0]].y, before.nodes[x[1]].x, before.nodes[x[1]].y,
+                            before.nodes[x[2]].x, before.nodes[x[2]].y, before.nodes[x[3]].x, before.nodes[x[3]].y}))
+        << q;
+  }
+  EXPECT_EQ(kept.size(), outside);
+  // The block with a 2 x 2 hole: a disk only when holes are allowed.
+  for (const bool holes : {false, true}) {
+    QuadMesh ring_mesh = before;
+    std::vector<std::uint8_t> annulus = flag_block(ring_mesh);
+    for (std::size_t q = 0; q < ring_mesh.quads.size(); ++q) {
+      const Vec2 c = 0.25 * (ring_mesh.nodes[ring_mesh.quads[q][0]] + ring_mesh.nodes[ring_mesh.quads[q][2]] +
+                             ring_mesh.nodes[ring_mesh.quads[q][1]] + ring_mesh.nodes[ring_mesh.quads[q][3]]);
+      if (c.x > 5 && c.x < 7 && c.y > 2 && c.y < 4) annulus[q] = 0;
+    }
+    LocalPatchOptions h = o;
+    h.holes = holes;
+    std::vector<std::uint8_t> made_ring;
+    const LocalPatchStats st_ring = remesh_poor_quads(ring_mesh, annulus, h, made_ring);
+    EXPECT_EQ(st_ring.patched, holes ? 1u : 0u);
+    EXPECT_EQ(st_ring.quads_removed, holes ? 20u : 0u);
+    EXPECT_TRUE(check_invariants(ring_mesh).ok()) << check_invariants(ring_mesh).first_problem;
+    EXPECT_NEAR(area(ring_mesh), n * n, 1e-9);
+  }
+  QuadMesh grown = before;
+  LocalPatchOptions ring = o;
+  ring.min_rings = 1;
+  ring.max_rings = 1;
+  std::vector<std::uint8_t> made_grown;
+  const LocalPatchStats st_grown = remesh_poor_quads(grown, flag_block(grown), ring, made_grown);
+  ASSERT_EQ(st_grown.patched, 1u);
+  EXPECT_GT(st_grown.quads_removed, 24u);
+}

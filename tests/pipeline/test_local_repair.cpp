@@ -341,6 +341,18 @@ TEST(LocalRepair, NewCoastsHoldTheInvariantsAndTheSummaryAccountsForEveryQuad) {
   }
 }
 
+// fjord_coast at 400 m in 4 subregions under an SJ gate of 0.5 (so "far outside", below 0.25, occurs), local
+// patches off and every poor quad accepted: what decides a subregion's fate is its map's quads alone.
+static MeshOptions fjord_under_a_high_gate() {
+  MeshOptions o;
+  o.size = 400.0;
+  o.parts = 4;
+  o.min_scaled_jacobian = 0.5;
+  o.max_poor_fraction = 1.0;
+  o.local_patch.enabled = false;
+  return o;
+}
+
 TEST(LocalRepair, ALargeMapKeepsItsMapForValidQuadsFarOutsideTheGates) {
   // fjord_coast at 400 m in 4 subregions, under an SJ gate of 0.5 (so "far outside", below 0.25, occurs) with
   // local patches off and every poor quad accepted: a map above keep_map_above_quads keeps its quads and
@@ -348,12 +360,7 @@ TEST(LocalRepair, ALargeMapKeepsItsMapForValidQuadsFarOutsideTheGates) {
   // Degenerate quads (below the untangling's target) cost a map of any size, under another reason.
   const Region region = load("fjord_coast");
   auto run = [&](std::size_t keep_above) {
-    MeshOptions o;
-    o.size = 400.0;
-    o.parts = 4;
-    o.min_scaled_jacobian = 0.5;
-    o.max_poor_fraction = 1.0;
-    o.local_patch.enabled = false;
+    MeshOptions o = fjord_under_a_high_gate();
     o.keep_map_above_quads = keep_above;
     return mesh_region(region, o);
   };
@@ -474,4 +481,56 @@ TEST(Patch, ValenceMovesLeaveFewerIrregularNodes) {
   }
   std::cout << "free nodes not in four quads: " << without << " without the moves, " << with << " with them\n";
   EXPECT_LT(static_cast<double>(with), 0.8 * static_cast<double>(without));
+}
+
+TEST(LocalRepair, ARepairRoundPatchesItsSubregionsInPlaceWithoutMappingAgain) {
+  // fjord_coast at 400 m in 4 subregions under an SJ gate of 0.5, local patches off and no map kept for its size:
+  // the first round demotes subregions for their near-degenerate quads. In place, the next round cuts those
+  // subregions out of the finished mesh and patches them there (no second map of the part); mapped again, the
+  // part gets the same patches. Both meshes hold every invariant with the boundary on the input, and the same
+  // subregions are patches.
+  const Region region = load("fjord_coast");
+  auto run = [&](bool in_place) {
+    MeshOptions o = fjord_under_a_high_gate();
+    o.keep_map_above_quads = std::numeric_limits<std::size_t>::max();
+    o.repair_in_place = in_place;
+    return mesh_region(region, o);
+  };
+  const MeshResult in_place = run(true), mapped_again = run(false);
+  auto chosen = [](const MeshResult& r) {
+    for (const auto& c : r.report["candidates"][0])
+      if (c.contains("chosen")) return c;
+    return nlohmann::json();
+  };
+  auto patched = [](const MeshResult& r) {
+    std::set<int> s;
+    for (const SubregionStats& sr : r.parts[0].subregions)
+      if (!sr.mapped) {
+        s.insert(sr.subregion);
+        EXPECT_NE(sr.reason.find("meshed again as a patch"), std::string::npos) << sr.reason;
+      }
+    return s;
+  };
+  const nlohmann::json a = chosen(in_place), b = chosen(mapped_again);
+  ASSERT_TRUE(a.is_object());
+  ASSERT_TRUE(b.is_object());
+  ASSERT_GE(a["repair_rounds"].size(), 2u);
+  EXPECT_FALSE(a["repair_rounds"][0]["remeshed"].empty());
+  EXPECT_EQ(a["stage_seconds"]["repair_maps"].get<double>(), 0.0);
+  EXPECT_GT(a["stage_seconds"]["repair_patches"].get<double>(), 0.0);
+  EXPECT_GT(b["stage_seconds"]["repair_maps"].get<double>(), 0.0);
+  EXPECT_EQ(b["stage_seconds"]["repair_patches"].get<double>(), 0.0);
+  EXPECT_EQ(patched(in_place), patched(mapped_again));
+  for (const int s : a["repair_rounds"][0]["remeshed"]) EXPECT_TRUE(patched(in_place).count(s)) << s;
+  for (const MeshResult* r : {&in_place, &mapped_again}) {
+    EXPECT_TRUE(check_invariants(r->mesh).ok()) << check_invariants(r->mesh).first_problem;
+    EXPECT_EQ(compute_quality(r->mesh).inverted, 0u);
+    DomainDistanceOptions measure;
+    for (const auto& d : r->report["dropped_parts"]) measure.skip_parts.push_back(d["part"].get<int>());
+    const DomainDistance d = domain_distance(r->mesh, r->region, measure);
+    EXPECT_LT(d.boundary_max_relative, 1e-9);
+    EXPECT_EQ(d.sharp_vertices_missing, 0u);
+  }
+  // The quads the summary counts are the mesh's, patches included.
+  EXPECT_EQ(in_place.report["summary"]["quads"].get<std::size_t>(), in_place.mesh.quads.size());
 }

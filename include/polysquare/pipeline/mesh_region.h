@@ -65,6 +65,10 @@ struct MeshOptions {
                                  ///< (triangles split into three quads), reported under `fallbacks`; false: refuse
   int repair_rounds = 4;          ///< times a candidate is meshed again with the mapped subregions whose quads stay
                                   ///< folded after smoothing turned into patches (local repair)
+  bool repair_in_place = true;    ///< a repair round that only turns mapped subregions into patches cuts their
+                                  ///< quads out of the finished mesh and patches each hole on its boundary nodes
+                                  ///< (the rest keeps its quads, smoothing and local patches); false: the part is
+                                  ///< mapped again with them as patches (their neighbours' counts quantized again)
   bool keep_partition = false;   ///< return the background triangulation and its partition (for pictures)
   double min_scaled_jacobian = 0.2;    ///< a candidate with a quad below this is refused (see max_poor_fraction);
                                        ///< 0 = accept any valid mesh

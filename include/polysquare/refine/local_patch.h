@@ -17,6 +17,12 @@ struct LocalPatchOptions {
   bool enabled = true;          ///< false: poor quads are left to the coarser repairs (whole subregions as patches)
   double size = 1.0;            ///< target quad edge length h (patch interior vertices follow it)
   int max_rings = 3;            ///< rings of quads grown around a cluster, one at a time, until its patch builds
+  /// Rings grown before the first patch is tried: 0 tries the flagged quads alone first (a whole subregion cut
+  /// out of a finished mesh), 1 never does (a poor quad's own corners are usually what a patch must move).
+  int min_rings = 1;
+  /// A region may enclose holes (islands, quads left out) and is then patched with them; false: it grows until
+  /// it is a disk.
+  bool holes = false;
   std::size_t max_quads = 300;  ///< a region grown past this many quads is left to the caller's coarser repair
   /// Growth goes on while the patch's worst corner (scaled Jacobian, before smoothing) is below this; the best
   /// patch of all rings tried is kept.
@@ -48,8 +54,15 @@ struct LocalPatchStats {
 /// both tried, the one with the better worst corner kept). Nodes outside the regions and every tagged edge keep
 /// their indices' meaning (nodes are renumbered, tags follow); patch quads take the subregion (quad_part) that
 /// held most of their region. `unstructured` (#quads, in/out; empty = none) flags quads made by patches: it is
-/// carried for the quads that stay and set for the new ones. Deterministic: clusters in quad order.
+/// carried as they are (any value) for the quads that stay and set to 1 for the new ones. Deterministic: clusters
+/// in quad order.
 LocalPatchStats remesh_poor_quads(QuadMesh& mesh, const std::vector<std::uint8_t>& poor, const LocalPatchOptions& options,
                                   std::vector<std::uint8_t>& unstructured);
+
+/// The same for given regions instead of clusters: the quads q with region[q] >= 0 (#quads or shorter) holding
+/// one index form one cluster, whatever they touch (a whole subregion cut out of a finished mesh, each apart from
+/// its neighbours); clusters in index order. The patch quads take the subregion that held most of their region.
+LocalPatchStats remesh_regions(QuadMesh& mesh, const std::vector<std::int32_t>& region, const LocalPatchOptions& options,
+                               std::vector<std::uint8_t>& unstructured);
 
 }  // namespace polysquare
