@@ -49,13 +49,15 @@ Stats stats_of(const std::vector<double>& v) {
   return s;
 }
 
-// Uniform grid of segments for nearest-segment queries.
+// Uniform grid of segments for nearest-segment queries. The cells' segments are one array (offsets per cell, in
+// segment order), not a vector per cell: a mesh of millions of quads gave 16 million cells twice per distance.
 struct SegmentGrid {
   std::vector<std::array<Vec2, 2>> segs;
   Box2 box;
   double cell = 1;
   long long nx = 1, ny = 1;
-  std::vector<std::vector<std::int32_t>> buckets;
+  std::vector<std::size_t> offset;  // cell c holds in_cell[offset[c] .. offset[c + 1])
+  std::vector<std::int32_t> in_cell;
   explicit SegmentGrid(std::vector<std::array<Vec2, 2>> s) : segs(std::move(s)) {
     for (const auto& e : segs) { box.add(e[0]); box.add(e[1]); }
     double len = 0;
@@ -66,13 +68,18 @@ struct SegmentGrid {
     nx = std::min(4096LL, static_cast<long long>((box.hi.x - box.lo.x) / cell) + 1);
     ny = std::min(4096LL, static_cast<long long>((box.hi.y - box.lo.y) / cell) + 1);
     cell = std::max((box.hi.x - box.lo.x) / static_cast<double>(nx), (box.hi.y - box.lo.y) / static_cast<double>(ny)) * 1.000001 + 1e-300;
-    buckets.resize(static_cast<std::size_t>(nx * ny));
-    for (std::size_t k = 0; k < segs.size(); ++k) {
+    offset.assign(static_cast<std::size_t>(nx * ny) + 1, 0);
+    auto each_cell = [&](std::size_t k, auto&& f) {
       const auto [i0, j0] = idx({std::min(segs[k][0].x, segs[k][1].x), std::min(segs[k][0].y, segs[k][1].y)});
       const auto [i1, j1] = idx({std::max(segs[k][0].x, segs[k][1].x), std::max(segs[k][0].y, segs[k][1].y)});
       for (long long i = i0; i <= i1; ++i)
-        for (long long j = j0; j <= j1; ++j) buckets[static_cast<std::size_t>(j * nx + i)].push_back(static_cast<std::int32_t>(k));
-    }
+        for (long long j = j0; j <= j1; ++j) f(static_cast<std::size_t>(j * nx + i));
+    };
+    for (std::size_t k = 0; k < segs.size(); ++k) each_cell(k, [&](std::size_t c) { offset[c + 1]++; });
+    for (std::size_t c = 0; c + 1 < offset.size(); ++c) offset[c + 1] += offset[c];
+    in_cell.resize(offset.back());
+    std::vector<std::size_t> fill(offset.begin(), offset.end() - 1);
+    for (std::size_t k = 0; k < segs.size(); ++k) each_cell(k, [&](std::size_t c) { in_cell[fill[c]++] = static_cast<std::int32_t>(k); });
   }
   std::pair<long long, long long> idx(Vec2 p) const {
     return {std::clamp(static_cast<long long>((p.x - box.lo.x) / cell), 0LL, nx - 1),
@@ -87,8 +94,11 @@ struct SegmentGrid {
       for (long long i = ci - r; i <= ci + r; ++i)
         for (long long j = cj - r; j <= cj + r; ++j) {
           if (std::max(std::llabs(i - ci), std::llabs(j - cj)) != r || i < 0 || j < 0 || i >= nx || j >= ny) continue;
-          for (auto k : buckets[static_cast<std::size_t>(j * nx + i)])
+          const auto c = static_cast<std::size_t>(j * nx + i);
+          for (std::size_t at = offset[c]; at < offset[c + 1]; ++at) {
+            const auto k = static_cast<std::size_t>(in_cell[at]);
             best = std::min(best, point_segment_distance(p, segs[k][0], segs[k][1]));
+          }
         }
       // A segment not met yet crosses only cells of later rings, which are at least r cells away.
       if (best <= static_cast<double>(r) * cell) break;
@@ -332,29 +342,40 @@ DomainDistance domain_distance(const QuadMesh& mesh, const Region& region, const
     const std::size_t m = f.closed ? f.points.size() : f.points.size() - 1;
     for (std::size_t i = 0; i < m; ++i) feature_segs.push_back({f.points[i], f.points[(i + 1) % f.points.size()]});
   }
-  std::unordered_map<std::uint64_t, int> cells_of_edge;
+  // Every cell side by its edge key, sorted (in parallel): an edge is a run of equal keys, a boundary edge a run of one.
+  std::vector<std::uint64_t> sides;
+  sides.reserve(4 * mesh.quads.size() + 3 * mesh.triangles.size());
   for (const auto& q : mesh.quads)
-    for (int k = 0; k < 4; ++k) cells_of_edge[edge_key(q[k], q[(k + 1) % 4])]++;
+    for (int k = 0; k < 4; ++k) sides.push_back(edge_key(q[k], q[(k + 1) % 4]));
   for (const auto& t : mesh.triangles)
-    for (int k = 0; k < 3; ++k) cells_of_edge[edge_key(t[k], t[(k + 1) % 3])]++;
-  std::unordered_set<std::int32_t> boundary_nodes;
-  for (const auto& [key, count] : cells_of_edge) {
-    const auto a = static_cast<std::int32_t>(key >> 32), b = static_cast<std::int32_t>(key & 0xffffffffu);
+    for (int k = 0; k < 3; ++k) sides.push_back(edge_key(t[k], t[(k + 1) % 3]));
+  oneapi::tbb::parallel_sort(sides.begin(), sides.end());
+  std::vector<std::uint8_t> on_boundary(mesh.nodes.size(), 0);
+  for (std::size_t i = 0; i < sides.size();) {
+    std::size_t j = i + 1;
+    while (j < sides.size() && sides[j] == sides[i]) ++j;
+    const auto a = static_cast<std::int32_t>(sides[i] >> 32), b = static_cast<std::int32_t>(sides[i] & 0xffffffffu);
     mesh_edges.push_back({mesh.nodes[a], mesh.nodes[b]});
-    if (count == 1) { boundary_nodes.insert(a); boundary_nodes.insert(b); }
+    if (j == i + 1) on_boundary[static_cast<std::size_t>(a)] = on_boundary[static_cast<std::size_t>(b)] = 1;
+    i = j;
   }
+  sides = {};
   const SegmentGrid rings(ring_segs);
-  for (auto v : boundary_nodes) d.boundary_max_distance = std::max(d.boundary_max_distance, rings.nearest(mesh.nodes[v]));
+  std::vector<double> boundary_distance(mesh.nodes.size(), 0.0);
+  for_each_index(mesh.nodes.size(), [&](std::size_t v) {
+    if (on_boundary[v]) boundary_distance[v] = rings.nearest(mesh.nodes[v]);
+  });
+  for (double dist : boundary_distance) d.boundary_max_distance = std::max(d.boundary_max_distance, dist);
   const double diag = region.bounding_box().diagonal();
   d.boundary_max_relative = diag > 0 ? d.boundary_max_distance / diag : 0;
   if (!feature_segs.empty()) {
-    const SegmentGrid edges(mesh_edges);
-    for (const auto& s : feature_segs)
-      for (int k = 0; k <= 8; ++k) {
-        const Vec2 p = lerp(s[0], s[1], k / 8.0);
-        const double dist = edges.nearest(p);
-        if (dist > d.feature_max_distance) { d.feature_max_distance = dist; d.feature_max_at = p; }
-      }
+    const SegmentGrid edges(std::move(mesh_edges));
+    // Nine points along each feature segment, measured in parallel, the farthest taken in order.
+    std::vector<double> dist(9 * feature_segs.size());
+    auto sample = [&](std::size_t i) { return lerp(feature_segs[i / 9][0], feature_segs[i / 9][1], static_cast<double>(i % 9) / 8.0); };
+    for_each_index(dist.size(), [&](std::size_t i) { dist[i] = edges.nearest(sample(i)); });
+    for (std::size_t i = 0; i < dist.size(); ++i)
+      if (dist[i] > d.feature_max_distance) { d.feature_max_distance = dist[i]; d.feature_max_at = sample(i); }
     const SegmentGrid features(feature_segs);
     for (const auto& e : mesh.feature_edges)
       for (auto v : e) {
