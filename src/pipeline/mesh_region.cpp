@@ -318,7 +318,8 @@ bool patch_subregions_in_place(QuadMesh& mesh, const std::map<int, std::string>&
   LocalPatchOptions lp = options.local_patch;
   lp.size = options.size;
   lp.min_rings = 0;
-  lp.holes = true;   // a subregion around an island
+  lp.holes = true;           // a subregion around an island
+  lp.inner_features = true;  // a subregion a feature runs into
   lp.max_rings = 1;  // one ring of neighbours when the subregion alone is no disk or its patch does not build
   lp.max_quads = std::numeric_limits<std::size_t>::max();
   lp.target_sj = 0.0;  // the first patch that builds: smoothing follows, and each try costs a whole patch

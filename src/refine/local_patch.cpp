@@ -31,7 +31,13 @@ struct QuadRegion {
   std::vector<std::int32_t> quads;
   std::vector<std::int32_t> loop;        // boundary nodes in order, loop after loop
   std::vector<std::size_t> loop_sizes;   // nodes of each loop, the outer one first
-  std::vector<std::int32_t> interior;    // nodes of the region not on its loops
+  std::vector<std::int32_t> interior;    // nodes of the region not on its loops nor given inside it
+  // With inner features: the feature curves inside the region (node chains between anchors, or cycles) and
+  // other nodes that must stay; `given` is every node the patch keeps, in the patch input's order.
+  std::vector<std::vector<std::int32_t>> inner_curves;
+  std::vector<std::uint8_t> inner_closed;
+  std::vector<std::int32_t> points;
+  std::vector<std::int32_t> given;
 };
 
 class Cutter {
@@ -93,16 +99,22 @@ class Cutter {
   }
 
   // The region of `quads` when it is a disk with one simple loop (with `holes`, a connected region with any
-  // number of holes) and nothing tagged inside.
-  bool cut(const std::vector<std::int32_t>& quads, const std::vector<std::uint8_t>& in, bool holes, QuadRegion& r) const {
+  // number of holes) and nothing tagged inside (with `inner_features`, feature curves and feature points inside
+  // are kept as curves and points of the patch).
+  bool cut(const std::vector<std::int32_t>& quads, const std::vector<std::uint8_t>& in, bool holes, bool inner_features,
+           QuadRegion& r) const {
     std::unordered_map<std::int32_t, std::int32_t> next;
     std::unordered_set<std::int32_t> nodes;
+    std::vector<std::uint64_t> inner;  // feature edges inside the region, each once
     for (std::int32_t q : quads)
       for (int i = 0; i < 4; ++i) {
         const std::int32_t a = m_.quads[q][i], b = m_.quads[q][(i + 1) % 4], n = neighbour(q, i);
         nodes.insert(a);
         if (n >= 0 && in[n]) {
-          if (feature_edge(a, b)) return false;  // a feature would be lost inside the patch
+          if (feature_edge(a, b)) {
+            if (!inner_features) return false;  // a feature would be lost inside the patch
+            if (q < n) inner.push_back(edge_key(a, b));
+          }
           continue;
         }
         if (!next.try_emplace(a, b).second) return false;  // the region touches itself at a
@@ -145,12 +157,66 @@ class Cutter {
       r.loop.insert(r.loop.end(), l.begin(), l.end());
       r.loop_sizes.push_back(l.size());
     }
-    for (std::int32_t v : nodes) {
-      if (next.count(v)) continue;
-      if (!m_.node_kind.empty() && m_.node_kind[static_cast<std::size_t>(v)] != NodeKind::interior) return false;
+    r.given = r.loop;
+    std::unordered_map<std::int32_t, std::vector<std::int32_t>> along;  // node -> its inner feature neighbours
+    std::sort(inner.begin(), inner.end());
+    for (const std::uint64_t key : inner) {
+      const auto a = static_cast<std::int32_t>(key >> 32), b = static_cast<std::int32_t>(key & 0xffffffffu);
+      along[a].push_back(b);
+      along[b].push_back(a);
+    }
+    if (!inner.empty()) {
+      // Chains from every anchor (a loop node, or a node with other than two inner feature edges), then cycles.
+      std::vector<std::int32_t> anchors, ends;
+      for (const auto& [v, nb] : along) ends.push_back(v);
+      std::sort(ends.begin(), ends.end());
+      for (std::int32_t v : ends)
+        if (next.count(v) || along.at(v).size() != 2) anchors.push_back(v);
+      std::unordered_set<std::uint64_t> walked;
+      auto walk = [&](std::int32_t from, std::int32_t to) {
+        std::vector<std::int32_t> chain{from};
+        for (std::int32_t prev = from, v = to;;) {
+          walked.insert(edge_key(prev, v));
+          chain.push_back(v);
+          if (v == from || next.count(v) || along.at(v).size() != 2) break;
+          const std::int32_t w = along.at(v)[0] == prev ? along.at(v)[1] : along.at(v)[0];
+          prev = v;
+          v = w;
+        }
+        return chain;
+      };
+      for (std::int32_t a : anchors)
+        for (std::int32_t b : along.at(a))
+          if (!walked.count(edge_key(a, b))) {
+            r.inner_curves.push_back(walk(a, b));
+            r.inner_closed.push_back(0);
+          }
+      for (std::int32_t a : ends)
+        for (std::int32_t b : along.at(a))
+          if (!walked.count(edge_key(a, b))) {
+            std::vector<std::int32_t> cycle = walk(a, b);
+            cycle.pop_back();  // back at a
+            r.inner_curves.push_back(std::move(cycle));
+            r.inner_closed.push_back(1);
+          }
+    }
+    std::unordered_set<std::int32_t> given(r.given.begin(), r.given.end());
+    for (const auto& c : r.inner_curves)
+      for (std::int32_t v : c)
+        if (given.insert(v).second) r.given.push_back(v);
+    std::vector<std::int32_t> inside;
+    for (std::int32_t v : nodes)
+      if (!given.count(v)) inside.push_back(v);
+    std::sort(inside.begin(), inside.end());
+    for (std::int32_t v : inside) {
+      if (!m_.node_kind.empty() && m_.node_kind[static_cast<std::size_t>(v)] != NodeKind::interior) {
+        if (!inner_features) return false;
+        r.points.push_back(v);  // a feature point: it stays a node
+        r.given.push_back(v);
+        continue;
+      }
       r.interior.push_back(v);
     }
-    std::sort(r.interior.begin(), r.interior.end());
     return true;
   }
 
@@ -180,6 +246,27 @@ class Cutter {
       first += n;
       in.curves.push_back(std::move(c));
     }
+    // Inner feature curves and points, on the given nodes after the loops' (r.given's order).
+    std::unordered_map<std::int32_t, std::int32_t> at;
+    for (std::size_t i = 0; i < r.given.size(); ++i) at.emplace(r.given[i], static_cast<std::int32_t>(i));
+    for (std::size_t i = r.loop.size(); i < r.given.size(); ++i) {
+      const auto v = static_cast<std::size_t>(r.given[i]);
+      in.nodes.push_back(m_.nodes[v]);
+      in.kind.push_back(m_.node_kind.empty() ? NodeKind::feature : m_.node_kind[v]);
+    }
+    for (std::size_t k = 0; k < r.inner_curves.size(); ++k) {
+      const auto& chain = r.inner_curves[k];
+      PatchCurve c;
+      c.closed = r.inner_closed[k] != 0;
+      const std::size_t edges = c.closed ? chain.size() : chain.size() - 1;
+      for (std::int32_t v : chain) c.nodes.push_back(at.at(v));
+      for (std::size_t i = 0; i < edges; ++i) {
+        c.role.push_back(PatchEdgeRole::feature);
+        c.tag.push_back(feature_.at(edge_key(chain[i], chain[(i + 1) % chain.size()])));
+      }
+      in.curves.push_back(std::move(c));
+    }
+    for (std::int32_t v : r.points) in.points.push_back(at.at(v));
     return in;
   }
 
@@ -254,7 +341,7 @@ LocalPatchStats remesh_clusters(QuadMesh& mesh, const Cutter& cutter, const std:
       reached = quads;
       if (quads.size() > options.max_quads) break;
       QuadRegion r;
-      if (!cutter.cut(quads, in, options.holes, r)) continue;
+      if (!cutter.cut(quads, in, options.holes, options.inner_features, r)) continue;
       QuadMesh patch;
       if (!best_patch(cutter.patch_input(r), options.size, patch)) continue;
       const double worst = worst_corner(patch);
@@ -320,11 +407,11 @@ LocalPatchStats remesh_clusters(QuadMesh& mesh, const Cutter& cutter, const std:
     flags.push_back(unstructured[q]);
   }
   for (const Done& d : done) {
-    const std::size_t given = d.region.loop.size();
+    const std::size_t given = d.region.given.size();
     std::vector<std::int32_t> map(d.patch.nodes.size());
     for (std::size_t i = 0; i < d.patch.nodes.size(); ++i) {
       if (i < given) {
-        map[i] = index[d.region.loop[i]];
+        map[i] = index[d.region.given[i]];
         continue;
       }
       map[i] = static_cast<std::int32_t>(out.nodes.size());

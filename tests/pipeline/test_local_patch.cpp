@@ -230,3 +230,47 @@ TEST(LocalPatch, WithNoRingFirstTheFlaggedRegionAloneIsMeshedAgainHolesIfAllowed
   ASSERT_EQ(st_grown.patched, 1u);
   EXPECT_GT(st_grown.quads_removed, 24u);
 }
+
+TEST(LocalPatch, AWholeRegionCrossedByAFeatureKeepsItAsAPatchCurve) {
+  // A 6 x 4 block across the grid's feature row (y = 6): with inner features the block alone is meshed again,
+  // the feature row is still a chain of quad edges on y = 6 and no patch quad lies across it; without, the block
+  // alone cannot be cut.
+  const int n = 12;
+  for (const bool inner : {false, true}) {
+    QuadMesh m = grid_with_feature(n);
+    std::vector<std::uint8_t> block(m.quads.size(), 0);
+    for (std::size_t q = 0; q < m.quads.size(); ++q) {
+      const Vec2 c = 0.25 * (m.nodes[m.quads[q][0]] + m.nodes[m.quads[q][1]] + m.nodes[m.quads[q][2]] + m.nodes[m.quads[q][3]]);
+      block[q] = c.x > 3 && c.x < 9 && c.y > 4 && c.y < 8;
+    }
+    LocalPatchOptions o;
+    o.size = 1.0;
+    o.min_rings = 0;
+    o.max_rings = 0;
+    o.inner_features = inner;
+    std::vector<std::uint8_t> made;
+    const LocalPatchStats st = remesh_poor_quads(m, block, o, made);
+    EXPECT_EQ(st.patched, inner ? 1u : 0u);
+    if (!inner) continue;
+    EXPECT_EQ(st.quads_removed, 24u);
+    EXPECT_TRUE(check_invariants(m).ok()) << check_invariants(m).first_problem;
+    EXPECT_NEAR(area(m), n * n, 1e-9);
+    std::set<std::uint64_t> edges;
+    for (const auto& x : m.quads)
+      for (int i = 0; i < 4; ++i) edges.insert(edge_key(x[i], x[(i + 1) % 4]));
+    EXPECT_EQ(m.feature_edges.size(), static_cast<std::size_t>(n));
+    for (const auto& e : m.feature_edges) {
+      EXPECT_TRUE(edges.count(edge_key(e[0], e[1])));
+      EXPECT_DOUBLE_EQ(m.nodes[e[0]].y, n / 2);
+    }
+    for (std::size_t q = 0; q < m.quads.size(); ++q) {
+      if (made[q] != 1) continue;
+      double lo = 1e9, hi = -1e9;
+      for (auto v : m.quads[q]) {
+        lo = std::min(lo, m.nodes[v].y);
+        hi = std::max(hi, m.nodes[v].y);
+      }
+      EXPECT_FALSE(lo < n / 2 - 1e-12 && hi > n / 2 + 1e-12) << q;  // no patch quad across the feature
+    }
+  }
+}

@@ -23,6 +23,9 @@ struct LocalPatchOptions {
   /// A region may enclose holes (islands, quads left out) and is then patched with them; false: it grows until
   /// it is a disk.
   bool holes = false;
+  /// Feature curves and feature points inside a region are kept as curves and points of its patch (a whole
+  /// subregion crossed by a feature); false: the region grows until no feature edge is inside.
+  bool inner_features = false;
   std::size_t max_quads = 300;  ///< a region grown past this many quads is left to the caller's coarser repair
   /// Growth goes on while the patch's worst corner (scaled Jacobian, before smoothing) is below this; the best
   /// patch of all rings tried is kept.
