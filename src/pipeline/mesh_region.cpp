@@ -334,10 +334,8 @@ bool patch_subregions_in_place(QuadMesh& mesh, const std::map<int, std::string>&
 // #subregions (of `count`): 1 for the subregions of the quads `changed(q)` and of the quads sharing a node with them.
 template <typename Changed>
 std::vector<std::uint8_t> subregions_touching(const QuadMesh& mesh, Changed changed, std::size_t count) {
-  std::vector<std::uint8_t> node(mesh.nodes.size(), 0), touched(count, 0);
-  for (std::size_t q = 0; q < mesh.quads.size(); ++q)
-    if (changed(q))
-      for (std::int32_t v : mesh.quads[q]) node[static_cast<std::size_t>(v)] = 1;
+  const std::vector<std::uint8_t> node = nodes_near(mesh, changed, 0);
+  std::vector<std::uint8_t> touched(count, 0);
   for (std::size_t q = 0; q < mesh.quads.size(); ++q) {
     const auto& x = mesh.quads[q];
     const int s = q < mesh.quad_part.size() ? mesh.quad_part[q] : -1;

@@ -342,24 +342,15 @@ DomainDistance domain_distance(const QuadMesh& mesh, const Region& region, const
     const std::size_t m = f.closed ? f.points.size() : f.points.size() - 1;
     for (std::size_t i = 0; i < m; ++i) feature_segs.push_back({f.points[i], f.points[(i + 1) % f.points.size()]});
   }
-  // Every cell side by its edge key, sorted (in parallel): an edge is a run of equal keys, a boundary edge a run of one.
-  std::vector<std::uint64_t> sides;
-  sides.reserve(4 * mesh.quads.size() + 3 * mesh.triangles.size());
-  for (const auto& q : mesh.quads)
-    for (int k = 0; k < 4; ++k) sides.push_back(edge_key(q[k], q[(k + 1) % 4]));
-  for (const auto& t : mesh.triangles)
-    for (int k = 0; k < 3; ++k) sides.push_back(edge_key(t[k], t[(k + 1) % 3]));
-  oneapi::tbb::parallel_sort(sides.begin(), sides.end());
+  // Every edge once (the table the finite-volume checks use); an edge of one cell is on the boundary.
+  const EdgeTable table = edge_table(mesh);
   std::vector<std::uint8_t> on_boundary(mesh.nodes.size(), 0);
-  for (std::size_t i = 0; i < sides.size();) {
-    std::size_t j = i + 1;
-    while (j < sides.size() && sides[j] == sides[i]) ++j;
-    const auto a = static_cast<std::int32_t>(sides[i] >> 32), b = static_cast<std::int32_t>(sides[i] & 0xffffffffu);
-    mesh_edges.push_back({mesh.nodes[a], mesh.nodes[b]});
-    if (j == i + 1) on_boundary[static_cast<std::size_t>(a)] = on_boundary[static_cast<std::size_t>(b)] = 1;
-    i = j;
+  mesh_edges.reserve(table.nodes.size());
+  for (std::size_t e = 0; e < table.nodes.size(); ++e) {
+    const auto [a, b] = table.nodes[e];
+    mesh_edges.push_back({mesh.nodes[static_cast<std::size_t>(a)], mesh.nodes[static_cast<std::size_t>(b)]});
+    if (table.faces[e][1] < 0) on_boundary[static_cast<std::size_t>(a)] = on_boundary[static_cast<std::size_t>(b)] = 1;
   }
-  sides = {};
   const SegmentGrid rings(ring_segs);
   std::vector<double> boundary_distance(mesh.nodes.size(), 0.0);
   for_each_index(mesh.nodes.size(), [&](std::size_t v) {

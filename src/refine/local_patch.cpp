@@ -143,11 +143,9 @@ class Cutter {
     // One counter-clockwise loop (the outer one), the others clockwise: a connected region.
     std::size_t outer = loops.size() == 1 ? 0 : loops.size();
     for (std::size_t k = 0; k < loops.size() && loops.size() > 1; ++k) {
-      double area = 0.0;
-      const auto& l = loops[k];
-      const Vec2 o = m_.nodes[l[0]];
-      for (std::size_t i = 0; i < l.size(); ++i) area += cross(m_.nodes[l[i]] - o, m_.nodes[l[(i + 1) % l.size()]] - o);
-      if (area <= 0.0) continue;
+      std::vector<Vec2> ring;
+      for (std::int32_t v : loops[k]) ring.push_back(m_.nodes[static_cast<std::size_t>(v)]);
+      if (ring_signed_area(ring) <= 0.0) continue;
       if (outer != loops.size()) return false;
       outer = k;
     }
