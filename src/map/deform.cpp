@@ -1,6 +1,7 @@
 #include "polysquare/map/deform.h"
 
 #include "core/digest.h"
+#include "map/untangle_triangles.h"
 
 #include <Eigen/Sparse>
 #include <Eigen/SparseCholesky>
@@ -494,25 +495,32 @@ DeformStats deform_to_polysquare(const DeformProblem& problem, const DeformOptio
 namespace {
 bool move_along_path(const DeformProblem& problem, const DeformOptions& options,
                      const std::vector<std::uint8_t>& target_mask, const std::vector<Vec2>& targets,
-                     std::vector<Vec2>& x);
+                     std::vector<Vec2>& x, bool& untangled);
 }  // namespace
 
 bool move_constrained_vertices(const DeformProblem& problem, const DeformOptions& options,
                                const std::vector<std::uint8_t>& target_mask, const std::vector<Vec2>& targets,
-                               std::vector<Vec2>& x) {
-  if (!options.memo) return move_along_path(problem, options, target_mask, targets, x);
+                               std::vector<Vec2>& x, bool* untangled) {
+  DeformStats path;
+  if (!options.memo) {
+    const bool ok = move_along_path(problem, options, target_mask, targets, x, path.untangled);
+    if (untangled) *untangled = path.untangled;
+    return ok;
+  }
   Digest d;
   d.word(2);  // which solve
   d.word(options.pull_when_path_fails ? 1 : 0);
+  d.word(options.untangle_when_path_fails ? 1 : 0);
   digest_problem(d, problem, options, x);
   d.raw(target_mask);
   d.raw(targets);
   const DeformMemo::Key key = d.key();
-  DeformStats unused;
   bool ok = false;
-  if (options.memo->find(key, x, unused, ok)) return ok;
-  ok = move_along_path(problem, options, target_mask, targets, x);
-  options.memo->store(key, x, unused, ok);
+  if (!options.memo->find(key, x, path, ok)) {
+    ok = move_along_path(problem, options, target_mask, targets, x, path.untangled);
+    options.memo->store(key, x, path, ok);
+  }
+  if (untangled) *untangled = path.untangled;
   return ok;
 }
 
@@ -520,7 +528,7 @@ namespace {
 
 bool straight_path(const DeformProblem& problem, const DeformOptions& options,
                    const std::vector<std::uint8_t>& target_mask, const std::vector<Vec2>& targets,
-                   std::vector<Vec2>& x);
+                   std::vector<Vec2>& x, bool& untangled);
 
 // The constrained vertices are first pulled towards their targets by springs of growing stiffness, the
 // barrier keeping every triangle valid: unlike the straight path, each vertex may take its own way round.
@@ -541,18 +549,19 @@ void pull_towards(const DeformProblem& problem, const DeformOptions& options,
 
 bool move_along_path(const DeformProblem& problem, const DeformOptions& options,
                      const std::vector<std::uint8_t>& target_mask, const std::vector<Vec2>& targets,
-                     std::vector<Vec2>& x) {
-  if (!options.pull_when_path_fails) return straight_path(problem, options, target_mask, targets, x);
+                     std::vector<Vec2>& x, bool& untangled) {
+  if (!options.pull_when_path_fails) return straight_path(problem, options, target_mask, targets, x, untangled);
   const std::vector<Vec2> start = x;
-  if (straight_path(problem, options, target_mask, targets, x)) return true;
+  if (straight_path(problem, options, target_mask, targets, x, untangled)) return true;
   x = start;
   pull_towards(problem, options, target_mask, targets, x);
-  return straight_path(problem, options, target_mask, targets, x);
+  return straight_path(problem, options, target_mask, targets, x, untangled);
 }
 
 bool straight_path(const DeformProblem& problem, const DeformOptions& options,
                    const std::vector<std::uint8_t>& target_mask, const std::vector<Vec2>& targets,
-                   std::vector<Vec2>& x) {
+                   std::vector<Vec2>& x, bool& untangled) {
+  untangled = false;
   const std::size_t n = x.size();
   // Harmonic (uniform graph Laplacian) extension of the constrained displacement to the free vertices, so a
   // step moves the interior along with the boundary instead of crushing the first ring of triangles.
@@ -612,8 +621,16 @@ bool straight_path(const DeformProblem& problem, const DeformOptions& options,
         // deformed one). The uniform harmonic (Tutte) embedding with every constrained vertex on its target is
         // bijective when they bound a convex polygon (Tutte's theorem: a rectangle, the common subregion), and
         // is accepted in any case only if no triangle is inverted; AMIPS then improves it.
+        // Otherwise the folds of the Tutte embedding are untangled with the boundary on its targets.
         std::vector<Vec2> tutte = targets;
-        if (!harmonic(tutte) || min_signed_area(problem.triangles, tutte) <= 0.0) return false;
+        if (!harmonic(tutte)) return false;
+        if (min_signed_area(problem.triangles, tutte) <= 0.0) {
+          if (!options.untangle_when_path_fails) return false;
+          std::vector<std::uint8_t> movable(n, 0);
+          for (std::size_t v = 0; v < n; ++v) movable[v] = !inner.fixed[v];
+          if (!untangle_triangles(problem, movable, tutte)) return false;
+          untangled = true;
+        }
         x = tutte;
         break;
       }

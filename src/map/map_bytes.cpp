@@ -121,7 +121,7 @@ void put_bytes(ByteWriter& w, const PartMapResult& result) {
   stats_fields(put, result.stats);
   w.put(static_cast<std::uint64_t>(result.stats.subregions.size()));
   for (const SubregionStats& s : result.stats.subregions) {
-    w.put(s.subregion), w.put(s.mapped), w.put(s.quads), w.put(s.local_patch_quads), w.put(s.reason), w.put(s.at);
+    w.put(s.subregion), w.put(s.mapped), w.put(s.untangled), w.put(s.quads), w.put(s.local_patch_quads), w.put(s.reason), w.put(s.at);
   }
   w.put(static_cast<std::uint64_t>(result.stats.failed_maps.size()));
   for (const auto& [a, b] : result.stats.failed_maps) w.put(a), w.put(b);
@@ -138,7 +138,7 @@ void get_bytes(ByteReader& r, PartMapResult& result) {
   r.get(n);
   result.stats.subregions.resize(n);
   for (SubregionStats& s : result.stats.subregions) {
-    r.get(s.subregion), r.get(s.mapped), r.get(s.quads), r.get(s.local_patch_quads), r.get(s.reason), r.get(s.at);
+    r.get(s.subregion), r.get(s.mapped), r.get(s.untangled), r.get(s.quads), r.get(s.local_patch_quads), r.get(s.reason), r.get(s.at);
   }
   r.get(n);
   result.stats.failed_maps.resize(n);

@@ -1076,6 +1076,7 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
   std::vector<std::string> grown_because(n);  // a grown patch's root: why its first patch could not be built
   std::vector<QuadMesh> meshes(n);
   std::vector<std::size_t> side_nodes(n, 0);
+  std::vector<std::uint8_t> untangled(n, 0);  // #subregions: its snap untangled folds
   std::vector<std::vector<Vec2>> unsnapped(n);  // deformed positions before the snap, to snap again
   std::size_t failed_maps = 0, failed_repairs = 0;
   double seconds_quantize = 0, seconds_snap = 0, seconds_patches = 0;
@@ -1178,14 +1179,15 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
     t0 = std::chrono::steady_clock::now();
     meshes.assign(n, {});
     side_nodes.assign(n, 0);
+    untangled.assign(n, 0);
     for (std::size_t p = 0; p < n; ++p)
       if (failure[p].empty()) unsnapped[p] = mapped[p].x;
     each_mapped("snap", [&](std::size_t p) {
-      snap_to_layout(subs[p].mesh, mapped[p], layouts[p], options, sub_name(p));
+      untangled[p] = snap_to_layout(subs[p].mesh, mapped[p], layouts[p], options, sub_name(p));
       meshes[p] = extract_quads(subs[p].mesh, subs[p].mesh.vertices, mapped[p].x, layouts[p], sub_name(p), nullptr,
                                 &side_nodes[p]);
-    }, [&](std::size_t p, ByteWriter& w) { put_bytes(w, mapped[p], false), put_bytes(w, meshes[p]), w.put(side_nodes[p]); },
-       [&](std::size_t p, ByteReader& r) { get_bytes(r, mapped[p], false), get_bytes(r, meshes[p]), r.get(side_nodes[p]); });
+    }, [&](std::size_t p, ByteWriter& w) { put_bytes(w, mapped[p], false), put_bytes(w, meshes[p]), w.put(side_nodes[p]), w.put(untangled[p]); },
+       [&](std::size_t p, ByteReader& r) { get_bytes(r, mapped[p], false), get_bytes(r, meshes[p]), r.get(side_nodes[p]), r.get(untangled[p]); });
     seconds_snap += seconds_since(t0);
     auto quantize_again = [&] {
       for (std::size_t p = 0; p < n; ++p)
@@ -1414,6 +1416,7 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
     SubregionStats& s = st.subregions[p];
     s.subregion = static_cast<int>(p);
     s.mapped = !is_patch[p];
+    s.untangled = s.mapped && untangled[p];
     s.reason = !failure[p].empty() ? failure[p]
                : is_patch[p]       ? sub_name(p) + ": its neighbour's patch could not be built without it"
                                    : std::string();

@@ -89,14 +89,16 @@ void straighten_to_labels(MappedMesh& mm, Layout& layout, const TriMesh& tri, co
     s.target = distance(mm.x[layout.break_vertex[s.break_a]], mm.x[layout.break_vertex[s.break_b]]);
 }
 
-void snap_to_layout(const TriMesh& tri, MappedMesh& mm, const Layout& layout, const PolysquareMapOptions& options,
+bool snap_to_layout(const TriMesh& tri, MappedMesh& mm, const Layout& layout, const PolysquareMapOptions& options,
                     const std::string& name) {
   std::vector<Vec2> targets;
   std::vector<std::uint8_t> mask;
   polysquare_targets(tri, tri.vertices, mm.x, layout, targets, mask);
-  if (!move_constrained_vertices(mm.problem, options.deform, mask, targets, mm.x))
+  bool untangled = false;
+  if (!move_constrained_vertices(mm.problem, options.deform, mask, targets, mm.x, &untangled))
     throw MeshingError(name + ": the deformation cannot reach the quantized poly-square without inverting triangles [" +
                        std::to_string(layout.segments.size()) + " sides]");
+  return untangled;
 }
 
 PartMapResult map_part(const Region& region, const RegionPart& part, const PolysquareMapOptions& options) {
@@ -193,6 +195,8 @@ PartMapResult map_part(const Region& region, const RegionPart& part, const Polys
     // part's last map: at once for a reused partition (repair rounds split nothing), else after the splits.
     PolysquareMapOptions pulled = options;
     pulled.deform.pull_when_path_fails = options.pull_failed_snaps;
+    pulled.deform.untangle_when_path_fails = options.pull_failed_snaps;
+    pulled.deform.untangle_when_path_fails = options.pull_failed_snaps;
     int joint_maps = 0;
     double seconds_joint_maps = 0.0;
     auto joint_map = [&](const std::vector<std::int32_t>& tp, int parts, const PolysquareMapOptions& o, PartMapStats& s) {

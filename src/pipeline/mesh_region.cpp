@@ -42,6 +42,7 @@ nlohmann::json part_json(const PartMapStats& s) {
     nlohmann::json j = {{"subregion", r.subregion}, {"quads", r.quads}, {"meshed_by", r.mapped ? "map" : "patch"},
                         {"at", {r.at.x, r.at.y}}};
     if (r.local_patch_quads > 0) j["local_patch_quads"] = r.local_patch_quads;
+    if (r.untangled) j["untangled"] = true;
     if (!r.mapped) j["reason"] = r.reason;
     subregions.push_back(std::move(j));
   }

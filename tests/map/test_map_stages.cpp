@@ -5,6 +5,7 @@
 #include <map>
 #include <numbers>
 
+#include "map/loop_path.h"
 #include "polysquare/core/error.h"
 #include "polysquare/map/deform.h"
 #include "polysquare/map/polysquare_map.h"
@@ -66,7 +67,7 @@ TEST(Deformation, ConstrainedMoveReachesTargetsAndStaysValid) {
   EXPECT_NEAR(x[0].y, -1.0, 0.2);
 }
 
-TEST(Deformation, ConstrainedMoveAroundAReflexCornerIsPulledWhereTheStraightPathFolds) {
+TEST(Deformation, ConstrainedMoveAroundAReflexCornerIsPulledOrUntangledWhereTheStraightPathFolds) {
   // An L-shaped grid (reflex corner at (1, 1)) whose boundary nodes slide 1.2 along the boundary: the straight
   // path takes the nodes near the reflex corner across the notch and folds triangles; pulled by springs, each
   // node goes its own way round and the move succeeds.
@@ -93,7 +94,6 @@ TEST(Deformation, ConstrainedMoveAroundAReflexCornerIsPulledWhereTheStraightPath
       }
     }
   const std::vector<Vec2> loop = {{0, 0}, {2, 0}, {2, 1}, {1, 1}, {1, 2}, {0, 2}};
-  const double perimeter = 8.0;
   auto arc_of = [&](Vec2 q) {  // arc length of a boundary point, -1 inside
     double s = 0.0;
     for (std::size_t k = 0; k < loop.size(); ++k) {
@@ -104,32 +104,34 @@ TEST(Deformation, ConstrainedMoveAroundAReflexCornerIsPulledWhereTheStraightPath
     }
     return -1.0;
   };
-  auto point_at = [&](double s) {
-    s = std::fmod(s, perimeter);
-    for (std::size_t k = 0; k < loop.size(); ++k) {
-      const Vec2 a = loop[k], b = loop[(k + 1) % loop.size()];
-      const double len = distance(a, b);
-      if (s <= len) return a + (s / len) * (b - a);
-      s -= len;
-    }
-    return loop.front();
-  };
   std::vector<std::uint8_t> mask(p.rest.size(), 0);
   std::vector<Vec2> targets = p.rest;
   for (std::size_t v = 0; v < p.rest.size(); ++v)
     if (const double s = arc_of(p.rest[v]); s >= 0.0) {
       mask[v] = 1;
-      targets[v] = point_at(s + 1.2);
+      targets[v] = point_on_loop(loop, s + 1.2);
     }
+  const DeformOptions straight_only;
   std::vector<Vec2> straight = p.rest;
-  EXPECT_FALSE(move_constrained_vertices(p, DeformOptions{}, mask, targets, straight));
-  DeformOptions pull;
+  EXPECT_FALSE(move_constrained_vertices(p, straight_only, mask, targets, straight));
+  DeformOptions pull = straight_only;
   pull.pull_when_path_fails = true;
   std::vector<Vec2> x = p.rest;
-  ASSERT_TRUE(move_constrained_vertices(p, pull, mask, targets, x));
+  bool untangled = true;
+  ASSERT_TRUE(move_constrained_vertices(p, pull, mask, targets, x, &untangled));
+  EXPECT_FALSE(untangled);
   for (std::size_t v = 0; v < x.size(); ++v)
     if (mask[v]) EXPECT_EQ(x[v], targets[v]);
   EXPECT_GT(min_signed_area(p.triangles, x), 0.0);
+  // Without the springs, the folds of the harmonic embedding on the targets can be untangled instead.
+  DeformOptions untangle = straight_only;
+  untangle.untangle_when_path_fails = true;
+  std::vector<Vec2> y = p.rest;
+  ASSERT_TRUE(move_constrained_vertices(p, untangle, mask, targets, y, &untangled));
+  EXPECT_TRUE(untangled);
+  for (std::size_t v = 0; v < y.size(); ++v)
+    if (mask[v]) EXPECT_EQ(y[v], targets[v]);
+  EXPECT_GT(min_signed_area(p.triangles, y), 0.0);
 }
 
 TEST(Deformation, PreconditionedSolveNeedsFewerIterationsForTheSameResult) {

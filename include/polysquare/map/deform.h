@@ -31,6 +31,9 @@ struct DeformOptions {
   /// move_constrained_vertices: when the straight path from the deformed to the target positions inverts a
   /// triangle, pull the constrained vertices to their targets by stiffening springs first, then try again.
   bool pull_when_path_fails = false;
+  /// move_constrained_vertices: when no path reaches the targets and the harmonic embedding on them folds, untangle
+  /// its folds with the constrained vertices on their targets (map/untangle_triangles.h) before giving up.
+  bool untangle_when_path_fails = false;
   /// Results of solved problems, shared by the copies of these options within one run (the pipeline sets it;
   /// null = none): a repair round re-maps every subregion of a part, most of them exactly as before.
   std::shared_ptr<DeformMemo> memo;
@@ -60,6 +63,7 @@ struct DeformStats {
   double energy_after = 0.0;
   double alignment_before = 0.0;  ///< E^B + E^F part (with the last eps), before and after
   double alignment_after = 0.0;
+  bool untangled = false;  ///< move_constrained_vertices: the targets were reached only by untangling folds
 };
 
 /// Solved deformations by a 128-bit digest of everything a solve reads (problem, options, start positions,
@@ -88,10 +92,11 @@ DeformStats deform_to_polysquare(const DeformProblem& problem, const DeformOptio
 
 /// Moves the vertices flagged in `target_mask` to `targets` along a path of un-inverted meshes: the displacement
 /// is extended harmonically to the free vertices, applied in steps that never flip a triangle, with the free
-/// vertices re-optimized for AMIPS after every step. Returns false when no valid path was found.
+/// vertices re-optimized for AMIPS after every step. Returns false when no valid path was found. `untangled`
+/// (when given) tells whether the targets were reached only by untangling (DeformOptions::untangle_when_path_fails).
 bool move_constrained_vertices(const DeformProblem& problem, const DeformOptions& options,
                                const std::vector<std::uint8_t>& target_mask, const std::vector<Vec2>& targets,
-                               std::vector<Vec2>& x);
+                               std::vector<Vec2>& x, bool* untangled = nullptr);
 
 /// Smallest signed area over the triangles (negative means inverted).
 double min_signed_area(const std::vector<std::array<std::int32_t, 3>>& triangles, const std::vector<Vec2>& x);

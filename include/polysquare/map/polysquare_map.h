@@ -64,7 +64,12 @@ struct PolysquareMapOptions {
   bool pull_failed_snaps = true;  ///< PPM: after the split rounds, the part is mapped once more with snaps that
                                   ///< a straight path cannot make pulled to their targets by stiffening springs
                                   ///< (DeformOptions::pull_when_path_fails), kept when more quads are structured;
-                                  ///< last because a pulled map is more distorted than its split pieces' maps
+                                  ///< last because a pulled map is more distorted than its split pieces' maps.
+                                  ///< Snaps that no path makes then have the folds of their harmonic embedding
+                                  ///< untangled (DeformOptions::untangle_when_path_fails): once a split has
+                                  ///< failed, a distorted map beats a patch (delta_box 100 m, 4 start vertices:
+                                  ///< structured 0.956 -> 0.968); untangling in every snap mapped subregions
+                                  ///< that a split maps better, whose slivers kept quads below SJ 0.3
   int split_max_subregions = 512; ///< no split takes a part beyond this many subregions, or beyond its quads over
                                   ///< split_quads_per_subregion when that is more: the joint quantization's time
                                   ///< grows with the count (delta_box 100 m: 322 subregions, 0.94 of its quads
@@ -99,6 +104,7 @@ struct SubregionStats {
   std::size_t quads = 0;
   std::size_t local_patch_quads = 0;  ///< of a mapped subregion's quads, those made by local patches around poor
                                       ///< quads (refine/local_patch.h)
+  bool untangled = false; ///< its map reached the quantized poly-square only by untangling folds (mapped only)
   std::string reason;     ///< why its map failed (patches only)
   Vec2 at{};              ///< its first boundary vertex, to find it
 };
@@ -160,8 +166,9 @@ MappedMesh deform_mesh(const TriMesh& tri, const PolysquareMapOptions& options, 
 void straighten_to_labels(MappedMesh& mm, Layout& layout, const TriMesh& tri, const PolysquareMapOptions& options);
 
 /// Moves the chain vertices of a deformed mesh onto the quantized layout without inverting a triangle.
-/// Throws MeshingError naming `name` when no valid path exists.
-void snap_to_layout(const TriMesh& tri, MappedMesh& mm, const Layout& layout, const PolysquareMapOptions& options,
+/// Throws MeshingError naming `name` when no valid path exists. Returns whether the map got there only by
+/// untangling (DeformOptions::untangle_when_path_fails).
+bool snap_to_layout(const TriMesh& tri, MappedMesh& mm, const Layout& layout, const PolysquareMapOptions& options,
                     const std::string& name);
 
 /// Meshes one part with a single poly-square map. Throws MeshingError naming the part when the map fails.
