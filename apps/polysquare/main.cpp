@@ -542,6 +542,10 @@ int main(int argc, char** argv) {
   cmd_mesh->add_option("--split-rounds", mesh.options.map.split_rounds,
                        "times a subregion whose map fails alone is split into smaller ones before meshing (0 = patch it)")
       ->capture_default_str()->check(CLI::Range(0, 8));
+  cmd_mesh->add_option("--multipass", mesh.options.map.multipass.max_passes,
+                       "PPM: deform the subregions together in at most this many passes over charts with buffer zones "
+                       "(the paper's Algorithm 1) instead of each alone (0)")
+      ->capture_default_str()->check(CLI::Range(0, 100));
   cmd_mesh->add_option("--map", mesh.map,
                        "how subregions are mapped: ppm (a poly-square per subregion, singularities where they meet) or "
                        "gpm (one global poly-square, separators as its sides)")

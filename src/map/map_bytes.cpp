@@ -28,6 +28,7 @@ void stats_fields(IO& io, Stats& s) {
   io(s.segments), io(s.quantize), io(s.quads), io(s.separators), io(s.split), io(s.joint_splits);
   io(s.seconds_partition), io(s.seconds_triangulate), io(s.seconds_deform), io(s.seconds_quantize);
   io(s.seconds_snap), io(s.seconds_extract), io(s.joint_maps), io(s.seconds_joint_maps);
+  io(s.multipass.passes), io(s.multipass.colours), io(s.multipass.last_move), io(s.multipass.seconds);
 }
 
 template <class IO, class Partition>

@@ -3,9 +3,11 @@
 #include <oneapi/tbb/parallel_for.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <exception>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <optional>
 #include <set>
@@ -19,6 +21,7 @@
 #include "polysquare/map/extract.h"
 #include "polysquare/map/layout.h"
 #include "polysquare/map/map_bytes.h"
+#include "polysquare/map/multipass.h"
 #include "polysquare/map/quantize.h"
 #include "polysquare/partition/partition.h"
 #include "map/interface_turns.h"
@@ -912,8 +915,36 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
   };
   auto pack_layout = [&](std::size_t p, ByteWriter& w) { put_bytes(w, layouts[p]); };
   auto unpack_layout = [&](std::size_t p, ByteReader& r) { get_bytes(r, layouts[p]); };
+  // Multi-pass PPM: every subregion's map starts from the positions the passes left its vertices at (vertices
+  // added by splitting an edge between two chain vertices at the middle of that edge's ends).
+  std::vector<Vec2> together;
+  if (options.multipass.max_passes > 0) {
+    together = multipass_deform(tri, triangle_part, parts, options.size, options.multipass, options.deform, st.multipass);
+  }
+  auto start_of = [&](std::size_t p) {
+    const Subregion& sub = subs[p];
+    const std::size_t nv = sub.mesh.vertices.size();
+    std::vector<Vec2> x(nv);
+    std::vector<std::vector<std::int32_t>> next(nv);
+    for (const auto& t : sub.mesh.triangles)
+      for (int k = 0; k < 3; ++k) next[static_cast<std::size_t>(t[k])].push_back(t[(k + 1) % 3]);
+    for (std::size_t v = 0; v < nv; ++v)
+      if (sub.global_vertex[v] >= 0) x[v] = together[static_cast<std::size_t>(sub.global_vertex[v])];
+    for (std::size_t v = 0; v < nv; ++v) {
+      if (sub.global_vertex[v] >= 0) continue;
+      double best = std::numeric_limits<double>::infinity();
+      for (std::int32_t a : next[v])
+        for (std::int32_t b : next[v]) {
+          const auto ua = static_cast<std::size_t>(a), ub = static_cast<std::size_t>(b);
+          if (a >= b || sub.global_vertex[ua] < 0 || sub.global_vertex[ub] < 0) continue;
+          const double off = distance(0.5 * (sub.mesh.vertices[ua] + sub.mesh.vertices[ub]), sub.mesh.vertices[v]);
+          if (off < best) best = off, x[v] = 0.5 * (x[ua] + x[ub]);
+        }
+    }
+    return x;
+  };
   each_mapped("deform", [&](std::size_t p) {
-    mapped[p] = deform_mesh(subs[p].mesh, options, true);
+    mapped[p] = together.empty() ? deform_mesh(subs[p].mesh, options, true) : deformed_mesh(subs[p].mesh, options, start_of(p));
     layouts[p] = build_layout(subs[p].mesh, subs[p].mesh.vertices, mapped[p].x, options.layout, sub_name(p));
   }, [&](std::size_t p, ByteWriter& w) { put_bytes(w, mapped[p], true), put_bytes(w, layouts[p]); },
      [&](std::size_t p, ByteReader& r) { get_bytes(r, mapped[p], true), get_bytes(r, layouts[p]); });
@@ -939,6 +970,18 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
   each_mapped("straighten", [&](std::size_t p) { straighten_to_labels(mapped[p], layouts[p], subs[p].mesh, options); },
               [&](std::size_t p, ByteWriter& w) { put_bytes(w, mapped[p], false), put_bytes(w, layouts[p]); },
               [&](std::size_t p, ByteReader& r) { get_bytes(r, mapped[p], false), get_bytes(r, layouts[p]); });
+  if (const char* mode = std::getenv("PS_TRUE_IFACE"))
+    for (std::size_t p = 0; p < n; ++p) {
+      if (!failure[p].empty()) continue;
+      for (LayoutSegment& sg : layouts[p].segments) {
+        const TriChain& ch = subs[p].mesh.chains[static_cast<std::size_t>(sg.chain)];
+        if (ch.interface < 0 && mode[0] == '1') continue;
+        const Vec2 a = subs[p].mesh.vertices[static_cast<std::size_t>(layouts[p].break_vertex[sg.break_a])];
+        const Vec2 b = subs[p].mesh.vertices[static_cast<std::size_t>(layouts[p].break_vertex[sg.break_b])];
+        const double truth = distance(a, b) / options.size;
+        sg.target = mode[0] == '3' ? std::sqrt(truth * sg.target) : truth;
+      }
+    }
   st.seconds_deform = seconds_since(t0);
   for (std::size_t p = 0; p < n; ++p) {
     if (!failure[p].empty()) continue;

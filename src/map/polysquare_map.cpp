@@ -33,11 +33,15 @@ double preorientation_angle(const std::vector<Vec2>& points, const std::vector<s
   return -std::arg(sum) / 4.0;
 }
 
-MappedMesh deform_mesh(const TriMesh& tri, const PolysquareMapOptions& options, bool orient_all_chains) {
+namespace {
+
+// The deformation problem of `tri` (rest shape centred, pre-oriented and in lattice units) and the edges its
+// pre-orientation reads.
+MappedMesh deformation_problem(const TriMesh& tri, const PolysquareMapOptions& options, bool orient_all_chains,
+                               std::vector<std::array<std::int32_t, 2>>& orient_edges) {
   MappedMesh mm;
   DeformProblem& problem = mm.problem;
   problem.triangles = tri.triangles;
-  std::vector<std::array<std::int32_t, 2>> orient_edges;
   for (const TriChain& ch : tri.chains) {
     const int n = static_cast<int>(ch.vertices.size());
     const int m = ch.closed ? n : n - 1;
@@ -62,8 +66,32 @@ MappedMesh deform_mesh(const TriMesh& tri, const PolysquareMapOptions& options, 
     const Vec2 q = p - centre;
     problem.rest.push_back({(c * q.x - s * q.y) / h, (s * q.x + c * q.y) / h});
   }
-  mm.x = problem.rest;
-  mm.stats = deform_to_polysquare(problem, options.deform, mm.x);
+  return mm;
+}
+
+}  // namespace
+
+MappedMesh deform_mesh(const TriMesh& tri, const PolysquareMapOptions& options, bool orient_all_chains) {
+  std::vector<std::array<std::int32_t, 2>> orient_edges;
+  MappedMesh mm = deformation_problem(tri, options, orient_all_chains, orient_edges);
+  mm.x = mm.problem.rest;
+  mm.stats = deform_to_polysquare(mm.problem, options.deform, mm.x);
+  return mm;
+}
+
+MappedMesh deformed_mesh(const TriMesh& tri, const PolysquareMapOptions& options, std::vector<Vec2> deformed) {
+  std::vector<std::array<std::int32_t, 2>> orient_edges;
+  MappedMesh mm = deformation_problem(tri, options, true, orient_edges);
+  // Turned so that its sides run along the axes, as a deformation from the rest shape would leave them.
+  Vec2 centre{0.0, 0.0};
+  for (Vec2 p : deformed) centre = centre + p;
+  if (!deformed.empty()) centre = (1.0 / static_cast<double>(deformed.size())) * centre;
+  const double theta = preorientation_angle(deformed, orient_edges), c = std::cos(theta), s = std::sin(theta);
+  for (Vec2& p : deformed) {
+    const Vec2 q = p - centre;
+    p = {c * q.x - s * q.y, s * q.x + c * q.y};
+  }
+  mm.x = std::move(deformed);
   return mm;
 }
 

@@ -68,7 +68,9 @@ nlohmann::json part_json(const PartMapStats& s) {
                        {"snap", s.seconds_snap},
                        {"extract", s.seconds_extract},
                        {"joint_maps", s.seconds_joint_maps}}},
-          {"joint_maps", s.joint_maps}};
+          {"joint_maps", s.joint_maps},
+          {"multipass", {{"passes", s.multipass.passes}, {"colours", s.multipass.colours},
+                         {"last_move", s.multipass.last_move}, {"seconds", s.multipass.seconds}}}};
 }
 
 nlohmann::json dropped_json(const std::vector<DroppedCurve>& curves) {

@@ -14,6 +14,7 @@
 #include "polysquare/core/work_sharing.h"
 #include "polysquare/map/deform.h"
 #include "polysquare/map/layout.h"
+#include "polysquare/map/multipass.h"
 #include "polysquare/map/quantize.h"
 #include "polysquare/partition/partition.h"
 #include "polysquare/triangulate/background_triangulation.h"
@@ -88,6 +89,9 @@ struct PolysquareMapOptions {
   /// snaps are divided among them; null = this process alone. The mesh does not depend on it.
   std::shared_ptr<const WorkSharing> sharing;
   DeformOptions deform;
+  /// PPM: the subregions deformed together in passes over charts with buffer zones (paper Algorithm 1) instead
+  /// of each alone; off by default (see multipass.h and the README's measurement)
+  MultipassOptions multipass;
   /// Weights of the labelled deformation that runs between labelling and quantization (continuation, one L-BFGS
   /// solve per weight): every side is pulled straight along its label, so the deformed layout the quantization
   /// reads orders and sizes the sides as the labels say (turtle_shell's bottom otherwise stays a staircase under
@@ -134,6 +138,7 @@ struct PartMapStats {
   int joint_splits = 0;                    ///< PPM: rounds that split failed subregions after the joint map
   double seconds_partition = 0;
   double seconds_triangulate = 0, seconds_deform = 0, seconds_quantize = 0, seconds_snap = 0, seconds_extract = 0;
+  MultipassStats multipass;       ///< PPM with multi-pass deformation: the passes of the kept map
   int joint_maps = 0;             ///< PPM: joint maps of the part (first, split rounds, pulled snaps), kept or not
   double seconds_joint_maps = 0;  ///< PPM: their time together (the seconds_* above are the kept map's only)
 };
@@ -160,6 +165,10 @@ struct MappedMesh {
 /// Deforms `tri` towards a poly-square: every chain edge is pulled to an axis. The pre-orientation (eq. 11) is
 /// computed over the ring edges, or with `orient_all_chains` over every chain but interior features.
 MappedMesh deform_mesh(const TriMesh& tri, const PolysquareMapOptions& options, bool orient_all_chains);
+
+/// The mapped mesh of a PPM subregion `tri` whose vertices were deformed elsewhere (multipass.h) to `deformed`
+/// (#vertices, any frame): deform_mesh's problem, `deformed` turned so that its chains run along the axes.
+MappedMesh deformed_mesh(const TriMesh& tri, const PolysquareMapOptions& options, std::vector<Vec2> deformed);
 
 /// Deforms `mm` again with every chain edge pulled along its layout label (options.label_weights), then sets each
 /// side's target to its new chord length. Keeps the map inversion-free; does nothing when the weights are empty.
