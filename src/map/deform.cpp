@@ -308,11 +308,10 @@ class Preconditioner {
   bool ok_ = false;
 };
 
-// L-BFGS with a backtracking line search (started from `pre`'s inverse when given), inversion-free unless
-// `unbounded` (an energy finite on folded triangles, like the untangler's). Returns the iteration count.
-template <class E>
-int minimize(const E& energy, const DeformProblem& pr, std::vector<Vec2>& x, int max_iter, double rtol, int memory,
-             const Preconditioner* pre = nullptr, bool unbounded = false) {
+// L-BFGS with an inversion-free backtracking line search (started from `pre`'s inverse when given). Returns the
+// iteration count.
+int minimize(const Energy& energy, const DeformProblem& pr, std::vector<Vec2>& x, int max_iter, double rtol, int memory,
+             const Preconditioner* pre = nullptr) {
   const std::size_t n = x.size();
   std::vector<Vec2> g(n), g_new(n), p(n), x_new(n), s_new(n), y_new(n), my;
   double f = energy.eval(x, &g);
@@ -359,7 +358,7 @@ int minimize(const E& energy, const DeformProblem& pr, std::vector<Vec2>& x, int
       for (const auto& v : p) pmax = std::max(pmax, norm(v));
       if (pmax > 0) step = std::min(1.0, 0.1 / pmax);
     }
-    if (!unbounded) step = std::min(step, 0.8 * max_feasible_step(pr, x, p));
+    step = std::min(step, 0.8 * max_feasible_step(pr, x, p));
     double f_new = kInf;
     bool ok = false;
     for (int ls = 0; ls < 50; ++ls) {
@@ -417,83 +416,6 @@ void digest_problem(Digest& d, const DeformProblem& p, const DeformOptions& o, c
   d.raw(p.fixed);
   d.raw(x);
 }
-
-// The regularized denominator chi(D, eps) = (D + sqrt(eps^2 + D^2)) / 2: positive for every D when eps > 0, and
-// D itself for D > 0 as eps -> 0.
-double chi(double d, double eps) { return 0.5 * (d + std::sqrt(eps * eps + d * d)); }
-
-struct UntangleEnergy {
-  const DeformProblem& problem;
-  const std::vector<std::uint8_t>& movable;
-  std::vector<std::array<double, 5>> rest;  // inverse rest edge matrix (r00, r01, r10, r11) and the weight
-  double theta = 1.0 / 128.0;  // share of the area term against the shape term (the paper's choice)
-
-  UntangleEnergy(const DeformProblem& p, const std::vector<std::uint8_t>& m) : problem(p), movable(m) {
-    double total = 0.0;
-    for (const auto& t : p.triangles) {
-      const Vec2 a = p.rest[t[1]] - p.rest[t[0]], b = p.rest[t[2]] - p.rest[t[0]];
-      const double det = cross(a, b);
-      rest.push_back({b.y / det, -b.x / det, -a.y / det, a.x / det, 0.5 * std::abs(det)});
-      total += 0.5 * std::abs(det);
-    }
-    const double mean = total / static_cast<double>(std::max<std::size_t>(1, rest.size()));
-    for (auto& r : rest) r[4] /= mean;
-  }
-
-  // J = E R^-1 for triangle t at positions x: J = [[j00, j01], [j10, j11]].
-  std::array<double, 4> jacobian(std::size_t t, const std::vector<Vec2>& x) const {
-    const auto& tr = problem.triangles[t];
-    const Vec2 a = x[tr[1]] - x[tr[0]], b = x[tr[2]] - x[tr[0]];
-    const auto& r = rest[t];
-    return {a.x * r[0] + b.x * r[2], a.x * r[1] + b.x * r[3], a.y * r[0] + b.y * r[2], a.y * r[1] + b.y * r[3]};
-  }
-
-  double min_det(const std::vector<Vec2>& x) const {
-    double m = std::numeric_limits<double>::infinity();
-    for (std::size_t t = 0; t < rest.size(); ++t) {
-      const auto j = jacobian(t, x);
-      m = std::min(m, j[0] * j[3] - j[1] * j[2]);
-    }
-    return m;
-  }
-
-  double eps = 1e-9;  // the regularization, lowered by untangle_triangles' schedule
-
-  // Energy at x (and its gradient, zero at fixed vertices, when g is given).
-  double eval(const std::vector<Vec2>& x, std::vector<Vec2>* g) const {
-    if (g) g->assign(x.size(), Vec2{});
-    double e = 0.0;
-    for (std::size_t t = 0; t < rest.size(); ++t) {
-      const auto j = jacobian(t, x);
-      const double d = j[0] * j[3] - j[1] * j[2];
-      const double f = j[0] * j[0] + j[1] * j[1] + j[2] * j[2] + j[3] * j[3];
-      const double root = std::sqrt(eps * eps + d * d);
-      const double c = 0.5 * (d + root);
-      const double w = rest[t][4];
-      e += w * ((1.0 - theta) * f / c + theta * (d * d + 1.0) / c);
-      if (!g) continue;
-      const double dc = c / root;  // d chi / d D
-      // dE/dJ = (1-theta) (2J / c - f dc / c^2 cof) + theta (2 d / c - (d^2 + 1) dc / c^2) cof
-      const double kd = (1.0 - theta) * (-f * dc / (c * c)) + theta * (2.0 * d / c - (d * d + 1.0) * dc / (c * c));
-      const double kj = (1.0 - theta) * 2.0 / c;
-      const double cof[4] = {j[3], -j[2], -j[1], j[0]};
-      double gj[4];
-      for (int k = 0; k < 4; ++k) gj[k] = w * (kj * j[k] + kd * cof[k]);
-      // dE/dE_edges = dE/dJ R^-T: columns are the gradients of the two edge vectors.
-      const auto& r = rest[t];
-      const double ga_x = gj[0] * r[0] + gj[1] * r[1], gb_x = gj[0] * r[2] + gj[1] * r[3];
-      const double ga_y = gj[2] * r[0] + gj[3] * r[1], gb_y = gj[2] * r[2] + gj[3] * r[3];
-      const auto& tr = problem.triangles[t];
-      auto add = [&](std::int32_t v, double gx, double gy) {
-        if (movable[static_cast<std::size_t>(v)]) (*g)[static_cast<std::size_t>(v)] = (*g)[static_cast<std::size_t>(v)] + Vec2{gx, gy};
-      };
-      add(tr[1], ga_x, ga_y);
-      add(tr[2], gb_x, gb_y);
-      add(tr[0], -ga_x - gb_x, -ga_y - gb_y);
-    }
-    return e;
-  }
-};
 
 }  // namespace
 
@@ -726,26 +648,5 @@ bool straight_path(const DeformProblem& problem, const DeformOptions& options,
 }
 
 }  // namespace
-
-// Declared in map/untangle_triangles.h; here because it shares the deformation's L-BFGS.
-bool untangle_triangles(const DeformProblem& problem, const std::vector<std::uint8_t>& movable, std::vector<Vec2>& x) {
-  UntangleEnergy u(problem, movable);
-  if (std::find(movable.begin(), movable.end(), std::uint8_t{1}) == movable.end()) return u.min_det(x) > 0.0;
-  double d = u.min_det(x);
-  u.eps = d > 0.0 ? 1e-9 : std::max(1e-3, 2.0 * std::abs(d));
-  double e_prev = u.eval(x, nullptr);
-  for (int outer = 0; outer < 100; ++outer) {
-    minimize(u, problem, x, 500, 1e-9, 10, nullptr, true);
-    const double e = u.eval(x, nullptr);
-    d = u.min_det(x);
-    if (d > 0.0 && std::abs(e_prev - e) <= 1e-5 * std::abs(e)) break;
-    // The schedule of the paper: eps shrinks with the energy's relative decrease, faster as it stalls.
-    const double sigma = std::max(1.0 - e / e_prev, 0.1);
-    const double mu = (1.0 - sigma) * chi(d, u.eps);
-    u.eps = d < mu ? 2.0 * std::sqrt(mu * (mu - d)) : 1e-9;
-    e_prev = u.eval(x, nullptr);
-  }
-  return u.min_det(x) > 0.0;
-}
 
 }  // namespace polysquare

@@ -224,6 +224,7 @@ PartMapResult map_part(const Region& region, const RegionPart& part, const Polys
     PolysquareMapOptions pulled = options;
     pulled.deform.pull_when_path_fails = options.pull_failed_snaps;
     pulled.deform.untangle_when_path_fails = options.pull_failed_snaps;
+    pulled.deform.untangle_when_path_fails = options.pull_failed_snaps;
     int joint_maps = 0;
     double seconds_joint_maps = 0.0;
     auto joint_map = [&](const std::vector<std::int32_t>& tp, int parts, const PolysquareMapOptions& o, PartMapStats& s) {

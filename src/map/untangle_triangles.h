@@ -2,8 +2,7 @@
 // triangulation whose constrained vertices already sit on their targets are moved until no triangle is
 // inverted, by minimizing a regularized distortion energy (Garanzha, Kaporin, Kudryavtseva, Protais, Ray,
 // Sokolov, "Foldover-free maps in 50 lines of code", ACM TOG 40(4), 2021): every triangle's energy is finite
-// whatever its orientation, and the regularization shrinks as the inverted triangles unfold. Defined in deform.cpp,
-// whose L-BFGS it shares (without the inversion-free step bound).
+// whatever its orientation, and the regularization shrinks as the inverted triangles unfold.
 #pragma once
 
 #include <cstdint>
