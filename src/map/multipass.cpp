@@ -21,20 +21,19 @@ struct Chart {
 };
 
 Chart build_chart(const TriMesh& tri, const std::vector<std::int32_t>& triangle_part, std::int32_t p,
-                  const std::vector<std::vector<std::int32_t>>& triangles_at,
+                  const std::vector<std::size_t>& own_triangles, const std::vector<std::vector<std::int32_t>>& triangles_at,
+                  const std::unordered_set<std::uint64_t>& feature_edges,
                   const std::unordered_map<std::uint64_t, std::array<std::int32_t, 2>>& owners, double size, int rings,
                   const DeformOptions& deform) {
-  const std::size_t nt = tri.triangles.size();
-  std::vector<std::uint8_t> in(nt, 0);
-  std::vector<std::size_t> chart_triangles;
-  for (std::size_t t = 0; t < nt; ++t)
-    if (triangle_part[t] == p) in[t] = 1, chart_triangles.push_back(t);
+  // Membership by hash, not a flag per triangle of the part: one chart per subregion, thousands on a coast.
+  std::unordered_set<std::size_t> in(own_triangles.begin(), own_triangles.end());
+  std::vector<std::size_t> chart_triangles = own_triangles;
   for (int r = 0; r < rings; ++r) {
     std::vector<std::size_t> added;
     for (std::size_t t : chart_triangles)
       for (std::int32_t v : tri.triangles[t])
         for (std::int32_t u : triangles_at[static_cast<std::size_t>(v)])
-          if (!in[static_cast<std::size_t>(u)]) in[static_cast<std::size_t>(u)] = 1, added.push_back(static_cast<std::size_t>(u));
+          if (in.insert(static_cast<std::size_t>(u)).second) added.push_back(static_cast<std::size_t>(u));
     if (added.empty()) break;
     chart_triangles.insert(chart_triangles.end(), added.begin(), added.end());
   }
@@ -63,43 +62,29 @@ Chart build_chart(const TriMesh& tri, const std::vector<std::int32_t>& triangle_
     for (int k = 0; k < 3; ++k) {
       const std::int32_t a = tri.triangles[t][k], b = tri.triangles[t][(k + 1) % 3];
       const auto& o = owners.at(edge_key(a, b));
-      const bool other_in = o[1] >= 0 && in[static_cast<std::size_t>(o[0] == static_cast<std::int32_t>(t) ? o[1] : o[0])];
+      const bool other_in = o[1] >= 0 && in.count(static_cast<std::size_t>(o[0] == static_cast<std::int32_t>(t) ? o[1] : o[0])) > 0;
       if (other_in) continue;
       for (std::int32_t v : {a, b})
         if (!own[static_cast<std::size_t>(local.at(v))]) c.problem.fixed[static_cast<std::size_t>(local.at(v))] = 1;
     }
-  std::unordered_set<std::uint64_t> feature_edges;
-  for (const TriChain& ch : tri.chains)
-    if (ch.kind == TriChain::Kind::feature)
-      for (std::size_t i = 0; i + (ch.closed ? 0 : 1) < ch.vertices.size(); ++i)
-        feature_edges.insert(edge_key(ch.vertices[i], ch.vertices[(i + 1) % ch.vertices.size()]));
   // Pulled to the axes: the subregion's ring pieces and the feature edges in it or on its boundary. Interfaces are
   // not: each side would pull them to the axes of its own frame, and two frames that do not differ by a quarter
   // turn pull them apart (with them, delta_box 200 m still moved 5-6 elements in the eighth pass, and 1.7-2.2
   // without); the labelled deformation of each subregion straightens them afterwards.
-  for (std::size_t t : chart_triangles) {
-    if (triangle_part[t] != p) continue;
+  for (std::size_t t : own_triangles)
     for (int k = 0; k < 3; ++k) {
       const std::int32_t a = tri.triangles[t][k], b = tri.triangles[t][(k + 1) % 3];
       const auto& o = owners.at(edge_key(a, b));
       const std::int32_t other = o[0] == static_cast<std::int32_t>(t) ? o[1] : o[0];
-      if (other >= 0 && triangle_part[static_cast<std::size_t>(other)] == p) continue;
+      const bool feature = feature_edges.count(edge_key(a, b)) > 0;
+      if (other >= 0 && triangle_part[static_cast<std::size_t>(other)] == p) {
+        // a feature inside the subregion, once (from its lower-numbered triangle)
+        if (feature && static_cast<std::int32_t>(t) < other) c.problem.aligned.push_back({local.at(a), local.at(b), deform.feature_weight});
+        continue;
+      }
       c.boundary.push_back({local.at(a), local.at(b)});
-      if (other >= 0 && !feature_edges.count(edge_key(a, b))) continue;
-      c.problem.aligned.push_back({local.at(a), local.at(b), deform.boundary_weight});
+      if (other < 0 || feature) c.problem.aligned.push_back({local.at(a), local.at(b), deform.boundary_weight});
     }
-  }
-  for (const TriChain& ch : tri.chains) {
-    if (ch.kind != TriChain::Kind::feature) continue;
-    const std::size_t m = ch.closed ? ch.vertices.size() : ch.vertices.size() - 1;
-    for (std::size_t i = 0; i < m; ++i) {
-      const std::int32_t a = ch.vertices[i], b = ch.vertices[(i + 1) % ch.vertices.size()];
-      const auto it = owners.find(edge_key(a, b));
-      if (it == owners.end() || it->second[1] < 0) continue;
-      if (triangle_part[static_cast<std::size_t>(it->second[0])] == p && triangle_part[static_cast<std::size_t>(it->second[1])] == p)
-        c.problem.aligned.push_back({local.at(a), local.at(b), deform.feature_weight});
-    }
-  }
   return c;
 }
 
@@ -125,10 +110,18 @@ std::vector<Vec2> multipass_deform(const TriMesh& tri, const std::vector<std::in
   for (std::size_t t = 0; t < tri.triangles.size(); ++t)
     for (std::int32_t v : tri.triangles[t]) triangles_at[static_cast<std::size_t>(v)].push_back(static_cast<std::int32_t>(t));
   const auto owners = edge_owners(tri);
+  std::unordered_set<std::uint64_t> feature_edges;
+  for (const TriChain& ch : tri.chains)
+    if (ch.kind == TriChain::Kind::feature)
+      for (std::size_t i = 0; i + (ch.closed ? 0 : 1) < ch.vertices.size(); ++i)
+        feature_edges.insert(edge_key(ch.vertices[i], ch.vertices[(i + 1) % ch.vertices.size()]));
+  std::vector<std::vector<std::size_t>> own(np);
+  for (std::size_t t = 0; t < tri.triangles.size(); ++t)
+    if (triangle_part[t] >= 0 && static_cast<std::size_t>(triangle_part[t]) < np) own[static_cast<std::size_t>(triangle_part[t])].push_back(t);
 
   std::vector<Chart> charts(np);
   oneapi::tbb::parallel_for(std::size_t{0}, np, [&](std::size_t p) {
-    charts[p] = build_chart(tri, triangle_part, static_cast<std::int32_t>(p), triangles_at, owners, size,
+    charts[p] = build_chart(tri, triangle_part, static_cast<std::int32_t>(p), own[p], triangles_at, feature_edges, owners, size,
                             options.buffer_rings, deform);
   });
   // Colours: greedy over the subregions in order, two charts that share a vertex apart, so that the charts of one

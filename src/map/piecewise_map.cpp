@@ -3,7 +3,6 @@
 #include <oneapi/tbb/parallel_for.h>
 
 #include <algorithm>
-#include <cstdlib>
 #include <exception>
 #include <chrono>
 #include <cmath>
@@ -970,18 +969,6 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
   each_mapped("straighten", [&](std::size_t p) { straighten_to_labels(mapped[p], layouts[p], subs[p].mesh, options); },
               [&](std::size_t p, ByteWriter& w) { put_bytes(w, mapped[p], false), put_bytes(w, layouts[p]); },
               [&](std::size_t p, ByteReader& r) { get_bytes(r, mapped[p], false), get_bytes(r, layouts[p]); });
-  if (const char* mode = std::getenv("PS_TRUE_IFACE"))
-    for (std::size_t p = 0; p < n; ++p) {
-      if (!failure[p].empty()) continue;
-      for (LayoutSegment& sg : layouts[p].segments) {
-        const TriChain& ch = subs[p].mesh.chains[static_cast<std::size_t>(sg.chain)];
-        if (ch.interface < 0 && mode[0] == '1') continue;
-        const Vec2 a = subs[p].mesh.vertices[static_cast<std::size_t>(layouts[p].break_vertex[sg.break_a])];
-        const Vec2 b = subs[p].mesh.vertices[static_cast<std::size_t>(layouts[p].break_vertex[sg.break_b])];
-        const double truth = distance(a, b) / options.size;
-        sg.target = mode[0] == '3' ? std::sqrt(truth * sg.target) : truth;
-      }
-    }
   st.seconds_deform = seconds_since(t0);
   for (std::size_t p = 0; p < n; ++p) {
     if (!failure[p].empty()) continue;
