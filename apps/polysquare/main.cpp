@@ -542,6 +542,10 @@ int main(int argc, char** argv) {
   cmd_mesh->add_option("--split-rounds", mesh.options.map.split_rounds,
                        "times a subregion whose map fails alone is split into smaller ones before meshing (0 = patch it)")
       ->capture_default_str()->check(CLI::Range(0, 8));
+  cmd_mesh->add_option("--agree-turns", mesh.options.map.layout.agree_turn_elements,
+                       "PPM: where a feature between two subregions turns on one side only, turn one side's labels a "
+                       "quarter over stretches of at most this many elements so both sides agree (0 = off)")
+      ->capture_default_str();
   cmd_mesh->add_option("--multipass", mesh.options.map.multipass.max_passes,
                        "PPM: deform the subregions together in at most this many passes over charts with buffer zones "
                        "(the paper's Algorithm 1) instead of each alone (0)")

@@ -966,6 +966,13 @@ QuadMesh map_piecewise(const TriMesh& tri, const std::vector<std::int32_t>& tria
       add_straight_breaks(layouts[p], m, mapped[p].x, extra, sub_name(p));
     }, pack_layout, unpack_layout);
   }
+  if (options.layout.agree_turn_elements > 0.0) {
+    // Feature interfaces: where one side turns and the other goes straight, one side is turned to agree.
+    std::vector<InterfaceSide> sides(n);
+    for (std::size_t p = 0; p < n; ++p)
+      if (failure[p].empty()) sides[p] = {&layouts[p], &subs[p].mesh, &mapped[p].x, &subs[p].global_vertex, sub_name(p)};
+    st.agreed_turns = agree_feature_interface_turns(sides, options.layout.agree_turn_elements);
+  }
   each_mapped("straighten", [&](std::size_t p) { straighten_to_labels(mapped[p], layouts[p], subs[p].mesh, options); },
               [&](std::size_t p, ByteWriter& w) { put_bytes(w, mapped[p], false), put_bytes(w, layouts[p]); },
               [&](std::size_t p, ByteReader& r) { get_bytes(r, mapped[p], false), get_bytes(r, layouts[p]); });

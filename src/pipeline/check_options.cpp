@@ -52,6 +52,8 @@ void check_mesh_options(const MeshOptions& o) {
           "map.deform.feature_weight", o.map.deform.feature_weight, "a finite number >= 0");
   require(std::isfinite(o.feature_tolerance) && o.feature_tolerance >= 0, "--feature-tolerance", "feature_tolerance",
           o.feature_tolerance, "a finite fraction of the size, at least 0 (0: unbounded)");
+  require(std::isfinite(o.map.layout.agree_turn_elements) && o.map.layout.agree_turn_elements >= 0, "--agree-turns",
+          "map.layout.agree_turn_elements", o.map.layout.agree_turn_elements, "a finite number of elements >= 0 (0 = off)");
   require(o.max_quads >= 1, "--max-quads", "max_quads", static_cast<double>(o.max_quads), "at least 1");
   require(o.threads >= 0 && o.threads <= kMaxThreads, "--threads", "threads", o.threads,
           "in [0, 4096] (0 = all cores)");

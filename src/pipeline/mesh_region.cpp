@@ -69,6 +69,7 @@ nlohmann::json part_json(const PartMapStats& s) {
                        {"extract", s.seconds_extract},
                        {"joint_maps", s.seconds_joint_maps}}},
           {"joint_maps", s.joint_maps},
+          {"agreed_turns", s.agreed_turns},
           {"multipass", {{"passes", s.multipass.passes}, {"colours", s.multipass.colours},
                          {"last_move", s.multipass.last_move}, {"seconds", s.multipass.seconds}}}};
 }

@@ -150,6 +150,7 @@ TEST(CliOutputs, OptionValuesAreValidatedBeforeReading) {
       {"--feature-weight nan", "--feature-weight"}, {"--feature-weight -1", "--feature-weight"},
       {"--flat-corner-angle nan", "--flat-corner-angle"}, {"--flat-corner-angle 200", "--flat-corner-angle"},
       {"--feature-tolerance nan", "--feature-tolerance"}, {"--feature-tolerance -1", "--feature-tolerance"},
+      {"--agree-turns nan", "--agree-turns"}, {"--agree-turns -1", "--agree-turns"},
       {"--max-quads -5", "--max-quads"},     {"--max-quads nan", "--max-quads"},
       {"--threads 1000000000", "--threads"}, {"--size nan", "--size"},
       {"--depth nan", "--depth"},            {"--pieces 3", "--pieces"},  // pieces need a .pvtu output

@@ -152,6 +152,7 @@ TEST(MeshOptionsCheck, DefaultsPassAndEveryNaNIsRefusedByName) {
       {"--flat-corner-angle", [](MeshOptions& o, double v) { o.refine.flat_corner_deg = v; }},
       {"--loop-corner-angle", [](MeshOptions& o, double v) { o.refine.loop_corner_deg = v; }},
       {"--feature-tolerance", [](MeshOptions& o, double v) { o.feature_tolerance = v; }},
+      {"--agree-turns", [](MeshOptions& o, double v) { o.map.layout.agree_turn_elements = v; }},
   };
   for (const Case& c : cases)
     for (double v : {nan, -1.0}) {  // NaN compared false against every gate and disabled it

@@ -20,6 +20,10 @@ struct LayoutOptions {
                                        ///< lets them bend, the two sides then sharing every break point
   double interface_change_cost = 1.5;  ///< label change cost on a bendable interface (smile meshes at 1.5, not
                                        ///< at 6 or 0.5)
+  double agree_turn_elements = 0.0;    ///< PPM: where a feature between two subregions turns on one side only, a
+                                       ///< stretch of at most this many elements between two such breaks of
+                                       ///< opposite sense is turned a quarter on one side (map/interface_turns.h)
+                                       ///< so both sides agree; 0 = off
 };
 
 /// Axis labels: 0 = +X, 1 = +Y, 2 = -X, 3 = -Y (the direction of travel along the chain).

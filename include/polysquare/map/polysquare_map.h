@@ -131,6 +131,7 @@ struct PartMapStats {
   QuantizeStats quantize;
   std::size_t quads = 0;
   std::size_t separators = 0;      ///< separator chains between subregions
+  std::size_t agreed_turns = 0;    ///< PPM: pairs of breaks on feature interfaces made to turn alike on both sides
   std::vector<SubregionStats> subregions;  ///< PPM: every subregion, in order
   SplitStats split;                        ///< PPM: subregions split before the joint map
   std::vector<std::pair<int, int>> failed_maps;  ///< PPM: subregions whose own map failed in the joint map (not
