@@ -40,7 +40,8 @@ struct InterfaceSide {
 /// (the nearest first) and one side's labels between the two are turned a quarter: that side's corner moves
 /// to, or cancels with, the other's, and every turn inside the stretch and the loop's total turn stay. Of the
 /// two sides, the one left with fewer corners is changed (then the shorter stretch); a stretch longer than
-/// `max_length` deformed elements is left alone. Returns the number of pairs agreed (the changed layouts' sides are rebuilt).
+/// `max_length` deformed elements is left alone. Returns the number of pairs agreed (the changed layouts' sides
+/// are rebuilt).
 std::size_t agree_feature_interface_turns(std::vector<InterfaceSide>& sides, double max_length);
 
 }  // namespace polysquare
