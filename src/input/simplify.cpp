@@ -171,12 +171,11 @@ void smooth_fine_stretches(Pool& pool, Grid& grid, const std::vector<Vec2>& inpu
   }
 }
 
-}  // namespace
+// A polyline's place in the pool: its vertices are consecutive from first.
+struct Line { int first; bool closed; int size; };
 
-SimplifyStats simplify_region(Region& region, const SimplifyOptions& options) {
-  SimplifyStats stats;
-  Pool pool;
-  struct Line { int first; bool closed; int size; };
+// The rings, then the feature curves, in one pool; the open lines' end vertices are locked.
+std::vector<Line> pool_lines(const Region& region, Pool& pool) {
   std::vector<Line> lines;
   auto add_line = [&](const std::vector<Vec2>& pts, bool closed) {
     const int first = static_cast<int>(pool.p.size()), n = static_cast<int>(pts.size());
@@ -192,50 +191,109 @@ SimplifyStats simplify_region(Region& region, const SimplifyOptions& options) {
   };
   for (const Ring& r : region.rings) add_line(r.points, true);
   for (const FeatureCurve& f : region.features) add_line(f.points, f.closed);
-  stats.vertices_before = pool.p.size();
-  if (!(options.min_area > 0.0)) { stats.vertices_after = stats.vertices_before; return stats; }
-  // Points shared by several polylines (a feature ending on a ring, curves meeting) stay.
-  {
-    std::unordered_map<long long, int> seen;
-    std::vector<std::pair<std::pair<double, double>, int>> keys;
-    for (std::size_t v = 0; v < pool.p.size(); ++v) keys.push_back({{pool.p[v].x, pool.p[v].y}, static_cast<int>(v)});
-    std::sort(keys.begin(), keys.end());
-    for (std::size_t i = 1; i < keys.size(); ++i)
-      if (keys[i].first == keys[i - 1].first) pool.locked[keys[i].second] = pool.locked[keys[i - 1].second] = 1;
-    for (const Vec2 q : region.feature_points)
-      for (std::size_t v = 0; v < pool.p.size(); ++v)
-        if (pool.p[v] == q) pool.locked[v] = 1;
-  }
-  Box2 box;
-  double len = 0.0;
-  std::size_t nseg = 0;
-  for (std::size_t v = 0; v < pool.p.size(); ++v) {
-    box.add(pool.p[v]);
-    if (pool.next[v] >= 0) { len += distance(pool.p[v], pool.p[pool.next[v]]); ++nseg; }
-  }
-  Grid grid{std::max(2.0 * len / std::max<std::size_t>(1, nseg), box.diagonal() * 1e-9), box.lo, {}};
+  return lines;
+}
+
+// Points shared by several polylines (a feature ending on a ring, curves meeting) stay.
+void lock_shared_points(const Region& region, Pool& pool) {
+  std::vector<std::pair<std::pair<double, double>, int>> keys;
+  for (std::size_t v = 0; v < pool.p.size(); ++v) keys.push_back({{pool.p[v].x, pool.p[v].y}, static_cast<int>(v)});
+  std::sort(keys.begin(), keys.end());
+  for (std::size_t i = 1; i < keys.size(); ++i)
+    if (keys[i].first == keys[i - 1].first) pool.locked[keys[i].second] = pool.locked[keys[i - 1].second] = 1;
+  for (const Vec2 q : region.feature_points)
+    for (std::size_t v = 0; v < pool.p.size(); ++v)
+      if (pool.p[v] == q) pool.locked[v] = 1;
+}
+
+// A grid of the alive segments, its cells twice their mean length (at least a billionth of the box's diagonal).
+Grid grid_of_alive_segments(const Pool& pool, const Box2& box, std::size_t segments) {
+  double alive_len = 0.0;
   for (std::size_t v = 0; v < pool.p.size(); ++v)
-    if (pool.next[v] >= 0) grid.add(pool, static_cast<int>(v));
+    if (pool.alive[v] && pool.next[v] >= 0) alive_len += distance(pool.p[v], pool.p[pool.next[v]]);
+  Grid grid{std::max(2.0 * alive_len / static_cast<double>(std::max<std::size_t>(1, segments)), box.diagonal() * 1e-9),
+            box.lo, {}};
+  for (std::size_t v = 0; v < pool.p.size(); ++v)
+    if (pool.alive[v] && pool.next[v] >= 0) grid.add(pool, static_cast<int>(v));
+  return grid;
+}
+
+// Whether the shortcut from v's previous to its next vertex touches no other segment and cuts off no vertex.
+bool shortcut_is_free(const Pool& pool, const Grid& grid, int v) {
+  const int a = pool.prev[v], b = pool.next[v];
+  const Vec2 pa = pool.p[a], pv = pool.p[v], pb = pool.p[b];
+  bool ok = true;
+  std::unordered_set<int> checked;
+  Box2 tri;
+  tri.add(pa); tri.add(pv); tri.add(pb);
+  grid.for_cells(tri.lo, tri.hi, [&](long long k) {
+    auto it = grid.cells.find(k);
+    if (it == grid.cells.end() || !ok) return;
+    for (int s : it->second) {
+      if (!pool.alive[s] || pool.next[s] < 0 || !checked.insert(s).second) continue;
+      const int e = pool.next[s];
+      if (s == a || s == v) continue;  // the two segments being replaced
+      const Vec2 ps = pool.p[s], pe = pool.p[e];
+      // The new segment may share only its own end points with the segments next to it.
+      const bool shares = s == b || e == a;
+      if (!shares && segments_touch(pa, pb, ps, pe)) { ok = false; return; }
+      // No other vertex inside (or on) the triangle that the shortcut cuts off. When a, v, b are collinear
+      // the triangle is the segment from a to b: every point of its line has three zero orientations, so only
+      // those within the three points' box are on it (the next vertex of a straight run is not, and once counted it
+      // kept every collinear vertex: a square with 1,000 points per side went to the map with all 4,000).
+      for (int q : {s, e}) {
+        if (q == a || q == v || q == b) continue;
+        const Vec2 pq = pool.p[q];
+        const double o1 = orient2(pa, pv, pq), o2 = orient2(pv, pb, pq), o3 = orient2(pb, pa, pq);
+        if (o1 == 0 && o2 == 0 && o3 == 0 &&
+            !(std::min({pa.x, pv.x, pb.x}) <= pq.x && pq.x <= std::max({pa.x, pv.x, pb.x}) &&
+              std::min({pa.y, pv.y, pb.y}) <= pq.y && pq.y <= std::max({pa.y, pv.y, pb.y})))
+          continue;
+        if ((o1 >= 0 && o2 >= 0 && o3 >= 0) || (o1 <= 0 && o2 <= 0 && o3 <= 0)) { ok = false; return; }
+      }
+    }
+  });
+  return ok;
+}
+
+// The corner at `at` between from and to, in degrees (180 at an open line's end).
+double opening(const Pool& pool, int from, int at, int to) {
+  if (from < 0 || to < 0) return 180.0;
+  const Vec2 u = pool.p[from] - pool.p[at], w = pool.p[to] - pool.p[at];
+  return std::abs(std::atan2(cross(u, w), dot(u, w))) * 180.0 / 3.14159265358979323846;
+}
+
+// Removals only move a vertex's neighbours apart: once the shortcut is too long, it stays too long.
+// A vertex crowding its neighbour goes even past max_segment, unless the shortcut leaves a spike (a corner
+// below 20 degrees at a or b) where there was none.
+bool shortcut_too_long(const Pool& pool, int a, int v, int b, const SimplifyOptions& options) {
+  const bool crowded = std::min(distance(pool.p[a], pool.p[v]), distance(pool.p[v], pool.p[b])) < options.crowded_fraction * options.max_segment &&
+                       opening(pool, pool.prev[a], a, b) >= 20.0 && opening(pool, a, b, pool.next[b]) >= 20.0;
+  return options.max_segment > 0.0 && !crowded && distance(pool.p[a], pool.p[b]) > options.max_segment;
+}
+
+// Every input vertex the new segment a-b replaces (those removed before between a and b, and v) stays
+// within max_distance of it; the line's vertices are consecutive in the pool.
+bool replaced_input_stays_close(const Pool& pool, const Line& line, const std::vector<Vec2>& input, int a, int b,
+                                double max_distance) {
+  bool close = true;
+  for (int i = a;;) {
+    i = i + 1 < line.first + line.size ? i + 1 : line.first;
+    if (i == b) break;
+    close = close && point_segment_distance(input[i], pool.p[a], pool.p[b]) <= max_distance;
+  }
+  return close;
+}
+
+// Removes vertices, smallest triangle area first, while the area is below min_area and the shortcut is free,
+// short enough and close to the input.
+void remove_small_triangles(Pool& pool, Grid& grid, const Box2& box, std::size_t nseg, const std::vector<Line>& lines,
+                            const std::vector<Vec2>& input, const SimplifyOptions& options, SimplifyStats& stats) {
   // Segments lengthen as vertices go, and a segment is listed in every cell of its box: with cells sized for the
   // input (0.5 m along a 1.2M-vertex ring), shortcuts of the target size spanned thousands of cells each, and the
   // grid grew to 5 GB in 90 s. So the grid is rebuilt, its cells sized for the segments then alive, each time
   // their count halves (linear in all: n + n/2 + ...). Only the speed changes: any cell size finds every segment.
   std::size_t segments = nseg, rebuilt_at = nseg;
-  auto rebuild_grid = [&] {
-    double alive_len = 0.0;
-    for (std::size_t v = 0; v < pool.p.size(); ++v)
-      if (pool.alive[v] && pool.next[v] >= 0) alive_len += distance(pool.p[v], pool.p[pool.next[v]]);
-    grid = Grid{std::max(2.0 * alive_len / static_cast<double>(std::max<std::size_t>(1, segments)), box.diagonal() * 1e-9),
-                box.lo, {}};
-    for (std::size_t v = 0; v < pool.p.size(); ++v)
-      if (pool.alive[v] && pool.next[v] >= 0) grid.add(pool, static_cast<int>(v));
-    rebuilt_at = segments;
-  };
-
-  // The input positions: distances are measured to them, also after smoothing has moved the vertices.
-  const std::vector<Vec2> input = pool.p;
-  if (options.smooth_distance > 0.0) smooth_fine_stretches(pool, grid, input, options);
-
   auto area = [&](int v) { return 0.5 * std::abs(orient2(pool.p[pool.prev[v]], pool.p[v], pool.p[pool.next[v]])); };
   using Entry = std::pair<double, int>;
   std::priority_queue<Entry, std::vector<Entry>, std::greater<>> heap;
@@ -245,43 +303,6 @@ SimplifyStats simplify_region(Region& region, const SimplifyOptions& options) {
   std::vector<int> line_size(lines.size());
   for (std::size_t l = 0; l < lines.size(); ++l) line_size[l] = lines[l].size;
 
-  auto shortcut_is_free = [&](int v) {
-    const int a = pool.prev[v], b = pool.next[v];
-    const Vec2 pa = pool.p[a], pv = pool.p[v], pb = pool.p[b];
-    bool ok = true;
-    std::unordered_set<int> checked;
-    Box2 tri;
-    tri.add(pa); tri.add(pv); tri.add(pb);
-    grid.for_cells(tri.lo, tri.hi, [&](long long k) {
-      auto it = grid.cells.find(k);
-      if (it == grid.cells.end() || !ok) return;
-      for (int s : it->second) {
-        if (!pool.alive[s] || pool.next[s] < 0 || !checked.insert(s).second) continue;
-        const int e = pool.next[s];
-        if (s == a || s == v) continue;  // the two segments being replaced
-        const Vec2 ps = pool.p[s], pe = pool.p[e];
-        // The new segment may share only its own end points with the segments next to it.
-        const bool shares = s == b || e == a;
-        if (!shares && segments_touch(pa, pb, ps, pe)) { ok = false; return; }
-        // No other vertex inside (or on) the triangle that the shortcut cuts off. When a, v, b are collinear
-        // the triangle is the segment from a to b: every point of its line has three zero orientations, so only
-        // those within the three points' box are on it (the next vertex of a straight run is not, and once counted it
-        // kept every collinear vertex: a square with 1,000 points per side went to the map with all 4,000).
-        for (int q : {s, e}) {
-          if (q == a || q == v || q == b) continue;
-          const Vec2 pq = pool.p[q];
-          const double o1 = orient2(pa, pv, pq), o2 = orient2(pv, pb, pq), o3 = orient2(pb, pa, pq);
-          if (o1 == 0 && o2 == 0 && o3 == 0 &&
-              !(std::min({pa.x, pv.x, pb.x}) <= pq.x && pq.x <= std::max({pa.x, pv.x, pb.x}) &&
-                std::min({pa.y, pv.y, pb.y}) <= pq.y && pq.y <= std::max({pa.y, pv.y, pb.y})))
-            continue;
-          if ((o1 >= 0 && o2 >= 0 && o3 >= 0) || (o1 <= 0 && o2 <= 0 && o3 <= 0)) { ok = false; return; }
-        }
-      }
-    });
-    return ok;
-  };
-
   while (!heap.empty()) {
     const auto [a_val, v] = heap.top();
     heap.pop();
@@ -289,45 +310,35 @@ SimplifyStats simplify_region(Region& region, const SimplifyOptions& options) {
     if (a_val >= options.min_area) break;
     const int l = pool.line[v];
     if (line_size[l] <= (lines[l].closed ? 4 : 2)) continue;
-    if (!shortcut_is_free(v)) { ++stats.refused; pool.locked[v] = 1; continue; }
+    if (!shortcut_is_free(pool, grid, v)) { ++stats.refused; pool.locked[v] = 1; continue; }
     const int a = pool.prev[v], b = pool.next[v];
-    // Removals only move a vertex's neighbours apart: once the shortcut is too long, it stays too long.
-    // A vertex crowding its neighbour goes even past max_segment, unless the shortcut leaves a spike (a corner
-    // below 20 degrees at a or b) where there was none.
-    auto opening = [&](int from, int at, int to) {
-      if (from < 0 || to < 0) return 180.0;
-      const Vec2 u = pool.p[from] - pool.p[at], w = pool.p[to] - pool.p[at];
-      return std::abs(std::atan2(cross(u, w), dot(u, w))) * 180.0 / 3.14159265358979323846;
-    };
-    const bool crowded = std::min(distance(pool.p[a], pool.p[v]), distance(pool.p[v], pool.p[b])) < options.crowded_fraction * options.max_segment &&
-                         opening(pool.prev[a], a, b) >= 20.0 && opening(a, b, pool.next[b]) >= 20.0;
-    if (options.max_segment > 0.0 && !crowded && distance(pool.p[a], pool.p[b]) > options.max_segment) {
+    if (shortcut_too_long(pool, a, v, b, options)) {
       pool.locked[v] = 1;
       continue;
     }
-    if (options.max_distance > 0.0) {
-      // Every input vertex the new segment replaces (those removed before between a and b, and v) stays
-      // within max_distance of it; the line's vertices are consecutive in the pool.
-      const Line& line = lines[static_cast<std::size_t>(l)];
-      bool close = true;
-      for (int i = a;;) {
-        i = i + 1 < line.first + line.size ? i + 1 : line.first;
-        if (i == b) break;
-        close = close && point_segment_distance(input[i], pool.p[a], pool.p[b]) <= options.max_distance;
-      }
-      if (!close) { pool.locked[v] = 1; continue; }
+    if (options.max_distance > 0.0 &&
+        !replaced_input_stays_close(pool, lines[static_cast<std::size_t>(l)], input, a, b, options.max_distance)) {
+      pool.locked[v] = 1;
+      continue;
     }
     pool.alive[v] = 0;
     pool.next[a] = b;
     pool.prev[b] = a;
     grid.add(pool, a);
     --line_size[l];
-    if (--segments * 2 <= rebuilt_at && segments >= 64) rebuild_grid();
+    if (--segments * 2 <= rebuilt_at && segments >= 64) {
+      grid = grid_of_alive_segments(pool, box, segments);
+      rebuilt_at = segments;
+    }
     for (int w : {a, b})
       if (!pool.locked[w] && pool.prev[w] >= 0 && pool.next[w] >= 0) heap.push({current[w] = area(w), w});
   }
-  // How far the input moved: every input vertex's distance to the kept segment that replaced it (a kept vertex
-  // counts too: smoothing may have moved it).
+}
+
+// How far the input moved: every input vertex's distance to the kept segment that replaced it (a kept vertex
+// counts too: smoothing may have moved it).
+double max_input_distance(const Pool& pool, const std::vector<Line>& lines, const std::vector<Vec2>& input) {
+  double max_distance = 0.0;
   for (const Line& line : lines) {
     std::vector<int> kept;
     for (int i = 0; i < line.size; ++i)
@@ -339,23 +350,50 @@ SimplifyStats simplify_region(Region& region, const SimplifyOptions& options) {
       const int from = kept[k], to = last ? kept[0] + line.size : kept[k + 1];
       const Vec2 pa = pool.p[line.first + from], pb = pool.p[line.first + to % line.size];
       for (int i = from; i <= to; ++i)
-        stats.max_distance = std::max(stats.max_distance, point_segment_distance(input[line.first + i % line.size], pa, pb));
+        max_distance = std::max(max_distance, point_segment_distance(input[line.first + i % line.size], pa, pb));
     }
   }
+  return max_distance;
+}
+
+// A line's surviving vertices in order.
+std::vector<Vec2> surviving_points(const Pool& pool, const Line& line) {
+  std::vector<Vec2> out;
+  int start = line.first;
+  while (!pool.alive[start]) ++start;  // closed lines: any survivor; open lines keep their first vertex
+  int v = start;
+  do {
+    out.push_back(pool.p[v]);
+    v = pool.next[v];
+  } while (v >= 0 && v != start);
+  return out;
+}
+
+}  // namespace
+
+SimplifyStats simplify_region(Region& region, const SimplifyOptions& options) {
+  SimplifyStats stats;
+  Pool pool;
+  const std::vector<Line> lines = pool_lines(region, pool);
+  stats.vertices_before = pool.p.size();
+  if (!(options.min_area > 0.0)) { stats.vertices_after = stats.vertices_before; return stats; }
+  lock_shared_points(region, pool);
+  Box2 box;
+  std::size_t nseg = 0;
+  for (std::size_t v = 0; v < pool.p.size(); ++v) {
+    box.add(pool.p[v]);
+    if (pool.next[v] >= 0) ++nseg;
+  }
+  Grid grid = grid_of_alive_segments(pool, box, nseg);
+
+  // The input positions: distances are measured to them, also after smoothing has moved the vertices.
+  const std::vector<Vec2> input = pool.p;
+  if (options.smooth_distance > 0.0) smooth_fine_stretches(pool, grid, input, options);
+  remove_small_triangles(pool, grid, box, nseg, lines, input, options, stats);
+  stats.max_distance = max_input_distance(pool, lines, input);
   // Write the surviving vertices back in order.
-  auto collect = [&](const Line& line) {
-    std::vector<Vec2> out;
-    int start = line.first;
-    while (!pool.alive[start]) ++start;  // closed lines: any survivor; open lines keep their first vertex
-    int v = start;
-    do {
-      out.push_back(pool.p[v]);
-      v = pool.next[v];
-    } while (v >= 0 && v != start);
-    return out;
-  };
-  for (std::size_t r = 0; r < region.rings.size(); ++r) region.rings[r].points = collect(lines[r]);
-  for (std::size_t f = 0; f < region.features.size(); ++f) region.features[f].points = collect(lines[region.rings.size() + f]);
+  for (std::size_t r = 0; r < region.rings.size(); ++r) region.rings[r].points = surviving_points(pool, lines[r]);
+  for (std::size_t f = 0; f < region.features.size(); ++f) region.features[f].points = surviving_points(pool, lines[region.rings.size() + f]);
   for (const Ring& r : region.rings) stats.vertices_after += r.points.size();
   for (const FeatureCurve& f : region.features) stats.vertices_after += f.points.size();
   // Coarsened to the size, a ring concave towards another curve closer than a chord's sagitta (an island in a
