@@ -51,11 +51,8 @@ bool segments_touch(Vec2 a, Vec2 b, Vec2 c, Vec2 d) {
   return (d1 == 0 && on(a, b, c)) || (d2 == 0 && on(a, b, d)) || (d3 == 0 && on(c, d, a)) || (d4 == 0 && on(c, d, b));
 }
 
-// Zigzagging vertices in a stretch finer than max_segment (both segments at a vertex shorter) move towards the mean
-// of their neighbours, a few passes, each move kept only if the vertex stays within smooth_distance of the input
-// curve and the moved segments touch no other curve, sweep over no vertex and close in on none. A shoreline digitised in steps finer
-// than the size (45-degree turns every 120 m at 200 m) then turns gently, and its steps stop being corners.
-void smooth_fine_stretches(Pool& pool, Grid& grid, const std::vector<Vec2>& input, const SimplifyOptions& options) {
+// Vertices with both neighbours whose input segments are shorter than max_segment, not locked.
+std::vector<int> movable_vertices(const Pool& pool, const std::vector<Vec2>& input, const SimplifyOptions& options) {
   const int n = static_cast<int>(pool.p.size());
   std::vector<int> movable;
   for (int v = 0; v < n; ++v) {
@@ -66,76 +63,88 @@ void smooth_fine_stretches(Pool& pool, Grid& grid, const std::vector<Vec2>& inpu
       continue;
     movable.push_back(v);
   }
-  // Distance to the input curve near v: the input segments within four vertices either side.
-  auto near_input = [&](int v, Vec2 q) {
-    double d = INFINITY;
-    int i = v;
-    for (int k = 0; k < 4 && pool.prev[i] >= 0; ++k) i = pool.prev[i];
-    for (int k = 0; k < 8 && pool.next[i] >= 0; ++k, i = pool.next[i])
-      d = std::min(d, point_segment_distance(q, input[i], input[pool.next[i]]));
-    return d;
-  };
-  auto inside = [](Vec2 q, Vec2 x, Vec2 y, Vec2 z) {
-    const double o1 = orient2(x, y, q), o2 = orient2(y, z, q), o3 = orient2(z, x, q);
-    return (o1 >= 0 && o2 >= 0 && o3 >= 0) || (o1 <= 0 && o2 <= 0 && o3 <= 0);
-  };
-  // Two curves that do not touch still make slivers when they come close: a move may not bring the vertex's
-  // segments nearer another curve than `clear`, or nearer than they already were.
-  const double clear = options.smooth_distance;
-  auto gap = [](Vec2 p, Vec2 q, Vec2 r, Vec2 t) {
-    if (segments_touch(p, q, r, t)) return 0.0;
-    return std::min({point_segment_distance(p, r, t), point_segment_distance(q, r, t), point_segment_distance(r, p, q),
-                     point_segment_distance(t, p, q)});
-  };
-  // Segments within a few vertices along the same curve are its own bends, not another curve.
-  auto nearby = [&](int v, int s) {
-    for (int k = 0, i = v, j = v; k < 4; ++k) {
-      i = i >= 0 ? pool.prev[i] : -1;
-      j = j >= 0 ? pool.next[j] : -1;
-      if (i == s || j == s) return true;
-    }
-    return false;
-  };
-  auto move_is_free = [&](int v, Vec2 c) {
-    const int a = pool.prev[v], b = pool.next[v];
-    const Vec2 pa = pool.p[a], pv = pool.p[v], pb = pool.p[b];
-    Box2 box;
-    for (Vec2 q : {pa, pv, pb, c}) box.add(q);
-    box.lo = box.lo - Vec2{clear, clear};
-    box.hi = box.hi + Vec2{clear, clear};
-    bool ok = true;
-    std::unordered_set<int> checked;
-    grid.for_cells(box.lo, box.hi, [&](long long k) {
-      auto it = grid.cells.find(k);
-      if (it == grid.cells.end() || !ok) return;
-      for (int s : it->second) {
-        if (!pool.alive[s] || pool.next[s] < 0 || !checked.insert(s).second) continue;
-        if (s == a || s == v) continue;  // the two segments that move
-        const int e = pool.next[s];
-        const Vec2 ps = pool.p[s], pe = pool.p[e];
-        if (e != a && segments_touch(pa, c, ps, pe)) { ok = false; return; }
-        if (s != b && segments_touch(c, pb, ps, pe)) { ok = false; return; }
-        for (int q : {s, e}) {
-          if (q == a || q == v || q == b) continue;
-          if (inside(pool.p[q], pa, pv, c) || inside(pool.p[q], pv, pb, c)) { ok = false; return; }
-        }
-        if (nearby(v, s)) continue;
-        // The vertex itself (also where a curve ends on another, its segments touching that one at the end)...
-        if (point_segment_distance(c, ps, pe) < std::min(clear, point_segment_distance(pv, ps, pe))) { ok = false; return; }
-        // ... and its segments, unless they share an end point with that one.
-        if (e != a && s != b &&
-            std::min(gap(pa, c, ps, pe), gap(c, pb, ps, pe)) < std::min(clear, std::min(gap(pa, pv, ps, pe), gap(pv, pb, ps, pe)))) {
-          ok = false;
-          return;
-        }
+  return movable;
+}
+
+// Distance to the input curve near v: the input segments within four vertices either side.
+double distance_to_input_near(const Pool& pool, const std::vector<Vec2>& input, int v, Vec2 q) {
+  double d = INFINITY;
+  int i = v;
+  for (int k = 0; k < 4 && pool.prev[i] >= 0; ++k) i = pool.prev[i];
+  for (int k = 0; k < 8 && pool.next[i] >= 0; ++k, i = pool.next[i])
+    d = std::min(d, point_segment_distance(q, input[i], input[pool.next[i]]));
+  return d;
+}
+
+bool in_triangle(Vec2 q, Vec2 x, Vec2 y, Vec2 z) {
+  const double o1 = orient2(x, y, q), o2 = orient2(y, z, q), o3 = orient2(z, x, q);
+  return (o1 >= 0 && o2 >= 0 && o3 >= 0) || (o1 <= 0 && o2 <= 0 && o3 <= 0);
+}
+
+double segment_gap(Vec2 p, Vec2 q, Vec2 r, Vec2 t) {
+  if (segments_touch(p, q, r, t)) return 0.0;
+  return std::min({point_segment_distance(p, r, t), point_segment_distance(q, r, t), point_segment_distance(r, p, q),
+                   point_segment_distance(t, p, q)});
+}
+
+// Segments within a few vertices along the same curve are its own bends, not another curve.
+bool nearby_along_curve(const Pool& pool, int v, int s) {
+  for (int k = 0, i = v, j = v; k < 4; ++k) {
+    i = i >= 0 ? pool.prev[i] : -1;
+    j = j >= 0 ? pool.next[j] : -1;
+    if (i == s || j == s) return true;
+  }
+  return false;
+}
+
+// Whether v may move to c: its moved segments touch no other curve and sweep over no vertex. Two curves that do
+// not touch still make slivers when they come close: a move may not bring the vertex's segments nearer another
+// curve than `clear`, or nearer than they already were.
+bool move_is_free(const Pool& pool, const Grid& grid, int v, Vec2 c, double clear) {
+  const int a = pool.prev[v], b = pool.next[v];
+  const Vec2 pa = pool.p[a], pv = pool.p[v], pb = pool.p[b];
+  Box2 box;
+  for (Vec2 q : {pa, pv, pb, c}) box.add(q);
+  box.lo = box.lo - Vec2{clear, clear};
+  box.hi = box.hi + Vec2{clear, clear};
+  bool ok = true;
+  std::unordered_set<int> checked;
+  grid.for_cells(box.lo, box.hi, [&](long long k) {
+    auto it = grid.cells.find(k);
+    if (it == grid.cells.end() || !ok) return;
+    for (int s : it->second) {
+      if (!pool.alive[s] || pool.next[s] < 0 || !checked.insert(s).second) continue;
+      if (s == a || s == v) continue;  // the two segments that move
+      const int e = pool.next[s];
+      const Vec2 ps = pool.p[s], pe = pool.p[e];
+      if (e != a && segments_touch(pa, c, ps, pe)) { ok = false; return; }
+      if (s != b && segments_touch(c, pb, ps, pe)) { ok = false; return; }
+      for (int q : {s, e}) {
+        if (q == a || q == v || q == b) continue;
+        if (in_triangle(pool.p[q], pa, pv, c) || in_triangle(pool.p[q], pv, pb, c)) { ok = false; return; }
       }
-    });
-    return ok;
-  };
-  // Only zigzags move: a vertex turning by more than smooth_turn_deg one way next to one turning the other way.
-  // Turns the same way are the curve's own bends (a small island is all of them); smoothing would shrink it.
-  const double min_turn = std::sin(options.smooth_turn_deg * 3.14159265358979323846 / 180.0);
-  auto turn = [&](int v) {
+      if (nearby_along_curve(pool, v, s)) continue;
+      // The vertex itself (also where a curve ends on another, its segments touching that one at the end)...
+      if (point_segment_distance(c, ps, pe) < std::min(clear, point_segment_distance(pv, ps, pe))) { ok = false; return; }
+      // ... and its segments, unless they share an end point with that one.
+      if (e != a && s != b &&
+          std::min(segment_gap(pa, c, ps, pe), segment_gap(c, pb, ps, pe)) <
+              std::min(clear, std::min(segment_gap(pa, pv, ps, pe), segment_gap(pv, pb, ps, pe)))) {
+        ok = false;
+        return;
+      }
+    }
+  });
+  return ok;
+}
+
+// Only zigzags move: a vertex turning by more than smooth_turn_deg one way next to one turning the other way.
+// Turns the same way are the curve's own bends (a small island is all of them); smoothing would shrink it.
+struct Zigzags {
+  const Pool& pool;
+  double min_turn;  // sine of smooth_turn_deg
+
+  int turn(int v) const {
     if (v < 0) return 0;
     const int a = pool.prev[v], b = pool.next[v];
     if (a < 0 || b < 0) return 0;
@@ -143,25 +152,34 @@ void smooth_fine_stretches(Pool& pool, Grid& grid, const std::vector<Vec2>& inpu
     const double c = cross(u, w);
     if (!(std::abs(c) > min_turn * std::hypot(u.x, u.y) * std::hypot(w.x, w.y))) return 0;
     return c > 0.0 ? 1 : -1;
-  };
-  auto zigzag = [&](int v) {
+  }
+  bool at(int v) const {
     if (v < 0) return false;
     const int t = turn(v);
     return t != 0 && (turn(pool.prev[v]) == -t || turn(pool.next[v]) == -t);
-  };
+  }
+};
+
+// Zigzagging vertices in a stretch finer than max_segment (both segments at a vertex shorter) move towards the mean
+// of their neighbours, a few passes, each move kept only if the vertex stays within smooth_distance of the input
+// curve and the moved segments touch no other curve, sweep over no vertex and close in on none. A shoreline digitised in steps finer
+// than the size (45-degree turns every 120 m at 200 m) then turns gently, and its steps stop being corners.
+void smooth_fine_stretches(Pool& pool, Grid& grid, const std::vector<Vec2>& input, const SimplifyOptions& options) {
+  const std::vector<int> movable = movable_vertices(pool, input, options);
+  const Zigzags zigzag{pool, std::sin(options.smooth_turn_deg * 3.14159265358979323846 / 180.0)};
   const double still = 1e-3 * options.smooth_distance;
   for (int pass = 0; pass < 30; ++pass) {
     int moved = 0;
     for (int v : movable) {
-      if (!zigzag(v) && !zigzag(pool.prev[v]) && !zigzag(pool.next[v])) continue;
+      if (!zigzag.at(v) && !zigzag.at(pool.prev[v]) && !zigzag.at(pool.next[v])) continue;
       const Vec2 p = pool.p[v];
       const Vec2 step = 0.25 * (pool.p[pool.prev[v]] + pool.p[pool.next[v]] - 2.0 * p);
       const Vec2 c = p + step;
-      if (distance(c, p) < still || near_input(v, c) > options.smooth_distance) continue;
+      if (distance(c, p) < still || distance_to_input_near(pool, input, v, c) > options.smooth_distance) continue;
       // Vertices also slide along the curve as it straightens; one that slid farther than max_distance from
       // its own input position would leave that input vertex beyond the bound once its neighbours are removed.
       if (options.max_distance > 0.0 && distance(c, input[v]) > options.max_distance) continue;
-      if (!move_is_free(v, c)) continue;
+      if (!move_is_free(pool, grid, v, c, options.smooth_distance)) continue;
       pool.p[v] = c;
       grid.add(pool, pool.prev[v]);  // old cells keep stale entries: checks read the current positions
       grid.add(pool, v);
@@ -625,6 +643,124 @@ Vec2 leaving_direction(const std::vector<Vec2>& line, double reach) {
   return {0, 0};
 }
 
+// Meeting points: ends of open feature pieces, with every curve leaving them.
+std::map<std::pair<double, double>, std::vector<Dart>> meeting_points(const Region& region) {
+  std::map<std::pair<double, double>, std::vector<Dart>> at;
+  for (std::size_t f = 0; f < region.features.size(); ++f) {
+    const FeatureCurve& c = region.features[f];
+    if (c.closed || c.points.size() < 2) continue;
+    at[{c.points.front().x, c.points.front().y}].push_back({false, static_cast<int>(f), false, 0});
+    at[{c.points.back().x, c.points.back().y}].push_back({false, static_cast<int>(f), true, 0});
+  }
+  for (std::size_t r = 0; r < region.rings.size(); ++r)
+    for (std::size_t i = 0; i < region.rings[r].points.size(); ++i) {
+      const Vec2 p = region.rings[r].points[i];
+      if (auto it = at.find({p.x, p.y}); it != at.end()) {
+        it->second.push_back({true, static_cast<int>(r), false, i});
+        it->second.push_back({true, static_cast<int>(r), true, i});
+      }
+    }
+  return at;
+}
+
+// The first vertex of `from` at least min_width from `to` (from's stretch before it goes).
+std::size_t first_away(const std::vector<Vec2>& from, const std::vector<Vec2>& to, double min_width) {
+  std::size_t k = 1;
+  while (k < from.size() && closest_on(from[k], to).distance < min_width) ++k;
+  return k;
+}
+
+double prefix_length(const std::vector<Vec2>& line, std::size_t k) {
+  return polyline_length(std::vector<Vec2>(line.begin(), line.begin() + static_cast<std::ptrdiff_t>(k + 1)));
+}
+
+// The region with B (points bp) starting at the foot on A (points ap) instead of at its k first vertices; the
+// foot becomes a vertex of A (a feature is cut there: curves meet only at their ends).
+Region with_wedge_opened(const Region& region, const Dart& a, const Dart& b, const std::vector<Vec2>& ap,
+                         const std::vector<Vec2>& bp, std::size_t k, const Foot& foot) {
+  Region next = region;
+  // B now starts at the foot.
+  std::vector<Vec2> nb{foot.at};
+  nb.insert(nb.end(), bp.begin() + static_cast<std::ptrdiff_t>(k), bp.end());
+  if (b.reversed) std::reverse(nb.begin(), nb.end());
+  next.features[static_cast<std::size_t>(b.index)].points = nb;
+  const bool at_vertex = foot.t == 0.0 || foot.t == 1.0;
+  const std::size_t vertex = foot.segment + (foot.t == 1.0 ? 1 : 0);
+  if (!a.ring) {
+    FeatureCurve& fa = next.features[static_cast<std::size_t>(a.index)];
+    std::vector<Vec2> first(ap.begin(), ap.begin() + static_cast<std::ptrdiff_t>(at_vertex ? vertex + 1 : foot.segment + 1));
+    if (!at_vertex) first.push_back(foot.at);
+    std::vector<Vec2> second{foot.at};
+    second.insert(second.end(), ap.begin() + static_cast<std::ptrdiff_t>(at_vertex ? vertex + 1 : foot.segment + 1), ap.end());
+    if (a.reversed) {
+      std::reverse(first.begin(), first.end());
+      std::reverse(second.begin(), second.end());
+    }
+    FeatureCurve other = fa;
+    fa.points = std::move(first);
+    other.points = std::move(second);
+    next.features.push_back(std::move(other));
+  } else if (!at_vertex) {
+    auto& rp = next.rings[static_cast<std::size_t>(a.index)].points;
+    const std::size_t n = rp.size();
+    // Walked forward the foot lies after ring vertex (v0 + segment); walked backward, before (v0 - segment).
+    const std::size_t after = a.reversed ? (a.vertex + n - foot.segment - 1) % n : (a.vertex + foot.segment) % n;
+    rp.insert(rp.begin() + static_cast<std::ptrdiff_t>(after + 1), foot.at);
+  }
+  return next;
+}
+
+// Whether the link from p0 to p1 touches anything but its own two ends.
+bool link_touches_others(const Region& region, Vec2 p0, Vec2 p1) {
+  bool crosses = false;
+  auto test = [&](Vec2 u, Vec2 v) {
+    if (u == p0 || v == p0 || u == p1 || v == p1) return;
+    crosses = crosses || segments_touch(p0, p1, u, v);
+  };
+  for (const Ring& r : region.rings)
+    for (std::size_t i = 0; i < r.points.size() && !crosses; ++i) test(r.points[i], r.points[(i + 1) % r.points.size()]);
+  for (const FeatureCurve& c : region.features)
+    for (std::size_t i = 0; i + (c.closed ? 0 : 1) < c.points.size() && !crosses; ++i)
+      test(c.points[i], c.points[(i + 1) % c.points.size()]);
+  for (Vec2 q : region.feature_points) crosses = crosses || point_segment_distance(q, p0, p1) == 0.0;
+  return crosses;
+}
+
+// Feature B (points bp, leaving in direction db) against curve A at the same meeting point: when they leave
+// within max_angle of each other, B's stretch beside A goes and B starts at A where it is min_width away.
+// Returns whether region changed.
+bool open_wedge(Region& region, const Dart& a, const Dart& b, const std::vector<Vec2>& bp, Vec2 db, double min_width,
+                double cos_max, std::vector<DroppedCurve>& done) {
+  const std::vector<Vec2> ap = dart_points(region, a, polyline_length(bp) + 2.0 * min_width);
+  const Vec2 da = leaving_direction(ap, 0.25 * min_width);
+  const double la = std::hypot(da.x, da.y), lb = std::hypot(db.x, db.y);
+  if (!(la > 0.0 && lb > 0.0) || dot(da, db) < cos_max * la * lb) return false;
+  const std::size_t k = first_away(bp, ap, min_width);
+  if (k >= bp.size()) return false;  // B stays beside A to its end: a narrow face, not a wedge
+  // Of two features, the one that loses the shorter stretch leaves the other (a river leaves the
+  // shoreline it runs along); ties go by index.
+  if (!a.ring) {
+    const std::vector<Vec2> whole_a = dart_points(region, a, 0.0);
+    const std::size_t ka = first_away(whole_a, bp, min_width);
+    if (ka < whole_a.size() &&
+        (prefix_length(whole_a, ka) < prefix_length(bp, k) ||
+         (prefix_length(whole_a, ka) == prefix_length(bp, k) && a.index < b.index)))
+      return false;
+  }
+  double stretch = 0.0;
+  for (std::size_t i = 1; i < k; ++i) stretch = std::max(stretch, closest_on(bp[i], ap).distance);
+  const Foot foot = closest_on(bp[k], ap);
+  if (foot.segment == 0 && foot.t == 0.0) return false;
+  if (!a.ring && foot.segment + 2 == ap.size() && foot.t == 1.0) return false;  // A's far end: no room
+  Region next = with_wedge_opened(region, a, b, ap, bp, k, foot);
+  if (link_touches_others(next, foot.at, bp[k])) return false;
+  const double opening = std::acos(std::min(1.0, dot(da, db) / (la * lb)));
+  done.push_back({DroppedCurve::Kind::wedge_stretch, region.features[static_cast<std::size_t>(b.index)].source_feature,
+                  2.0 * min_width * std::sin(0.5 * opening), 0.0, stretch, bp.front()});
+  region = std::move(next);
+  return true;
+}
+
 }  // namespace
 
 std::vector<DroppedCurve> open_narrow_wedges(Region& region, double min_width, double max_angle_deg) {
@@ -632,109 +768,16 @@ std::vector<DroppedCurve> open_narrow_wedges(Region& region, double min_width, d
   if (!(min_width > 0.0)) return done;
   const double cos_max = std::cos(max_angle_deg * M_PI / 180.0);
   for (int round = 0; round < 10000; ++round) {
-    // Meeting points: ends of open feature pieces, with every curve leaving them.
-    std::map<std::pair<double, double>, std::vector<Dart>> at;
-    for (std::size_t f = 0; f < region.features.size(); ++f) {
-      const FeatureCurve& c = region.features[f];
-      if (c.closed || c.points.size() < 2) continue;
-      at[{c.points.front().x, c.points.front().y}].push_back({false, static_cast<int>(f), false, 0});
-      at[{c.points.back().x, c.points.back().y}].push_back({false, static_cast<int>(f), true, 0});
-    }
-    for (std::size_t r = 0; r < region.rings.size(); ++r)
-      for (std::size_t i = 0; i < region.rings[r].points.size(); ++i) {
-        const Vec2 p = region.rings[r].points[i];
-        if (auto it = at.find({p.x, p.y}); it != at.end()) {
-          it->second.push_back({true, static_cast<int>(r), false, i});
-          it->second.push_back({true, static_cast<int>(r), true, i});
-        }
-      }
+    const auto at = meeting_points(region);
     bool changed = false;
-    for (auto& [key, darts] : at) {
+    for (const auto& [key, darts] : at) {
       for (std::size_t b = 0; b < darts.size() && !changed; ++b) {
         if (darts[b].ring) continue;
         const std::vector<Vec2> bp = dart_points(region, darts[b], 0.0);
         const Vec2 db = leaving_direction(bp, 0.25 * min_width);
         for (std::size_t a = 0; a < darts.size() && !changed; ++a) {
           if (a == b || (darts[a].ring == darts[b].ring && darts[a].index == darts[b].index)) continue;
-          const std::vector<Vec2> ap = dart_points(region, darts[a], polyline_length(bp) + 2.0 * min_width);
-          const Vec2 da = leaving_direction(ap, 0.25 * min_width);
-          const double la = std::hypot(da.x, da.y), lb = std::hypot(db.x, db.y);
-          if (!(la > 0.0 && lb > 0.0) || dot(da, db) < cos_max * la * lb) continue;
-          // The first vertex of B at least min_width from A (B's stretch before it goes).
-          auto first_away = [&](const std::vector<Vec2>& from, const std::vector<Vec2>& to) {
-            std::size_t k = 1;
-            while (k < from.size() && closest_on(from[k], to).distance < min_width) ++k;
-            return k;
-          };
-          const std::size_t k = first_away(bp, ap);
-          if (k >= bp.size()) continue;  // B stays beside A to its end: a narrow face, not a wedge
-          // Of two features, the one that loses the shorter stretch leaves the other (a river leaves the
-          // shoreline it runs along); ties go by index.
-          auto prefix = [](const std::vector<Vec2>& line, std::size_t k) {
-            return polyline_length(std::vector<Vec2>(line.begin(), line.begin() + static_cast<std::ptrdiff_t>(k + 1)));
-          };
-          if (!darts[a].ring) {
-            const std::vector<Vec2> whole_a = dart_points(region, darts[a], 0.0);
-            const std::size_t ka = first_away(whole_a, bp);
-            if (ka < whole_a.size() &&
-                (prefix(whole_a, ka) < prefix(bp, k) || (prefix(whole_a, ka) == prefix(bp, k) && darts[a].index < darts[b].index)))
-              continue;
-          }
-          double stretch = 0.0;
-          for (std::size_t i = 1; i < k; ++i) stretch = std::max(stretch, closest_on(bp[i], ap).distance);
-          const Foot foot = closest_on(bp[k], ap);
-          if (foot.segment == 0 && foot.t == 0.0) continue;
-          if (!darts[a].ring && foot.segment + 2 == ap.size() && foot.t == 1.0) continue;  // A's far end: no room
-          Region next = region;
-          // B now starts at the foot.
-          std::vector<Vec2> nb{foot.at};
-          nb.insert(nb.end(), bp.begin() + static_cast<std::ptrdiff_t>(k), bp.end());
-          if (darts[b].reversed) std::reverse(nb.begin(), nb.end());
-          next.features[static_cast<std::size_t>(darts[b].index)].points = nb;
-          // The foot becomes a vertex of A (a feature is cut there: curves meet only at their ends).
-          const bool at_vertex = foot.t == 0.0 || foot.t == 1.0;
-          const std::size_t vertex = foot.segment + (foot.t == 1.0 ? 1 : 0);
-          if (!darts[a].ring) {
-            FeatureCurve& fa = next.features[static_cast<std::size_t>(darts[a].index)];
-            std::vector<Vec2> first(ap.begin(), ap.begin() + static_cast<std::ptrdiff_t>(at_vertex ? vertex + 1 : foot.segment + 1));
-            if (!at_vertex) first.push_back(foot.at);
-            std::vector<Vec2> second{foot.at};
-            second.insert(second.end(), ap.begin() + static_cast<std::ptrdiff_t>(at_vertex ? vertex + 1 : foot.segment + 1), ap.end());
-            if (darts[a].reversed) {
-              std::reverse(first.begin(), first.end());
-              std::reverse(second.begin(), second.end());
-            }
-            FeatureCurve other = fa;
-            fa.points = std::move(first);
-            other.points = std::move(second);
-            next.features.push_back(std::move(other));
-          } else if (!at_vertex) {
-            auto& rp = next.rings[static_cast<std::size_t>(darts[a].index)].points;
-            const std::size_t n = rp.size();
-            // Walked forward the foot lies after ring vertex (v0 + segment); walked backward, before (v0 - segment).
-            const std::size_t after = darts[a].reversed ? (darts[a].vertex + n - foot.segment - 1) % n
-                                                         : (darts[a].vertex + foot.segment) % n;
-            rp.insert(rp.begin() + static_cast<std::ptrdiff_t>(after + 1), foot.at);
-          }
-          // The link may touch nothing but its own two ends.
-          const Vec2 p0 = foot.at, p1 = bp[k];
-          bool crosses = false;
-          auto test = [&](Vec2 u, Vec2 v) {
-            if (u == p0 || v == p0 || u == p1 || v == p1) return;
-            crosses = crosses || segments_touch(p0, p1, u, v);
-          };
-          for (const Ring& r : next.rings)
-            for (std::size_t i = 0; i < r.points.size() && !crosses; ++i) test(r.points[i], r.points[(i + 1) % r.points.size()]);
-          for (const FeatureCurve& c : next.features)
-            for (std::size_t i = 0; i + (c.closed ? 0 : 1) < c.points.size() && !crosses; ++i)
-              test(c.points[i], c.points[(i + 1) % c.points.size()]);
-          for (Vec2 q : next.feature_points) crosses = crosses || point_segment_distance(q, p0, p1) == 0.0;
-          if (crosses) continue;
-          const double opening = std::acos(std::min(1.0, dot(da, db) / (la * lb)));
-          done.push_back({DroppedCurve::Kind::wedge_stretch, region.features[static_cast<std::size_t>(darts[b].index)].source_feature,
-                          2.0 * min_width * std::sin(0.5 * opening), 0.0, stretch, bp.front()});
-          region = std::move(next);
-          changed = true;
+          changed = open_wedge(region, darts[a], darts[b], bp, db, min_width, cos_max, done);
         }
       }
       if (changed) break;
