@@ -125,150 +125,160 @@ void dedupe(std::vector<Vec2>& pts, bool closed, const std::string& where, bool 
   if (repairs) repairs->push_back(where + ": dropped " + std::to_string(before - pts.size()) + " repeated point(s), first at " + point_text(first_repeat));
 }
 
-}  // namespace
+std::string ring_name(const Region& region, std::size_t r) {
+  return region.source + ": feature " + std::to_string(region.rings[r].source_feature) + ": ring " + std::to_string(r);
+}
 
-void validate_region(Region& region, const InputOptions& options, std::vector<std::string>* repairs,
-                     std::vector<std::string>* warnings) {
-  const std::string& src = region.source;
-  if (options.repair) {
-    // Finite coordinates first: GEOS must not see NaN.
-    for (const Ring& ring : region.rings)
-      check_points(ring.points, src + ": feature " + std::to_string(ring.source_feature), options);
-    make_parts_valid(region, repairs);
-  }
-  auto ring_name = [&](std::size_t r) {
-    return src + ": feature " + std::to_string(region.rings[r].source_feature) + ": ring " + std::to_string(r);
-  };
-  auto feature_name = [&](std::size_t f) {
-    return src + ": feature " + std::to_string(region.features[f].source_feature) + " (curve " + std::to_string(f) + ")";
-  };
+std::string feature_name(const Region& region, std::size_t f) {
+  return region.source + ": feature " + std::to_string(region.features[f].source_feature) + " (curve " + std::to_string(f) + ")";
+}
+
+// Finite coordinates within the limit, no repeated points (or dropped with repair), enough points per line.
+void check_line_points(Region& region, const InputOptions& options, std::vector<std::string>* repairs) {
   for (std::size_t r = 0; r < region.rings.size(); ++r) {
     Ring& ring = region.rings[r];
-    check_points(ring.points, ring_name(r), options);
-    dedupe(ring.points, true, ring_name(r), options.repair, repairs);
+    check_points(ring.points, ring_name(region, r), options);
+    dedupe(ring.points, true, ring_name(region, r), options.repair, repairs);
     if (ring.points.size() < 3)
-      throw InputError(ring_name(r) + " has fewer than 3 distinct points, at " + point_text(ring.points.front()));
+      throw InputError(ring_name(region, r) + " has fewer than 3 distinct points, at " + point_text(ring.points.front()));
   }
   for (std::size_t f = 0; f < region.features.size(); ++f) {
     FeatureCurve& c = region.features[f];
-    check_points(c.points, feature_name(f), options);
+    check_points(c.points, feature_name(region, f), options);
     // A line that ends where it starts is a closed loop (an island's shoreline), whatever geometry type carried it.
     if (!c.closed && c.points.size() >= 4 && c.points.front() == c.points.back()) {
       c.closed = true;
       c.points.pop_back();
     }
-    dedupe(c.points, c.closed, feature_name(f), options.repair, repairs);
+    dedupe(c.points, c.closed, feature_name(region, f), options.repair, repairs);
     if (c.points.size() < 2 || (c.closed && c.points.size() < 3))
-      throw InputError(feature_name(f) + " has too few distinct points" +
+      throw InputError(feature_name(region, f) + " has too few distinct points" +
                        (c.points.empty() ? std::string() : ", at " + point_text(c.points.front())));
   }
-  check_points(region.feature_points, src + ": feature points", options);
+  check_points(region.feature_points, region.source + ": feature points", options);
+}
 
-  // Rings must not cross or touch themselves or each other.
+std::vector<Segment> ring_segments(const Region& region) {
   std::vector<Segment> segs;
   for (std::size_t r = 0; r < region.rings.size(); ++r) {
     const auto& p = region.rings[r].points;
     for (std::size_t i = 0; i < p.size(); ++i)
       segs.push_back({p[i], p[(i + 1) % p.size()], static_cast<int>(r), static_cast<int>(i), static_cast<int>(p.size()), true});
   }
+  return segs;
+}
+
+// Rings must not cross or touch themselves or each other.
+void refuse_meeting_rings(const Region& region) {
+  std::vector<Segment> segs = ring_segments(region);
   for_each_meeting(segs, [&](const Segment& s, const Segment& t, Vec2 at) -> bool {
-    if (s.owner == t.owner) throw InputError(ring_name(static_cast<std::size_t>(s.owner)) + " intersects itself at " + point_text(at));
-    throw InputError(ring_name(static_cast<std::size_t>(s.owner)) + " meets ring " + std::to_string(t.owner) + " at " + point_text(at));
+    if (s.owner == t.owner) throw InputError(ring_name(region, static_cast<std::size_t>(s.owner)) + " intersects itself at " + point_text(at));
+    throw InputError(ring_name(region, static_cast<std::size_t>(s.owner)) + " meets ring " + std::to_string(t.owner) + " at " + point_text(at));
   });
-  // A hole inside another hole of its polygon (a third ring of a GeoJSON Polygon) is an island in a lake: it
-  // becomes a part of its own, said in a warning; a ring inside that island too is refused (rings no longer
-  // cross, so one point tells where a ring lies). Meshed as given, the island was domain and its lake too.
-  {
-    std::vector<int> depth(region.rings.size(), 0), container(region.rings.size(), -1);
-    for (std::size_t r = 0; r < region.rings.size(); ++r)
-      for (std::size_t h = 0; h < region.rings.size() && region.rings[r].hole; ++h)
-        if (h != r && region.rings[h].hole && region.rings[h].part == region.rings[r].part &&
-            point_in_ring(region.rings[r].points.front(), region.rings[h].points))
-          ++depth[r], container[r] = static_cast<int>(h);
-    for (std::size_t r = 0; r < region.rings.size(); ++r) {
-      if (depth[r] > 1)
-        throw InputError(ring_name(r) + " lies inside ring " + std::to_string(container[r]) +
-                         ", which lies inside another hole of the same polygon: give islands in lakes as polygons of "
-                         "their own, at " + point_text(region.rings[r].points.front()));
-      if (depth[r] == 1) {
-        region.rings[r].hole = false;
-        region.rings[r].part = region.num_parts++;
-        if (warnings)
-          warnings->push_back(ring_name(r) + " lies inside hole ring " + std::to_string(container[r]) +
-                              " of the same polygon: meshed as an island (polygon part " +
-                              std::to_string(region.rings[r].part) + "), at " + point_text(region.rings[r].points.front()));
-      }
+}
+
+// A hole inside another hole of its polygon (a third ring of a GeoJSON Polygon) is an island in a lake: it
+// becomes a part of its own, said in a warning; a ring inside that island too is refused (rings no longer
+// cross, so one point tells where a ring lies). Meshed as given, the island was domain and its lake too.
+void make_islands_in_lakes_parts(Region& region, std::vector<std::string>* warnings) {
+  std::vector<int> depth(region.rings.size(), 0), container(region.rings.size(), -1);
+  for (std::size_t r = 0; r < region.rings.size(); ++r)
+    for (std::size_t h = 0; h < region.rings.size() && region.rings[r].hole; ++h)
+      if (h != r && region.rings[h].hole && region.rings[h].part == region.rings[r].part &&
+          point_in_ring(region.rings[r].points.front(), region.rings[h].points))
+        ++depth[r], container[r] = static_cast<int>(h);
+  for (std::size_t r = 0; r < region.rings.size(); ++r) {
+    if (depth[r] > 1)
+      throw InputError(ring_name(region, r) + " lies inside ring " + std::to_string(container[r]) +
+                       ", which lies inside another hole of the same polygon: give islands in lakes as polygons of "
+                       "their own, at " + point_text(region.rings[r].points.front()));
+    if (depth[r] == 1) {
+      region.rings[r].hole = false;
+      region.rings[r].part = region.num_parts++;
+      if (warnings)
+        warnings->push_back(ring_name(region, r) + " lies inside hole ring " + std::to_string(container[r]) +
+                            " of the same polygon: meshed as an island (polygon part " +
+                            std::to_string(region.rings[r].part) + "), at " + point_text(region.rings[r].points.front()));
     }
   }
-  // Orientation after the crossing check, so a bow-tie is reported as what it is rather than as zero area.
+}
+
+// Orientation after the crossing check, so a bow-tie is reported as what it is rather than as zero area.
+void orient_rings(Region& region) {
   for (std::size_t r = 0; r < region.rings.size(); ++r) {
     Ring& ring = region.rings[r];
     const double a = ring_signed_area(ring.points);
-    if (a == 0.0) throw InputError(ring_name(r) + " has zero area, at " + point_text(ring.points.front()));
+    if (a == 0.0) throw InputError(ring_name(region, r) + " has zero area, at " + point_text(ring.points.front()));
     if ((a > 0) == ring.hole) std::reverse(ring.points.begin(), ring.points.end());
   }
-  // Nesting: holes inside their own outer ring, parts not inside each other (outside their holes).
-  std::vector<int> outer(static_cast<std::size_t>(region.num_parts), -1);
-  for (std::size_t r = 0; r < region.rings.size(); ++r)
-    if (!region.rings[r].hole) outer[static_cast<std::size_t>(region.rings[r].part)] = static_cast<int>(r);
-  auto in_domain_of_part = [&](Vec2 p, int part) {
-    if (!point_in_ring(p, region.rings[static_cast<std::size_t>(outer[static_cast<std::size_t>(part)])].points)) return false;
+}
+
+// Each part's outer ring.
+struct PartRings {
+  const Region& region;
+  std::vector<int> outer;
+
+  explicit PartRings(const Region& r) : region(r), outer(static_cast<std::size_t>(r.num_parts), -1) {
+    for (std::size_t k = 0; k < region.rings.size(); ++k)
+      if (!region.rings[k].hole) outer[static_cast<std::size_t>(region.rings[k].part)] = static_cast<int>(k);
+  }
+  const std::vector<Vec2>& outer_ring(int part) const {
+    return region.rings[static_cast<std::size_t>(outer[static_cast<std::size_t>(part)])].points;
+  }
+  bool in_domain_of_part(Vec2 p, int part) const {
+    if (!point_in_ring(p, outer_ring(part))) return false;
     for (const Ring& h : region.rings)
       if (h.part == part && h.hole && point_in_ring(p, h.points)) return false;
     return true;
-  };
+  }
+};
+
+// Nesting: holes inside their own outer ring, parts not inside each other (outside their holes).
+void check_nesting(const PartRings& parts) {
+  const Region& region = parts.region;
   for (std::size_t r = 0; r < region.rings.size(); ++r) {
     const Ring& ring = region.rings[r];
     const Vec2 p = ring.points.front();
-    if (ring.hole && !point_in_ring(p, region.rings[static_cast<std::size_t>(outer[static_cast<std::size_t>(ring.part)])].points))
-      throw InputError(ring_name(r) + " is a hole outside its polygon, at " + point_text(p));
+    if (ring.hole && !point_in_ring(p, parts.outer_ring(ring.part)))
+      throw InputError(ring_name(region, r) + " is a hole outside its polygon, at " + point_text(p));
     if (!ring.hole)
       for (int k = 0; k < region.num_parts; ++k)
-        if (k != ring.part && in_domain_of_part(p, k))
-          throw InputError(ring_name(r) + " lies inside polygon part " + std::to_string(k) + " (overlapping parts), at " + point_text(p));
+        if (k != ring.part && parts.in_domain_of_part(p, k))
+          throw InputError(ring_name(region, r) + " lies inside polygon part " + std::to_string(k) + " (overlapping parts), at " + point_text(p));
   }
-  // Boundary segments: on a ring, their end points ring vertices (and feature points, so they become nodes).
-  place_boundary_segments(region, options.boundary_snap_relative * region.bounding_box().diagonal());
-  // Feature points must lie in the domain or on its boundary, like curves (with --repair, points in holes or
-  // outside are dropped and reported).
-  {
-    const double tol = options.snap_relative * region.bounding_box().diagonal();
-    std::vector<Vec2> kept;
-    for (Vec2 p : region.feature_points) {
-      bool inside = false;
-      for (int k = 0; k < region.num_parts && !inside; ++k) inside = in_domain_of_part(p, k);
-      double d = INFINITY;
-      for (std::size_t r = 0; r < region.rings.size() && !inside && d > tol; ++r) {
-        const auto& q = region.rings[r].points;
-        for (std::size_t i = 0; i < q.size(); ++i) d = std::min(d, point_segment_distance(p, q[i], q[(i + 1) % q.size()]));
-      }
-      if (inside || d <= tol) {
-        kept.push_back(p);
-        continue;
-      }
-      bool in_hole = false;
-      for (int k = 0; k < region.num_parts; ++k)
-        in_hole |= point_in_ring(p, region.rings[static_cast<std::size_t>(outer[static_cast<std::size_t>(k)])].points);
-      const std::string what = src + ": feature point " + point_text(p) + (in_hole ? " lies in a hole" : " lies outside the domain");
-      if (!options.repair) throw InputError(what + " (--repair drops it)");
-      if (repairs) repairs->push_back(what + ": dropped");
+}
+
+// Feature points must lie in the domain or on its boundary, like curves (with --repair, points in holes or
+// outside are dropped and reported).
+void keep_feature_points_in_domain(Region& region, const PartRings& parts, const InputOptions& options,
+                                   std::vector<std::string>* repairs) {
+  const double tol = options.snap_relative * region.bounding_box().diagonal();
+  std::vector<Vec2> kept;
+  for (Vec2 p : region.feature_points) {
+    bool inside = false;
+    for (int k = 0; k < region.num_parts && !inside; ++k) inside = parts.in_domain_of_part(p, k);
+    double d = INFINITY;
+    for (std::size_t r = 0; r < region.rings.size() && !inside && d > tol; ++r) {
+      const auto& q = region.rings[r].points;
+      for (std::size_t i = 0; i < q.size(); ++i) d = std::min(d, point_segment_distance(p, q[i], q[(i + 1) % q.size()]));
     }
-    region.feature_points = std::move(kept);
+    if (inside || d <= tol) {
+      kept.push_back(p);
+      continue;
+    }
+    bool in_hole = false;
+    for (int k = 0; k < region.num_parts; ++k) in_hole |= point_in_ring(p, parts.outer_ring(k));
+    const std::string what = region.source + ": feature point " + point_text(p) + (in_hole ? " lies in a hole" : " lies outside the domain");
+    if (!options.repair) throw InputError(what + " (--repair drops it)");
+    if (repairs) repairs->push_back(what + ": dropped");
   }
-  // Features: cut at crossings and clipped to the domain; then no curve may cross the boundary or another
-  // curve except at end points (this catches self-crossing curves, which are not split).
-  FeatureSplitOptions split;
-  split.clip_holes = options.repair;
-  const FeatureSplitStats split_stats = split_features(region, split);
-  if (warnings) warnings->insert(warnings->end(), split_stats.warnings.begin(), split_stats.warnings.end());
-  if (repairs && split_stats.pieces_in_holes > 0)
-    repairs->push_back(src + ": clipped " + std::to_string(split_stats.pieces_in_holes) + " feature piece(s) inside holes");
-  std::vector<Segment> all;
-  for (std::size_t r = 0; r < region.rings.size(); ++r) {
-    const auto& p = region.rings[r].points;
-    for (std::size_t i = 0; i < p.size(); ++i)
-      all.push_back({p[i], p[(i + 1) % p.size()], static_cast<int>(r), static_cast<int>(i), static_cast<int>(p.size()), true});
-  }
+  region.feature_points = std::move(kept);
+}
+
+// After the split no curve may cross the boundary or another curve except at end points (this catches
+// self-crossing curves, which are not split).
+void refuse_feature_crossings(const Region& region) {
+  std::vector<Segment> all = ring_segments(region);
   for (std::size_t f = 0; f < region.features.size(); ++f) {
     const auto& p = region.features[f].points;
     const bool closed = region.features[f].closed;
@@ -286,15 +296,45 @@ void validate_region(Region& region, const InputOptions& options, std::vector<st
     if (other.owner >= 0) {
       // A feature may end on the boundary; it may not cross it.
       if (at_end) return false;
-      throw InputError(feature_name(f) + " crosses the boundary (ring " + std::to_string(other.owner) + ") at " + point_text(at));
+      throw InputError(feature_name(region, f) + " crosses the boundary (ring " + std::to_string(other.owner) + ") at " + point_text(at));
     }
     const std::size_t g = static_cast<std::size_t>(-1 - other.owner);
     const auto& q = region.features[g].points;
     const bool other_end = !region.features[g].closed && (at == q.front() || at == q.back());
     if (at_end && other_end) return false;  // curves meeting at their end points
-    throw InputError(feature_name(f) + (f == g ? " crosses itself" : " crosses feature curve " + std::to_string(g)) +
+    throw InputError(feature_name(region, f) + (f == g ? " crosses itself" : " crosses feature curve " + std::to_string(g)) +
                      " at " + point_text(at));
   });
+}
+
+}  // namespace
+
+void validate_region(Region& region, const InputOptions& options, std::vector<std::string>* repairs,
+                     std::vector<std::string>* warnings) {
+  const std::string& src = region.source;
+  if (options.repair) {
+    // Finite coordinates first: GEOS must not see NaN.
+    for (const Ring& ring : region.rings)
+      check_points(ring.points, src + ": feature " + std::to_string(ring.source_feature), options);
+    make_parts_valid(region, repairs);
+  }
+  check_line_points(region, options, repairs);
+  refuse_meeting_rings(region);
+  make_islands_in_lakes_parts(region, warnings);
+  orient_rings(region);
+  const PartRings parts(region);
+  check_nesting(parts);
+  // Boundary segments: on a ring, their end points ring vertices (and feature points, so they become nodes).
+  place_boundary_segments(region, options.boundary_snap_relative * region.bounding_box().diagonal());
+  keep_feature_points_in_domain(region, parts, options, repairs);
+  // Features: cut at crossings and clipped to the domain; then checked for crossings left.
+  FeatureSplitOptions split;
+  split.clip_holes = options.repair;
+  const FeatureSplitStats split_stats = split_features(region, split);
+  if (warnings) warnings->insert(warnings->end(), split_stats.warnings.begin(), split_stats.warnings.end());
+  if (repairs && split_stats.pieces_in_holes > 0)
+    repairs->push_back(src + ": clipped " + std::to_string(split_stats.pieces_in_holes) + " feature piece(s) inside holes");
+  refuse_feature_crossings(region);
 }
 
 namespace {

@@ -51,11 +51,8 @@ bool segments_touch(Vec2 a, Vec2 b, Vec2 c, Vec2 d) {
   return (d1 == 0 && on(a, b, c)) || (d2 == 0 && on(a, b, d)) || (d3 == 0 && on(c, d, a)) || (d4 == 0 && on(c, d, b));
 }
 
-// Zigzagging vertices in a stretch finer than max_segment (both segments at a vertex shorter) move towards the mean
-// of their neighbours, a few passes, each move kept only if the vertex stays within smooth_distance of the input
-// curve and the moved segments touch no other curve, sweep over no vertex and close in on none. A shoreline digitised in steps finer
-// than the size (45-degree turns every 120 m at 200 m) then turns gently, and its steps stop being corners.
-void smooth_fine_stretches(Pool& pool, Grid& grid, const std::vector<Vec2>& input, const SimplifyOptions& options) {
+// Vertices with both neighbours whose input segments are shorter than max_segment, not locked.
+std::vector<int> movable_vertices(const Pool& pool, const std::vector<Vec2>& input, const SimplifyOptions& options) {
   const int n = static_cast<int>(pool.p.size());
   std::vector<int> movable;
   for (int v = 0; v < n; ++v) {
@@ -66,76 +63,88 @@ void smooth_fine_stretches(Pool& pool, Grid& grid, const std::vector<Vec2>& inpu
       continue;
     movable.push_back(v);
   }
-  // Distance to the input curve near v: the input segments within four vertices either side.
-  auto near_input = [&](int v, Vec2 q) {
-    double d = INFINITY;
-    int i = v;
-    for (int k = 0; k < 4 && pool.prev[i] >= 0; ++k) i = pool.prev[i];
-    for (int k = 0; k < 8 && pool.next[i] >= 0; ++k, i = pool.next[i])
-      d = std::min(d, point_segment_distance(q, input[i], input[pool.next[i]]));
-    return d;
-  };
-  auto inside = [](Vec2 q, Vec2 x, Vec2 y, Vec2 z) {
-    const double o1 = orient2(x, y, q), o2 = orient2(y, z, q), o3 = orient2(z, x, q);
-    return (o1 >= 0 && o2 >= 0 && o3 >= 0) || (o1 <= 0 && o2 <= 0 && o3 <= 0);
-  };
-  // Two curves that do not touch still make slivers when they come close: a move may not bring the vertex's
-  // segments nearer another curve than `clear`, or nearer than they already were.
-  const double clear = options.smooth_distance;
-  auto gap = [](Vec2 p, Vec2 q, Vec2 r, Vec2 t) {
-    if (segments_touch(p, q, r, t)) return 0.0;
-    return std::min({point_segment_distance(p, r, t), point_segment_distance(q, r, t), point_segment_distance(r, p, q),
-                     point_segment_distance(t, p, q)});
-  };
-  // Segments within a few vertices along the same curve are its own bends, not another curve.
-  auto nearby = [&](int v, int s) {
-    for (int k = 0, i = v, j = v; k < 4; ++k) {
-      i = i >= 0 ? pool.prev[i] : -1;
-      j = j >= 0 ? pool.next[j] : -1;
-      if (i == s || j == s) return true;
-    }
-    return false;
-  };
-  auto move_is_free = [&](int v, Vec2 c) {
-    const int a = pool.prev[v], b = pool.next[v];
-    const Vec2 pa = pool.p[a], pv = pool.p[v], pb = pool.p[b];
-    Box2 box;
-    for (Vec2 q : {pa, pv, pb, c}) box.add(q);
-    box.lo = box.lo - Vec2{clear, clear};
-    box.hi = box.hi + Vec2{clear, clear};
-    bool ok = true;
-    std::unordered_set<int> checked;
-    grid.for_cells(box.lo, box.hi, [&](long long k) {
-      auto it = grid.cells.find(k);
-      if (it == grid.cells.end() || !ok) return;
-      for (int s : it->second) {
-        if (!pool.alive[s] || pool.next[s] < 0 || !checked.insert(s).second) continue;
-        if (s == a || s == v) continue;  // the two segments that move
-        const int e = pool.next[s];
-        const Vec2 ps = pool.p[s], pe = pool.p[e];
-        if (e != a && segments_touch(pa, c, ps, pe)) { ok = false; return; }
-        if (s != b && segments_touch(c, pb, ps, pe)) { ok = false; return; }
-        for (int q : {s, e}) {
-          if (q == a || q == v || q == b) continue;
-          if (inside(pool.p[q], pa, pv, c) || inside(pool.p[q], pv, pb, c)) { ok = false; return; }
-        }
-        if (nearby(v, s)) continue;
-        // The vertex itself (also where a curve ends on another, its segments touching that one at the end)...
-        if (point_segment_distance(c, ps, pe) < std::min(clear, point_segment_distance(pv, ps, pe))) { ok = false; return; }
-        // ... and its segments, unless they share an end point with that one.
-        if (e != a && s != b &&
-            std::min(gap(pa, c, ps, pe), gap(c, pb, ps, pe)) < std::min(clear, std::min(gap(pa, pv, ps, pe), gap(pv, pb, ps, pe)))) {
-          ok = false;
-          return;
-        }
+  return movable;
+}
+
+// Distance to the input curve near v: the input segments within four vertices either side.
+double distance_to_input_near(const Pool& pool, const std::vector<Vec2>& input, int v, Vec2 q) {
+  double d = INFINITY;
+  int i = v;
+  for (int k = 0; k < 4 && pool.prev[i] >= 0; ++k) i = pool.prev[i];
+  for (int k = 0; k < 8 && pool.next[i] >= 0; ++k, i = pool.next[i])
+    d = std::min(d, point_segment_distance(q, input[i], input[pool.next[i]]));
+  return d;
+}
+
+bool in_triangle(Vec2 q, Vec2 x, Vec2 y, Vec2 z) {
+  const double o1 = orient2(x, y, q), o2 = orient2(y, z, q), o3 = orient2(z, x, q);
+  return (o1 >= 0 && o2 >= 0 && o3 >= 0) || (o1 <= 0 && o2 <= 0 && o3 <= 0);
+}
+
+double segment_gap(Vec2 p, Vec2 q, Vec2 r, Vec2 t) {
+  if (segments_touch(p, q, r, t)) return 0.0;
+  return std::min({point_segment_distance(p, r, t), point_segment_distance(q, r, t), point_segment_distance(r, p, q),
+                   point_segment_distance(t, p, q)});
+}
+
+// Segments within a few vertices along the same curve are its own bends, not another curve.
+bool nearby_along_curve(const Pool& pool, int v, int s) {
+  for (int k = 0, i = v, j = v; k < 4; ++k) {
+    i = i >= 0 ? pool.prev[i] : -1;
+    j = j >= 0 ? pool.next[j] : -1;
+    if (i == s || j == s) return true;
+  }
+  return false;
+}
+
+// Whether v may move to c: its moved segments touch no other curve and sweep over no vertex. Two curves that do
+// not touch still make slivers when they come close: a move may not bring the vertex's segments nearer another
+// curve than `clear`, or nearer than they already were.
+bool move_is_free(const Pool& pool, const Grid& grid, int v, Vec2 c, double clear) {
+  const int a = pool.prev[v], b = pool.next[v];
+  const Vec2 pa = pool.p[a], pv = pool.p[v], pb = pool.p[b];
+  Box2 box;
+  for (Vec2 q : {pa, pv, pb, c}) box.add(q);
+  box.lo = box.lo - Vec2{clear, clear};
+  box.hi = box.hi + Vec2{clear, clear};
+  bool ok = true;
+  std::unordered_set<int> checked;
+  grid.for_cells(box.lo, box.hi, [&](long long k) {
+    auto it = grid.cells.find(k);
+    if (it == grid.cells.end() || !ok) return;
+    for (int s : it->second) {
+      if (!pool.alive[s] || pool.next[s] < 0 || !checked.insert(s).second) continue;
+      if (s == a || s == v) continue;  // the two segments that move
+      const int e = pool.next[s];
+      const Vec2 ps = pool.p[s], pe = pool.p[e];
+      if (e != a && segments_touch(pa, c, ps, pe)) { ok = false; return; }
+      if (s != b && segments_touch(c, pb, ps, pe)) { ok = false; return; }
+      for (int q : {s, e}) {
+        if (q == a || q == v || q == b) continue;
+        if (in_triangle(pool.p[q], pa, pv, c) || in_triangle(pool.p[q], pv, pb, c)) { ok = false; return; }
       }
-    });
-    return ok;
-  };
-  // Only zigzags move: a vertex turning by more than smooth_turn_deg one way next to one turning the other way.
-  // Turns the same way are the curve's own bends (a small island is all of them); smoothing would shrink it.
-  const double min_turn = std::sin(options.smooth_turn_deg * 3.14159265358979323846 / 180.0);
-  auto turn = [&](int v) {
+      if (nearby_along_curve(pool, v, s)) continue;
+      // The vertex itself (also where a curve ends on another, its segments touching that one at the end)...
+      if (point_segment_distance(c, ps, pe) < std::min(clear, point_segment_distance(pv, ps, pe))) { ok = false; return; }
+      // ... and its segments, unless they share an end point with that one.
+      if (e != a && s != b &&
+          std::min(segment_gap(pa, c, ps, pe), segment_gap(c, pb, ps, pe)) <
+              std::min(clear, std::min(segment_gap(pa, pv, ps, pe), segment_gap(pv, pb, ps, pe)))) {
+        ok = false;
+        return;
+      }
+    }
+  });
+  return ok;
+}
+
+// Only zigzags move: a vertex turning by more than smooth_turn_deg one way next to one turning the other way.
+// Turns the same way are the curve's own bends (a small island is all of them); smoothing would shrink it.
+struct Zigzags {
+  const Pool& pool;
+  double min_turn;  // sine of smooth_turn_deg
+
+  int turn(int v) const {
     if (v < 0) return 0;
     const int a = pool.prev[v], b = pool.next[v];
     if (a < 0 || b < 0) return 0;
@@ -143,25 +152,34 @@ void smooth_fine_stretches(Pool& pool, Grid& grid, const std::vector<Vec2>& inpu
     const double c = cross(u, w);
     if (!(std::abs(c) > min_turn * std::hypot(u.x, u.y) * std::hypot(w.x, w.y))) return 0;
     return c > 0.0 ? 1 : -1;
-  };
-  auto zigzag = [&](int v) {
+  }
+  bool at(int v) const {
     if (v < 0) return false;
     const int t = turn(v);
     return t != 0 && (turn(pool.prev[v]) == -t || turn(pool.next[v]) == -t);
-  };
+  }
+};
+
+// Zigzagging vertices in a stretch finer than max_segment (both segments at a vertex shorter) move towards the mean
+// of their neighbours, a few passes, each move kept only if the vertex stays within smooth_distance of the input
+// curve and the moved segments touch no other curve, sweep over no vertex and close in on none. A shoreline digitised in steps finer
+// than the size (45-degree turns every 120 m at 200 m) then turns gently, and its steps stop being corners.
+void smooth_fine_stretches(Pool& pool, Grid& grid, const std::vector<Vec2>& input, const SimplifyOptions& options) {
+  const std::vector<int> movable = movable_vertices(pool, input, options);
+  const Zigzags zigzag{pool, std::sin(options.smooth_turn_deg * 3.14159265358979323846 / 180.0)};
   const double still = 1e-3 * options.smooth_distance;
   for (int pass = 0; pass < 30; ++pass) {
     int moved = 0;
     for (int v : movable) {
-      if (!zigzag(v) && !zigzag(pool.prev[v]) && !zigzag(pool.next[v])) continue;
+      if (!zigzag.at(v) && !zigzag.at(pool.prev[v]) && !zigzag.at(pool.next[v])) continue;
       const Vec2 p = pool.p[v];
       const Vec2 step = 0.25 * (pool.p[pool.prev[v]] + pool.p[pool.next[v]] - 2.0 * p);
       const Vec2 c = p + step;
-      if (distance(c, p) < still || near_input(v, c) > options.smooth_distance) continue;
+      if (distance(c, p) < still || distance_to_input_near(pool, input, v, c) > options.smooth_distance) continue;
       // Vertices also slide along the curve as it straightens; one that slid farther than max_distance from
       // its own input position would leave that input vertex beyond the bound once its neighbours are removed.
       if (options.max_distance > 0.0 && distance(c, input[v]) > options.max_distance) continue;
-      if (!move_is_free(v, c)) continue;
+      if (!move_is_free(pool, grid, v, c, options.smooth_distance)) continue;
       pool.p[v] = c;
       grid.add(pool, pool.prev[v]);  // old cells keep stale entries: checks read the current positions
       grid.add(pool, v);
@@ -171,12 +189,11 @@ void smooth_fine_stretches(Pool& pool, Grid& grid, const std::vector<Vec2>& inpu
   }
 }
 
-}  // namespace
+// A polyline's place in the pool: its vertices are consecutive from first.
+struct Line { int first; bool closed; int size; };
 
-SimplifyStats simplify_region(Region& region, const SimplifyOptions& options) {
-  SimplifyStats stats;
-  Pool pool;
-  struct Line { int first; bool closed; int size; };
+// The rings, then the feature curves, in one pool; the open lines' end vertices are locked.
+std::vector<Line> pool_lines(const Region& region, Pool& pool) {
   std::vector<Line> lines;
   auto add_line = [&](const std::vector<Vec2>& pts, bool closed) {
     const int first = static_cast<int>(pool.p.size()), n = static_cast<int>(pts.size());
@@ -192,50 +209,109 @@ SimplifyStats simplify_region(Region& region, const SimplifyOptions& options) {
   };
   for (const Ring& r : region.rings) add_line(r.points, true);
   for (const FeatureCurve& f : region.features) add_line(f.points, f.closed);
-  stats.vertices_before = pool.p.size();
-  if (!(options.min_area > 0.0)) { stats.vertices_after = stats.vertices_before; return stats; }
-  // Points shared by several polylines (a feature ending on a ring, curves meeting) stay.
-  {
-    std::unordered_map<long long, int> seen;
-    std::vector<std::pair<std::pair<double, double>, int>> keys;
-    for (std::size_t v = 0; v < pool.p.size(); ++v) keys.push_back({{pool.p[v].x, pool.p[v].y}, static_cast<int>(v)});
-    std::sort(keys.begin(), keys.end());
-    for (std::size_t i = 1; i < keys.size(); ++i)
-      if (keys[i].first == keys[i - 1].first) pool.locked[keys[i].second] = pool.locked[keys[i - 1].second] = 1;
-    for (const Vec2 q : region.feature_points)
-      for (std::size_t v = 0; v < pool.p.size(); ++v)
-        if (pool.p[v] == q) pool.locked[v] = 1;
-  }
-  Box2 box;
-  double len = 0.0;
-  std::size_t nseg = 0;
-  for (std::size_t v = 0; v < pool.p.size(); ++v) {
-    box.add(pool.p[v]);
-    if (pool.next[v] >= 0) { len += distance(pool.p[v], pool.p[pool.next[v]]); ++nseg; }
-  }
-  Grid grid{std::max(2.0 * len / std::max<std::size_t>(1, nseg), box.diagonal() * 1e-9), box.lo, {}};
+  return lines;
+}
+
+// Points shared by several polylines (a feature ending on a ring, curves meeting) stay.
+void lock_shared_points(const Region& region, Pool& pool) {
+  std::vector<std::pair<std::pair<double, double>, int>> keys;
+  for (std::size_t v = 0; v < pool.p.size(); ++v) keys.push_back({{pool.p[v].x, pool.p[v].y}, static_cast<int>(v)});
+  std::sort(keys.begin(), keys.end());
+  for (std::size_t i = 1; i < keys.size(); ++i)
+    if (keys[i].first == keys[i - 1].first) pool.locked[keys[i].second] = pool.locked[keys[i - 1].second] = 1;
+  for (const Vec2 q : region.feature_points)
+    for (std::size_t v = 0; v < pool.p.size(); ++v)
+      if (pool.p[v] == q) pool.locked[v] = 1;
+}
+
+// A grid of the alive segments, its cells twice their mean length (at least a billionth of the box's diagonal).
+Grid grid_of_alive_segments(const Pool& pool, const Box2& box, std::size_t segments) {
+  double alive_len = 0.0;
   for (std::size_t v = 0; v < pool.p.size(); ++v)
-    if (pool.next[v] >= 0) grid.add(pool, static_cast<int>(v));
+    if (pool.alive[v] && pool.next[v] >= 0) alive_len += distance(pool.p[v], pool.p[pool.next[v]]);
+  Grid grid{std::max(2.0 * alive_len / static_cast<double>(std::max<std::size_t>(1, segments)), box.diagonal() * 1e-9),
+            box.lo, {}};
+  for (std::size_t v = 0; v < pool.p.size(); ++v)
+    if (pool.alive[v] && pool.next[v] >= 0) grid.add(pool, static_cast<int>(v));
+  return grid;
+}
+
+// Whether the shortcut from v's previous to its next vertex touches no other segment and cuts off no vertex.
+bool shortcut_is_free(const Pool& pool, const Grid& grid, int v) {
+  const int a = pool.prev[v], b = pool.next[v];
+  const Vec2 pa = pool.p[a], pv = pool.p[v], pb = pool.p[b];
+  bool ok = true;
+  std::unordered_set<int> checked;
+  Box2 tri;
+  tri.add(pa); tri.add(pv); tri.add(pb);
+  grid.for_cells(tri.lo, tri.hi, [&](long long k) {
+    auto it = grid.cells.find(k);
+    if (it == grid.cells.end() || !ok) return;
+    for (int s : it->second) {
+      if (!pool.alive[s] || pool.next[s] < 0 || !checked.insert(s).second) continue;
+      const int e = pool.next[s];
+      if (s == a || s == v) continue;  // the two segments being replaced
+      const Vec2 ps = pool.p[s], pe = pool.p[e];
+      // The new segment may share only its own end points with the segments next to it.
+      const bool shares = s == b || e == a;
+      if (!shares && segments_touch(pa, pb, ps, pe)) { ok = false; return; }
+      // No other vertex inside (or on) the triangle that the shortcut cuts off. When a, v, b are collinear
+      // the triangle is the segment from a to b: every point of its line has three zero orientations, so only
+      // those within the three points' box are on it (the next vertex of a straight run is not, and once counted it
+      // kept every collinear vertex: a square with 1,000 points per side went to the map with all 4,000).
+      for (int q : {s, e}) {
+        if (q == a || q == v || q == b) continue;
+        const Vec2 pq = pool.p[q];
+        const double o1 = orient2(pa, pv, pq), o2 = orient2(pv, pb, pq), o3 = orient2(pb, pa, pq);
+        if (o1 == 0 && o2 == 0 && o3 == 0 &&
+            !(std::min({pa.x, pv.x, pb.x}) <= pq.x && pq.x <= std::max({pa.x, pv.x, pb.x}) &&
+              std::min({pa.y, pv.y, pb.y}) <= pq.y && pq.y <= std::max({pa.y, pv.y, pb.y})))
+          continue;
+        if ((o1 >= 0 && o2 >= 0 && o3 >= 0) || (o1 <= 0 && o2 <= 0 && o3 <= 0)) { ok = false; return; }
+      }
+    }
+  });
+  return ok;
+}
+
+// The corner at `at` between from and to, in degrees (180 at an open line's end).
+double opening(const Pool& pool, int from, int at, int to) {
+  if (from < 0 || to < 0) return 180.0;
+  const Vec2 u = pool.p[from] - pool.p[at], w = pool.p[to] - pool.p[at];
+  return std::abs(std::atan2(cross(u, w), dot(u, w))) * 180.0 / 3.14159265358979323846;
+}
+
+// Removals only move a vertex's neighbours apart: once the shortcut is too long, it stays too long.
+// A vertex crowding its neighbour goes even past max_segment, unless the shortcut leaves a spike (a corner
+// below 20 degrees at a or b) where there was none.
+bool shortcut_too_long(const Pool& pool, int a, int v, int b, const SimplifyOptions& options) {
+  const bool crowded = std::min(distance(pool.p[a], pool.p[v]), distance(pool.p[v], pool.p[b])) < options.crowded_fraction * options.max_segment &&
+                       opening(pool, pool.prev[a], a, b) >= 20.0 && opening(pool, a, b, pool.next[b]) >= 20.0;
+  return options.max_segment > 0.0 && !crowded && distance(pool.p[a], pool.p[b]) > options.max_segment;
+}
+
+// Every input vertex the new segment a-b replaces (those removed before between a and b, and v) stays
+// within max_distance of it; the line's vertices are consecutive in the pool.
+bool replaced_input_stays_close(const Pool& pool, const Line& line, const std::vector<Vec2>& input, int a, int b,
+                                double max_distance) {
+  bool close = true;
+  for (int i = a;;) {
+    i = i + 1 < line.first + line.size ? i + 1 : line.first;
+    if (i == b) break;
+    close = close && point_segment_distance(input[i], pool.p[a], pool.p[b]) <= max_distance;
+  }
+  return close;
+}
+
+// Removes vertices, smallest triangle area first, while the area is below min_area and the shortcut is free,
+// short enough and close to the input.
+void remove_small_triangles(Pool& pool, Grid& grid, const Box2& box, std::size_t nseg, const std::vector<Line>& lines,
+                            const std::vector<Vec2>& input, const SimplifyOptions& options, SimplifyStats& stats) {
   // Segments lengthen as vertices go, and a segment is listed in every cell of its box: with cells sized for the
   // input (0.5 m along a 1.2M-vertex ring), shortcuts of the target size spanned thousands of cells each, and the
   // grid grew to 5 GB in 90 s. So the grid is rebuilt, its cells sized for the segments then alive, each time
   // their count halves (linear in all: n + n/2 + ...). Only the speed changes: any cell size finds every segment.
   std::size_t segments = nseg, rebuilt_at = nseg;
-  auto rebuild_grid = [&] {
-    double alive_len = 0.0;
-    for (std::size_t v = 0; v < pool.p.size(); ++v)
-      if (pool.alive[v] && pool.next[v] >= 0) alive_len += distance(pool.p[v], pool.p[pool.next[v]]);
-    grid = Grid{std::max(2.0 * alive_len / static_cast<double>(std::max<std::size_t>(1, segments)), box.diagonal() * 1e-9),
-                box.lo, {}};
-    for (std::size_t v = 0; v < pool.p.size(); ++v)
-      if (pool.alive[v] && pool.next[v] >= 0) grid.add(pool, static_cast<int>(v));
-    rebuilt_at = segments;
-  };
-
-  // The input positions: distances are measured to them, also after smoothing has moved the vertices.
-  const std::vector<Vec2> input = pool.p;
-  if (options.smooth_distance > 0.0) smooth_fine_stretches(pool, grid, input, options);
-
   auto area = [&](int v) { return 0.5 * std::abs(orient2(pool.p[pool.prev[v]], pool.p[v], pool.p[pool.next[v]])); };
   using Entry = std::pair<double, int>;
   std::priority_queue<Entry, std::vector<Entry>, std::greater<>> heap;
@@ -245,43 +321,6 @@ SimplifyStats simplify_region(Region& region, const SimplifyOptions& options) {
   std::vector<int> line_size(lines.size());
   for (std::size_t l = 0; l < lines.size(); ++l) line_size[l] = lines[l].size;
 
-  auto shortcut_is_free = [&](int v) {
-    const int a = pool.prev[v], b = pool.next[v];
-    const Vec2 pa = pool.p[a], pv = pool.p[v], pb = pool.p[b];
-    bool ok = true;
-    std::unordered_set<int> checked;
-    Box2 tri;
-    tri.add(pa); tri.add(pv); tri.add(pb);
-    grid.for_cells(tri.lo, tri.hi, [&](long long k) {
-      auto it = grid.cells.find(k);
-      if (it == grid.cells.end() || !ok) return;
-      for (int s : it->second) {
-        if (!pool.alive[s] || pool.next[s] < 0 || !checked.insert(s).second) continue;
-        const int e = pool.next[s];
-        if (s == a || s == v) continue;  // the two segments being replaced
-        const Vec2 ps = pool.p[s], pe = pool.p[e];
-        // The new segment may share only its own end points with the segments next to it.
-        const bool shares = s == b || e == a;
-        if (!shares && segments_touch(pa, pb, ps, pe)) { ok = false; return; }
-        // No other vertex inside (or on) the triangle that the shortcut cuts off. When a, v, b are collinear
-        // the triangle is the segment from a to b: every point of its line has three zero orientations, so only
-        // those within the three points' box are on it (the next vertex of a straight run is not, and once counted it
-        // kept every collinear vertex: a square with 1,000 points per side went to the map with all 4,000).
-        for (int q : {s, e}) {
-          if (q == a || q == v || q == b) continue;
-          const Vec2 pq = pool.p[q];
-          const double o1 = orient2(pa, pv, pq), o2 = orient2(pv, pb, pq), o3 = orient2(pb, pa, pq);
-          if (o1 == 0 && o2 == 0 && o3 == 0 &&
-              !(std::min({pa.x, pv.x, pb.x}) <= pq.x && pq.x <= std::max({pa.x, pv.x, pb.x}) &&
-                std::min({pa.y, pv.y, pb.y}) <= pq.y && pq.y <= std::max({pa.y, pv.y, pb.y})))
-            continue;
-          if ((o1 >= 0 && o2 >= 0 && o3 >= 0) || (o1 <= 0 && o2 <= 0 && o3 <= 0)) { ok = false; return; }
-        }
-      }
-    });
-    return ok;
-  };
-
   while (!heap.empty()) {
     const auto [a_val, v] = heap.top();
     heap.pop();
@@ -289,45 +328,35 @@ SimplifyStats simplify_region(Region& region, const SimplifyOptions& options) {
     if (a_val >= options.min_area) break;
     const int l = pool.line[v];
     if (line_size[l] <= (lines[l].closed ? 4 : 2)) continue;
-    if (!shortcut_is_free(v)) { ++stats.refused; pool.locked[v] = 1; continue; }
+    if (!shortcut_is_free(pool, grid, v)) { ++stats.refused; pool.locked[v] = 1; continue; }
     const int a = pool.prev[v], b = pool.next[v];
-    // Removals only move a vertex's neighbours apart: once the shortcut is too long, it stays too long.
-    // A vertex crowding its neighbour goes even past max_segment, unless the shortcut leaves a spike (a corner
-    // below 20 degrees at a or b) where there was none.
-    auto opening = [&](int from, int at, int to) {
-      if (from < 0 || to < 0) return 180.0;
-      const Vec2 u = pool.p[from] - pool.p[at], w = pool.p[to] - pool.p[at];
-      return std::abs(std::atan2(cross(u, w), dot(u, w))) * 180.0 / 3.14159265358979323846;
-    };
-    const bool crowded = std::min(distance(pool.p[a], pool.p[v]), distance(pool.p[v], pool.p[b])) < options.crowded_fraction * options.max_segment &&
-                         opening(pool.prev[a], a, b) >= 20.0 && opening(a, b, pool.next[b]) >= 20.0;
-    if (options.max_segment > 0.0 && !crowded && distance(pool.p[a], pool.p[b]) > options.max_segment) {
+    if (shortcut_too_long(pool, a, v, b, options)) {
       pool.locked[v] = 1;
       continue;
     }
-    if (options.max_distance > 0.0) {
-      // Every input vertex the new segment replaces (those removed before between a and b, and v) stays
-      // within max_distance of it; the line's vertices are consecutive in the pool.
-      const Line& line = lines[static_cast<std::size_t>(l)];
-      bool close = true;
-      for (int i = a;;) {
-        i = i + 1 < line.first + line.size ? i + 1 : line.first;
-        if (i == b) break;
-        close = close && point_segment_distance(input[i], pool.p[a], pool.p[b]) <= options.max_distance;
-      }
-      if (!close) { pool.locked[v] = 1; continue; }
+    if (options.max_distance > 0.0 &&
+        !replaced_input_stays_close(pool, lines[static_cast<std::size_t>(l)], input, a, b, options.max_distance)) {
+      pool.locked[v] = 1;
+      continue;
     }
     pool.alive[v] = 0;
     pool.next[a] = b;
     pool.prev[b] = a;
     grid.add(pool, a);
     --line_size[l];
-    if (--segments * 2 <= rebuilt_at && segments >= 64) rebuild_grid();
+    if (--segments * 2 <= rebuilt_at && segments >= 64) {
+      grid = grid_of_alive_segments(pool, box, segments);
+      rebuilt_at = segments;
+    }
     for (int w : {a, b})
       if (!pool.locked[w] && pool.prev[w] >= 0 && pool.next[w] >= 0) heap.push({current[w] = area(w), w});
   }
-  // How far the input moved: every input vertex's distance to the kept segment that replaced it (a kept vertex
-  // counts too: smoothing may have moved it).
+}
+
+// How far the input moved: every input vertex's distance to the kept segment that replaced it (a kept vertex
+// counts too: smoothing may have moved it).
+double max_input_distance(const Pool& pool, const std::vector<Line>& lines, const std::vector<Vec2>& input) {
+  double max_distance = 0.0;
   for (const Line& line : lines) {
     std::vector<int> kept;
     for (int i = 0; i < line.size; ++i)
@@ -339,23 +368,50 @@ SimplifyStats simplify_region(Region& region, const SimplifyOptions& options) {
       const int from = kept[k], to = last ? kept[0] + line.size : kept[k + 1];
       const Vec2 pa = pool.p[line.first + from], pb = pool.p[line.first + to % line.size];
       for (int i = from; i <= to; ++i)
-        stats.max_distance = std::max(stats.max_distance, point_segment_distance(input[line.first + i % line.size], pa, pb));
+        max_distance = std::max(max_distance, point_segment_distance(input[line.first + i % line.size], pa, pb));
     }
   }
+  return max_distance;
+}
+
+// A line's surviving vertices in order.
+std::vector<Vec2> surviving_points(const Pool& pool, const Line& line) {
+  std::vector<Vec2> out;
+  int start = line.first;
+  while (!pool.alive[start]) ++start;  // closed lines: any survivor; open lines keep their first vertex
+  int v = start;
+  do {
+    out.push_back(pool.p[v]);
+    v = pool.next[v];
+  } while (v >= 0 && v != start);
+  return out;
+}
+
+}  // namespace
+
+SimplifyStats simplify_region(Region& region, const SimplifyOptions& options) {
+  SimplifyStats stats;
+  Pool pool;
+  const std::vector<Line> lines = pool_lines(region, pool);
+  stats.vertices_before = pool.p.size();
+  if (!(options.min_area > 0.0)) { stats.vertices_after = stats.vertices_before; return stats; }
+  lock_shared_points(region, pool);
+  Box2 box;
+  std::size_t nseg = 0;
+  for (std::size_t v = 0; v < pool.p.size(); ++v) {
+    box.add(pool.p[v]);
+    if (pool.next[v] >= 0) ++nseg;
+  }
+  Grid grid = grid_of_alive_segments(pool, box, nseg);
+
+  // The input positions: distances are measured to them, also after smoothing has moved the vertices.
+  const std::vector<Vec2> input = pool.p;
+  if (options.smooth_distance > 0.0) smooth_fine_stretches(pool, grid, input, options);
+  remove_small_triangles(pool, grid, box, nseg, lines, input, options, stats);
+  stats.max_distance = max_input_distance(pool, lines, input);
   // Write the surviving vertices back in order.
-  auto collect = [&](const Line& line) {
-    std::vector<Vec2> out;
-    int start = line.first;
-    while (!pool.alive[start]) ++start;  // closed lines: any survivor; open lines keep their first vertex
-    int v = start;
-    do {
-      out.push_back(pool.p[v]);
-      v = pool.next[v];
-    } while (v >= 0 && v != start);
-    return out;
-  };
-  for (std::size_t r = 0; r < region.rings.size(); ++r) region.rings[r].points = collect(lines[r]);
-  for (std::size_t f = 0; f < region.features.size(); ++f) region.features[f].points = collect(lines[region.rings.size() + f]);
+  for (std::size_t r = 0; r < region.rings.size(); ++r) region.rings[r].points = surviving_points(pool, lines[r]);
+  for (std::size_t f = 0; f < region.features.size(); ++f) region.features[f].points = surviving_points(pool, lines[region.rings.size() + f]);
   for (const Ring& r : region.rings) stats.vertices_after += r.points.size();
   for (const FeatureCurve& f : region.features) stats.vertices_after += f.points.size();
   // Coarsened to the size, a ring concave towards another curve closer than a chord's sagitta (an island in a
@@ -587,6 +643,124 @@ Vec2 leaving_direction(const std::vector<Vec2>& line, double reach) {
   return {0, 0};
 }
 
+// Meeting points: ends of open feature pieces, with every curve leaving them.
+std::map<std::pair<double, double>, std::vector<Dart>> meeting_points(const Region& region) {
+  std::map<std::pair<double, double>, std::vector<Dart>> at;
+  for (std::size_t f = 0; f < region.features.size(); ++f) {
+    const FeatureCurve& c = region.features[f];
+    if (c.closed || c.points.size() < 2) continue;
+    at[{c.points.front().x, c.points.front().y}].push_back({false, static_cast<int>(f), false, 0});
+    at[{c.points.back().x, c.points.back().y}].push_back({false, static_cast<int>(f), true, 0});
+  }
+  for (std::size_t r = 0; r < region.rings.size(); ++r)
+    for (std::size_t i = 0; i < region.rings[r].points.size(); ++i) {
+      const Vec2 p = region.rings[r].points[i];
+      if (auto it = at.find({p.x, p.y}); it != at.end()) {
+        it->second.push_back({true, static_cast<int>(r), false, i});
+        it->second.push_back({true, static_cast<int>(r), true, i});
+      }
+    }
+  return at;
+}
+
+// The first vertex of `from` at least min_width from `to` (from's stretch before it goes).
+std::size_t first_away(const std::vector<Vec2>& from, const std::vector<Vec2>& to, double min_width) {
+  std::size_t k = 1;
+  while (k < from.size() && closest_on(from[k], to).distance < min_width) ++k;
+  return k;
+}
+
+double prefix_length(const std::vector<Vec2>& line, std::size_t k) {
+  return polyline_length(std::vector<Vec2>(line.begin(), line.begin() + static_cast<std::ptrdiff_t>(k + 1)));
+}
+
+// The region with B (points bp) starting at the foot on A (points ap) instead of at its k first vertices; the
+// foot becomes a vertex of A (a feature is cut there: curves meet only at their ends).
+Region with_wedge_opened(const Region& region, const Dart& a, const Dart& b, const std::vector<Vec2>& ap,
+                         const std::vector<Vec2>& bp, std::size_t k, const Foot& foot) {
+  Region next = region;
+  // B now starts at the foot.
+  std::vector<Vec2> nb{foot.at};
+  nb.insert(nb.end(), bp.begin() + static_cast<std::ptrdiff_t>(k), bp.end());
+  if (b.reversed) std::reverse(nb.begin(), nb.end());
+  next.features[static_cast<std::size_t>(b.index)].points = nb;
+  const bool at_vertex = foot.t == 0.0 || foot.t == 1.0;
+  const std::size_t vertex = foot.segment + (foot.t == 1.0 ? 1 : 0);
+  if (!a.ring) {
+    FeatureCurve& fa = next.features[static_cast<std::size_t>(a.index)];
+    std::vector<Vec2> first(ap.begin(), ap.begin() + static_cast<std::ptrdiff_t>(at_vertex ? vertex + 1 : foot.segment + 1));
+    if (!at_vertex) first.push_back(foot.at);
+    std::vector<Vec2> second{foot.at};
+    second.insert(second.end(), ap.begin() + static_cast<std::ptrdiff_t>(at_vertex ? vertex + 1 : foot.segment + 1), ap.end());
+    if (a.reversed) {
+      std::reverse(first.begin(), first.end());
+      std::reverse(second.begin(), second.end());
+    }
+    FeatureCurve other = fa;
+    fa.points = std::move(first);
+    other.points = std::move(second);
+    next.features.push_back(std::move(other));
+  } else if (!at_vertex) {
+    auto& rp = next.rings[static_cast<std::size_t>(a.index)].points;
+    const std::size_t n = rp.size();
+    // Walked forward the foot lies after ring vertex (v0 + segment); walked backward, before (v0 - segment).
+    const std::size_t after = a.reversed ? (a.vertex + n - foot.segment - 1) % n : (a.vertex + foot.segment) % n;
+    rp.insert(rp.begin() + static_cast<std::ptrdiff_t>(after + 1), foot.at);
+  }
+  return next;
+}
+
+// Whether the link from p0 to p1 touches anything but its own two ends.
+bool link_touches_others(const Region& region, Vec2 p0, Vec2 p1) {
+  bool crosses = false;
+  auto test = [&](Vec2 u, Vec2 v) {
+    if (u == p0 || v == p0 || u == p1 || v == p1) return;
+    crosses = crosses || segments_touch(p0, p1, u, v);
+  };
+  for (const Ring& r : region.rings)
+    for (std::size_t i = 0; i < r.points.size() && !crosses; ++i) test(r.points[i], r.points[(i + 1) % r.points.size()]);
+  for (const FeatureCurve& c : region.features)
+    for (std::size_t i = 0; i + (c.closed ? 0 : 1) < c.points.size() && !crosses; ++i)
+      test(c.points[i], c.points[(i + 1) % c.points.size()]);
+  for (Vec2 q : region.feature_points) crosses = crosses || point_segment_distance(q, p0, p1) == 0.0;
+  return crosses;
+}
+
+// Feature B (points bp, leaving in direction db) against curve A at the same meeting point: when they leave
+// within max_angle of each other, B's stretch beside A goes and B starts at A where it is min_width away.
+// Returns whether region changed.
+bool open_wedge(Region& region, const Dart& a, const Dart& b, const std::vector<Vec2>& bp, Vec2 db, double min_width,
+                double cos_max, std::vector<DroppedCurve>& done) {
+  const std::vector<Vec2> ap = dart_points(region, a, polyline_length(bp) + 2.0 * min_width);
+  const Vec2 da = leaving_direction(ap, 0.25 * min_width);
+  const double la = std::hypot(da.x, da.y), lb = std::hypot(db.x, db.y);
+  if (!(la > 0.0 && lb > 0.0) || dot(da, db) < cos_max * la * lb) return false;
+  const std::size_t k = first_away(bp, ap, min_width);
+  if (k >= bp.size()) return false;  // B stays beside A to its end: a narrow face, not a wedge
+  // Of two features, the one that loses the shorter stretch leaves the other (a river leaves the
+  // shoreline it runs along); ties go by index.
+  if (!a.ring) {
+    const std::vector<Vec2> whole_a = dart_points(region, a, 0.0);
+    const std::size_t ka = first_away(whole_a, bp, min_width);
+    if (ka < whole_a.size() &&
+        (prefix_length(whole_a, ka) < prefix_length(bp, k) ||
+         (prefix_length(whole_a, ka) == prefix_length(bp, k) && a.index < b.index)))
+      return false;
+  }
+  double stretch = 0.0;
+  for (std::size_t i = 1; i < k; ++i) stretch = std::max(stretch, closest_on(bp[i], ap).distance);
+  const Foot foot = closest_on(bp[k], ap);
+  if (foot.segment == 0 && foot.t == 0.0) return false;
+  if (!a.ring && foot.segment + 2 == ap.size() && foot.t == 1.0) return false;  // A's far end: no room
+  Region next = with_wedge_opened(region, a, b, ap, bp, k, foot);
+  if (link_touches_others(next, foot.at, bp[k])) return false;
+  const double opening = std::acos(std::min(1.0, dot(da, db) / (la * lb)));
+  done.push_back({DroppedCurve::Kind::wedge_stretch, region.features[static_cast<std::size_t>(b.index)].source_feature,
+                  2.0 * min_width * std::sin(0.5 * opening), 0.0, stretch, bp.front()});
+  region = std::move(next);
+  return true;
+}
+
 }  // namespace
 
 std::vector<DroppedCurve> open_narrow_wedges(Region& region, double min_width, double max_angle_deg) {
@@ -594,109 +768,16 @@ std::vector<DroppedCurve> open_narrow_wedges(Region& region, double min_width, d
   if (!(min_width > 0.0)) return done;
   const double cos_max = std::cos(max_angle_deg * M_PI / 180.0);
   for (int round = 0; round < 10000; ++round) {
-    // Meeting points: ends of open feature pieces, with every curve leaving them.
-    std::map<std::pair<double, double>, std::vector<Dart>> at;
-    for (std::size_t f = 0; f < region.features.size(); ++f) {
-      const FeatureCurve& c = region.features[f];
-      if (c.closed || c.points.size() < 2) continue;
-      at[{c.points.front().x, c.points.front().y}].push_back({false, static_cast<int>(f), false, 0});
-      at[{c.points.back().x, c.points.back().y}].push_back({false, static_cast<int>(f), true, 0});
-    }
-    for (std::size_t r = 0; r < region.rings.size(); ++r)
-      for (std::size_t i = 0; i < region.rings[r].points.size(); ++i) {
-        const Vec2 p = region.rings[r].points[i];
-        if (auto it = at.find({p.x, p.y}); it != at.end()) {
-          it->second.push_back({true, static_cast<int>(r), false, i});
-          it->second.push_back({true, static_cast<int>(r), true, i});
-        }
-      }
+    const auto at = meeting_points(region);
     bool changed = false;
-    for (auto& [key, darts] : at) {
+    for (const auto& [key, darts] : at) {
       for (std::size_t b = 0; b < darts.size() && !changed; ++b) {
         if (darts[b].ring) continue;
         const std::vector<Vec2> bp = dart_points(region, darts[b], 0.0);
         const Vec2 db = leaving_direction(bp, 0.25 * min_width);
         for (std::size_t a = 0; a < darts.size() && !changed; ++a) {
           if (a == b || (darts[a].ring == darts[b].ring && darts[a].index == darts[b].index)) continue;
-          const std::vector<Vec2> ap = dart_points(region, darts[a], polyline_length(bp) + 2.0 * min_width);
-          const Vec2 da = leaving_direction(ap, 0.25 * min_width);
-          const double la = std::hypot(da.x, da.y), lb = std::hypot(db.x, db.y);
-          if (!(la > 0.0 && lb > 0.0) || dot(da, db) < cos_max * la * lb) continue;
-          // The first vertex of B at least min_width from A (B's stretch before it goes).
-          auto first_away = [&](const std::vector<Vec2>& from, const std::vector<Vec2>& to) {
-            std::size_t k = 1;
-            while (k < from.size() && closest_on(from[k], to).distance < min_width) ++k;
-            return k;
-          };
-          const std::size_t k = first_away(bp, ap);
-          if (k >= bp.size()) continue;  // B stays beside A to its end: a narrow face, not a wedge
-          // Of two features, the one that loses the shorter stretch leaves the other (a river leaves the
-          // shoreline it runs along); ties go by index.
-          auto prefix = [](const std::vector<Vec2>& line, std::size_t k) {
-            return polyline_length(std::vector<Vec2>(line.begin(), line.begin() + static_cast<std::ptrdiff_t>(k + 1)));
-          };
-          if (!darts[a].ring) {
-            const std::vector<Vec2> whole_a = dart_points(region, darts[a], 0.0);
-            const std::size_t ka = first_away(whole_a, bp);
-            if (ka < whole_a.size() &&
-                (prefix(whole_a, ka) < prefix(bp, k) || (prefix(whole_a, ka) == prefix(bp, k) && darts[a].index < darts[b].index)))
-              continue;
-          }
-          double stretch = 0.0;
-          for (std::size_t i = 1; i < k; ++i) stretch = std::max(stretch, closest_on(bp[i], ap).distance);
-          const Foot foot = closest_on(bp[k], ap);
-          if (foot.segment == 0 && foot.t == 0.0) continue;
-          if (!darts[a].ring && foot.segment + 2 == ap.size() && foot.t == 1.0) continue;  // A's far end: no room
-          Region next = region;
-          // B now starts at the foot.
-          std::vector<Vec2> nb{foot.at};
-          nb.insert(nb.end(), bp.begin() + static_cast<std::ptrdiff_t>(k), bp.end());
-          if (darts[b].reversed) std::reverse(nb.begin(), nb.end());
-          next.features[static_cast<std::size_t>(darts[b].index)].points = nb;
-          // The foot becomes a vertex of A (a feature is cut there: curves meet only at their ends).
-          const bool at_vertex = foot.t == 0.0 || foot.t == 1.0;
-          const std::size_t vertex = foot.segment + (foot.t == 1.0 ? 1 : 0);
-          if (!darts[a].ring) {
-            FeatureCurve& fa = next.features[static_cast<std::size_t>(darts[a].index)];
-            std::vector<Vec2> first(ap.begin(), ap.begin() + static_cast<std::ptrdiff_t>(at_vertex ? vertex + 1 : foot.segment + 1));
-            if (!at_vertex) first.push_back(foot.at);
-            std::vector<Vec2> second{foot.at};
-            second.insert(second.end(), ap.begin() + static_cast<std::ptrdiff_t>(at_vertex ? vertex + 1 : foot.segment + 1), ap.end());
-            if (darts[a].reversed) {
-              std::reverse(first.begin(), first.end());
-              std::reverse(second.begin(), second.end());
-            }
-            FeatureCurve other = fa;
-            fa.points = std::move(first);
-            other.points = std::move(second);
-            next.features.push_back(std::move(other));
-          } else if (!at_vertex) {
-            auto& rp = next.rings[static_cast<std::size_t>(darts[a].index)].points;
-            const std::size_t n = rp.size();
-            // Walked forward the foot lies after ring vertex (v0 + segment); walked backward, before (v0 - segment).
-            const std::size_t after = darts[a].reversed ? (darts[a].vertex + n - foot.segment - 1) % n
-                                                         : (darts[a].vertex + foot.segment) % n;
-            rp.insert(rp.begin() + static_cast<std::ptrdiff_t>(after + 1), foot.at);
-          }
-          // The link may touch nothing but its own two ends.
-          const Vec2 p0 = foot.at, p1 = bp[k];
-          bool crosses = false;
-          auto test = [&](Vec2 u, Vec2 v) {
-            if (u == p0 || v == p0 || u == p1 || v == p1) return;
-            crosses = crosses || segments_touch(p0, p1, u, v);
-          };
-          for (const Ring& r : next.rings)
-            for (std::size_t i = 0; i < r.points.size() && !crosses; ++i) test(r.points[i], r.points[(i + 1) % r.points.size()]);
-          for (const FeatureCurve& c : next.features)
-            for (std::size_t i = 0; i + (c.closed ? 0 : 1) < c.points.size() && !crosses; ++i)
-              test(c.points[i], c.points[(i + 1) % c.points.size()]);
-          for (Vec2 q : next.feature_points) crosses = crosses || point_segment_distance(q, p0, p1) == 0.0;
-          if (crosses) continue;
-          const double opening = std::acos(std::min(1.0, dot(da, db) / (la * lb)));
-          done.push_back({DroppedCurve::Kind::wedge_stretch, region.features[static_cast<std::size_t>(darts[b].index)].source_feature,
-                          2.0 * min_width * std::sin(0.5 * opening), 0.0, stretch, bp.front()});
-          region = std::move(next);
-          changed = true;
+          changed = open_wedge(region, darts[a], darts[b], bp, db, min_width, cos_max, done);
         }
       }
       if (changed) break;

@@ -43,9 +43,8 @@ std::vector<Seg> segments(const Region& region) {
   return out;
 }
 
-// One pass: finds for every query the nearest vertex and segment of another ring or curve within tol, moves it,
-// and inserts the points moved onto a segment interior into that ring or curve. Returns the moves made.
-std::size_t snap_pass(Region& region, double tol, SnapStats& stats, std::vector<std::string>* notes) {
+// The end points of the open curves and the isolated feature points, each to be snapped.
+std::vector<Query> snap_queries(const Region& region) {
   std::vector<Query> queries;
   for (std::size_t f = 0; f < region.features.size(); ++f) {
     const auto& c = region.features[f];
@@ -57,7 +56,11 @@ std::size_t snap_pass(Region& region, double tol, SnapStats& stats, std::vector<
   }
   for (std::size_t k = 0; k < region.feature_points.size(); ++k)
     if (std::isfinite(region.feature_points[k].x + region.feature_points[k].y)) queries.push_back({region.feature_points[k], kPoint, k, false});
-  if (queries.empty()) return 0;
+  return queries;
+}
+
+// For every query, the nearest segment and vertex of another ring or curve within tol.
+void find_nearest(std::vector<Query>& queries, const std::vector<Seg>& segs, double tol) {
   std::vector<std::size_t> by_x(queries.size());
   for (std::size_t i = 0; i < by_x.size(); ++i) by_x[i] = i;
   std::sort(by_x.begin(), by_x.end(), [&](std::size_t i, std::size_t j) { return queries[i].p.x < queries[j].p.x; });
@@ -66,7 +69,6 @@ std::size_t snap_pass(Region& region, double tol, SnapStats& stats, std::vector<
     auto it = std::lower_bound(by_x.begin(), by_x.end(), lo, [&](std::size_t i, double v) { return queries[i].p.x < v; });
     for (; it != by_x.end() && queries[*it].p.x <= hi; ++it) visit(queries[*it]);
   };
-  const std::vector<Seg> segs = segments(region);
   for (std::size_t s = 0; s < segs.size(); ++s) {
     const Seg& g = segs[s];
     in_x_range(std::min(g.a.x, g.b.x) - tol, std::max(g.a.x, g.b.x) + tol, [&](Query& q) {
@@ -80,58 +82,56 @@ std::size_t snap_pass(Region& region, double tol, SnapStats& stats, std::vector<
       }
     });
   }
-  // Points inserted per (owner, segment index): parameter along the segment and the point.
-  std::map<std::pair<int, int>, std::vector<std::pair<double, Vec2>>> inserts;
-  std::size_t moves = 0;
-  for (Query& q : queries) {
-    // A vertex that close wins (even when the point is on a segment: it would leave a tiny edge); a point far from
-    // everything, or exactly on a segment, stays.
-    const bool onto_vertex = q.vertex_d > 0.0 && q.vertex_d <= tol;
-    if (q.seg < 0 || (!onto_vertex && (q.seg_d == 0.0 || q.seg_d > tol))) continue;
-    const Seg& g = segs[static_cast<std::size_t>(onto_vertex ? q.vertex_seg : q.seg)];
-    Vec2 to;
-    if (onto_vertex) {
-      to = q.vertex;
-    } else {
-      const Vec2 d = g.b - g.a;
-      const double t = std::clamp(dot(q.p - g.a, d) / dot(d, d), 0.0, 1.0);
-      to = lerp(g.a, g.b, t);
-      auto& list = inserts[{g.owner, g.index}];
-      // Two points snapping to the same place share one inserted vertex.
-      auto same = std::find_if(list.begin(), list.end(), [&](const auto& e) { return distance(e.second, to) <= tol; });
-      if (same != list.end()) to = same->second;
-      else list.push_back({t, to});
-    }
-    const double moved = distance(q.p, to);
-    if (q.owner == kPoint) {
-      region.feature_points[q.which] = to;
-    } else {
-      auto& pts = region.features[q.which].points;
-      (q.front ? pts.front() : pts.back()) = to;
-      // Snapped onto the point next to it along its own curve (a shared vertex there): the end is that point, once.
-      if (pts.size() > 2 && q.front && pts[0] == pts[1]) pts.erase(pts.begin());
-      if (pts.size() > 2 && !q.front && pts[pts.size() - 1] == pts[pts.size() - 2]) pts.pop_back();
-    }
-    ++moves;
-    ++(onto_vertex ? stats.to_vertex : stats.to_segment);
-    stats.largest_move = std::max(stats.largest_move, moved);
-    if (notes) {
-      const std::string what =
-          q.owner == kPoint ? "feature point " + std::to_string(q.which)
-                            : "feature " + std::to_string(region.features[q.which].source_feature) + " (curve " +
-                                  std::to_string(q.which) + "): " + (q.front ? "first" : "last") + " point";
-      const std::string onto =
-          g.owner >= 0 ? "ring " + std::to_string(g.owner) + " (feature " +
-                             std::to_string(region.rings[static_cast<std::size_t>(g.owner)].source_feature) + ")"
-                       : "feature curve " + std::to_string(-1 - g.owner);
-      std::ostringstream d;
-      d.precision(3);
-      d << moved;
-      notes->push_back(region.source + ": " + what + " " + point_text(q.p) + " snapped " + d.str() + " onto " +
-                       (onto_vertex ? "a vertex of " : "") + onto + " at " + point_text(to));
-    }
+}
+
+// Points inserted per (owner, segment index): parameter along the segment and the point.
+using Inserts = std::map<std::pair<int, int>, std::vector<std::pair<double, Vec2>>>;
+
+// Where q goes on g: the vertex, or its foot on the segment, recorded in inserts. Two points snapping to the same
+// place share one inserted vertex.
+Vec2 snap_target(const Query& q, const Seg& g, bool onto_vertex, double tol, Inserts& inserts) {
+  if (onto_vertex) return q.vertex;
+  const Vec2 d = g.b - g.a;
+  const double t = std::clamp(dot(q.p - g.a, d) / dot(d, d), 0.0, 1.0);
+  const Vec2 to = lerp(g.a, g.b, t);
+  auto& list = inserts[{g.owner, g.index}];
+  auto same = std::find_if(list.begin(), list.end(), [&](const auto& e) { return distance(e.second, to) <= tol; });
+  if (same != list.end()) return same->second;
+  list.push_back({t, to});
+  return to;
+}
+
+// The query's point (a feature point or a curve's end) moved to `to`.
+void move_point(Region& region, const Query& q, Vec2 to) {
+  if (q.owner == kPoint) {
+    region.feature_points[q.which] = to;
+    return;
   }
-  // Inserted points go into their ring or curve in order along each segment.
+  auto& pts = region.features[q.which].points;
+  (q.front ? pts.front() : pts.back()) = to;
+  // Snapped onto the point next to it along its own curve (a shared vertex there): the end is that point, once.
+  if (pts.size() > 2 && q.front && pts[0] == pts[1]) pts.erase(pts.begin());
+  if (pts.size() > 2 && !q.front && pts[pts.size() - 1] == pts[pts.size() - 2]) pts.pop_back();
+}
+
+std::string snap_note(const Region& region, const Query& q, const Seg& g, bool onto_vertex, double moved, Vec2 to) {
+  const std::string what =
+      q.owner == kPoint ? "feature point " + std::to_string(q.which)
+                        : "feature " + std::to_string(region.features[q.which].source_feature) + " (curve " +
+                              std::to_string(q.which) + "): " + (q.front ? "first" : "last") + " point";
+  const std::string onto =
+      g.owner >= 0 ? "ring " + std::to_string(g.owner) + " (feature " +
+                         std::to_string(region.rings[static_cast<std::size_t>(g.owner)].source_feature) + ")"
+                   : "feature curve " + std::to_string(-1 - g.owner);
+  std::ostringstream d;
+  d.precision(3);
+  d << moved;
+  return region.source + ": " + what + " " + point_text(q.p) + " snapped " + d.str() + " onto " +
+         (onto_vertex ? "a vertex of " : "") + onto + " at " + point_text(to);
+}
+
+// Inserted points go into their ring or curve in order along each segment.
+void insert_snapped_points(Region& region, Inserts& inserts) {
   auto rebuild = [&](int owner, std::vector<Vec2>& pts, bool closed) {
     std::vector<Vec2> out;
     const std::size_t m = closed ? pts.size() : pts.size() - 1;
@@ -145,14 +145,15 @@ std::size_t snap_pass(Region& region, double tol, SnapStats& stats, std::vector<
     }
     pts = std::move(out);
   };
-  if (!inserts.empty()) {
-    for (std::size_t r = 0; r < region.rings.size(); ++r) rebuild(static_cast<int>(r), region.rings[r].points, true);
-    for (std::size_t f = 0; f < region.features.size(); ++f)
-      if (region.features[f].points.size() >= 2)
-        rebuild(-1 - static_cast<int>(f), region.features[f].points, region.features[f].closed);
-  }
-  // A two-point curve whose end snapped onto its other end (a stub shorter than the tolerance) is no curve: it
-  // goes, and is said (a zero-length constraint crashed the triangulation).
+  for (std::size_t r = 0; r < region.rings.size(); ++r) rebuild(static_cast<int>(r), region.rings[r].points, true);
+  for (std::size_t f = 0; f < region.features.size(); ++f)
+    if (region.features[f].points.size() >= 2)
+      rebuild(-1 - static_cast<int>(f), region.features[f].points, region.features[f].closed);
+}
+
+// A two-point curve whose end snapped onto its other end (a stub shorter than the tolerance) is no curve: it
+// goes, and is said (a zero-length constraint crashed the triangulation).
+void drop_collapsed_stubs(Region& region, std::vector<std::string>* notes) {
   for (std::size_t f = region.features.size(); f-- > 0;) {
     const auto& pts = region.features[f].points;
     if (region.features[f].closed || pts.size() != 2 || !(pts[0] == pts[1])) continue;
@@ -162,6 +163,33 @@ std::size_t snap_pass(Region& region, double tol, SnapStats& stats, std::vector<
                        " collapsed onto a point and is left out");
     region.features.erase(region.features.begin() + static_cast<std::ptrdiff_t>(f));
   }
+}
+
+// One pass: finds for every query the nearest vertex and segment of another ring or curve within tol, moves it,
+// and inserts the points moved onto a segment interior into that ring or curve. Returns the moves made.
+std::size_t snap_pass(Region& region, double tol, SnapStats& stats, std::vector<std::string>* notes) {
+  std::vector<Query> queries = snap_queries(region);
+  if (queries.empty()) return 0;
+  const std::vector<Seg> segs = segments(region);
+  find_nearest(queries, segs, tol);
+  Inserts inserts;
+  std::size_t moves = 0;
+  for (Query& q : queries) {
+    // A vertex that close wins (even when the point is on a segment: it would leave a tiny edge); a point far from
+    // everything, or exactly on a segment, stays.
+    const bool onto_vertex = q.vertex_d > 0.0 && q.vertex_d <= tol;
+    if (q.seg < 0 || (!onto_vertex && (q.seg_d == 0.0 || q.seg_d > tol))) continue;
+    const Seg& g = segs[static_cast<std::size_t>(onto_vertex ? q.vertex_seg : q.seg)];
+    const Vec2 to = snap_target(q, g, onto_vertex, tol, inserts);
+    const double moved = distance(q.p, to);
+    move_point(region, q, to);
+    ++moves;
+    ++(onto_vertex ? stats.to_vertex : stats.to_segment);
+    stats.largest_move = std::max(stats.largest_move, moved);
+    if (notes) notes->push_back(snap_note(region, q, g, onto_vertex, moved, to));
+  }
+  if (!inserts.empty()) insert_snapped_points(region, inserts);
+  drop_collapsed_stubs(region, notes);
   return moves;
 }
 

@@ -271,6 +271,200 @@ std::vector<std::int32_t> feature_faces(const Topology& topo, double min_area, i
   return face;
 }
 
+// Feature faces with their triangles, areas and boundary lengths (ring and feature edges, seen from each side).
+struct Faces {
+  int count = 1;
+  std::vector<std::int32_t> of_triangle;
+  std::vector<std::vector<std::int32_t>> triangles;
+  std::vector<double> area, length;
+  double total_area = 0, total_length = 0;
+};
+
+Faces faces_of(const Topology& topo, double min_face_area, std::size_t nt) {
+  Faces faces;
+  faces.of_triangle = feature_faces(topo, min_face_area, faces.count);
+  const int nf = faces.count;
+  const std::vector<std::int32_t>& face = faces.of_triangle;
+  faces.triangles.resize(static_cast<std::size_t>(nf));
+  for (std::size_t t = 0; t < nt; ++t) faces.triangles[face[t]].push_back(static_cast<std::int32_t>(t));
+  faces.area.assign(static_cast<std::size_t>(nf), 0.0);
+  faces.length.assign(static_cast<std::size_t>(nf), 0.0);
+  for (std::size_t t = 0; t < nt; ++t) {
+    faces.area[face[t]] += topo.area[t];
+    faces.total_area += topo.area[t];
+    for (int e = 0; e < 3; ++e) {
+      const auto& ed = topo.edges[topo.tri_edges[t][e]];
+      if (ed.t1 < 0 || ed.feature) { faces.length[face[t]] += ed.length; faces.total_length += ed.length; }
+    }
+  }
+  return faces;
+}
+
+// The parts dealt to the faces: face f has parts first[f] .. first[f + 1] - 1.
+struct FaceParts {
+  int k = 1;                          ///< all parts
+  std::vector<int> count, first;      ///< per face
+  std::vector<std::int32_t> face_of;  ///< per part
+};
+
+// k parts (at least one per face) dealt to the faces by half their share of area and half their share of
+// boundary length.
+FaceParts deal_parts(const Faces& faces, int k) {
+  const int nf = faces.count;
+  FaceParts dealt;
+  k = std::max(k, nf);
+  std::vector<int>& face_parts = dealt.count;
+  face_parts.assign(static_cast<std::size_t>(nf), k);
+  if (nf > 1) {
+    std::vector<double> quota(static_cast<std::size_t>(nf));
+    int sum = 0;
+    for (int f = 0; f < nf; ++f) {
+      const double share = 0.5 * faces.area[f] / std::max(faces.total_area, 1e-300) +
+                           0.5 * (faces.total_length > 0 ? faces.length[f] / faces.total_length
+                                                         : faces.area[f] / std::max(faces.total_area, 1e-300));
+      quota[f] = k * share;
+      face_parts[f] = std::clamp(static_cast<int>(std::floor(quota[f])), 1, static_cast<int>(faces.triangles[f].size()));
+      sum += face_parts[f];
+    }
+    // Largest remainders up to k; a face over its quota (the minimum of one) is paid by the smallest remainders.
+    while (sum != k) {
+      int pick = -1;
+      for (int f = 0; f < nf; ++f) {
+        const double r = quota[f] - face_parts[f];
+        if (sum < k ? face_parts[f] < static_cast<int>(faces.triangles[f].size()) &&
+                          (pick < 0 || r > quota[pick] - face_parts[pick])
+                    : face_parts[f] > 1 && (pick < 0 || r < quota[pick] - face_parts[pick]))
+          pick = f;
+      }
+      if (pick < 0) break;
+      face_parts[pick] += sum < k ? 1 : -1;
+      sum += sum < k ? 1 : -1;
+    }
+    k = sum;
+  }
+  dealt.k = k;
+  dealt.first.assign(static_cast<std::size_t>(nf) + 1, 0);
+  for (int f = 0; f < nf; ++f) dealt.first[f + 1] = dealt.first[f] + face_parts[f];
+  dealt.face_of.resize(static_cast<std::size_t>(k));
+  for (int f = 0; f < nf; ++f)
+    for (int p = dealt.first[f]; p < dealt.first[f + 1]; ++p) dealt.face_of[p] = f;
+  return dealt;
+}
+
+// METIS's k-way partition of each face dealt two or more parts, written into part.
+void metis_partition_faces(const Topology& topo, const Faces& faces, const FaceParts& dealt, std::uint64_t seed,
+                           std::vector<std::int32_t>& part) {
+  const std::size_t nt = part.size();
+  const std::vector<std::int32_t>& face = faces.of_triangle;
+  // METIS wants integer weights: areas and lengths relative to their means, in hundredths.
+  double mean_area = 0;
+  for (double a : topo.area) mean_area += a;
+  mean_area /= static_cast<double>(nt);
+  // METIS draws from one process-wide random state (GKlib): concurrent calls (parts and candidates are
+  // partitioned from several threads) would make the partition depend on timing, so they are serialized.
+  static std::mutex metis_mutex;
+  std::vector<std::int32_t> local(nt, -1);
+  for (int f = 0; f < faces.count; ++f) {
+    if (dealt.count[f] < 2) continue;
+    const auto& tris = faces.triangles[f];
+    for (std::size_t i = 0; i < tris.size(); ++i) local[tris[i]] = static_cast<std::int32_t>(i);
+    std::vector<idx_t> xadj{0}, adjncy, vwgt, adjwgt;
+    for (std::int32_t t : tris) {
+      vwgt.push_back(std::max<idx_t>(1, static_cast<idx_t>(std::lround(100.0 * topo.area[t] / mean_area))));
+      for (int e = 0; e < 3; ++e) {
+        const std::int32_t n = topo.neighbour(static_cast<std::size_t>(t), e);
+        if (n < 0 || face[n] != f) continue;
+        adjncy.push_back(local[n]);
+        adjwgt.push_back(std::max<idx_t>(1, static_cast<idx_t>(std::lround(topo.edges[topo.tri_edges[t][e]].length))));
+      }
+      xadj.push_back(static_cast<idx_t>(adjncy.size()));
+    }
+    idx_t nv = static_cast<idx_t>(tris.size()), ncon = 1, nparts = dealt.count[f], objval = 0;
+    idx_t opts[METIS_NOPTIONS];
+    METIS_SetDefaultOptions(opts);
+    opts[METIS_OPTION_SEED] = static_cast<idx_t>(seed % 1000003);
+    opts[METIS_OPTION_CONTIG] = 1;
+    std::vector<idx_t> face_part(tris.size(), 0);
+    const std::lock_guard<std::mutex> lock(metis_mutex);
+    const int status = METIS_PartGraphKway(&nv, &ncon, xadj.data(), adjncy.data(), vwgt.data(), nullptr, adjwgt.data(),
+                                           &nparts, nullptr, nullptr, opts, &objval, face_part.data());
+    if (status != METIS_OK) throw MeshingError("partitioning: METIS failed with status " + std::to_string(status));
+    for (std::size_t i = 0; i < tris.size(); ++i) part[tris[i]] = dealt.first[f] + static_cast<std::int32_t>(face_part[i]);
+  }
+}
+
+// The energy terms that a move of t can change.
+double local_energy(const TriMesh& mesh, const Topology& topo, const std::vector<std::int32_t>& part,
+                    const PartitionOptions& options, std::int32_t t) {
+  double e = 0;
+  for (int j = 0; j < 3; ++j) {
+    const std::size_t ed = static_cast<std::size_t>(topo.tri_edges[t][j]);
+    if (topo.separator(ed, part))
+      e += topo.edges[ed].length - (topo.edges[ed].feature ? options.lambda_feature * topo.edges[ed].length : 0.0);
+    e += options.lambda_angle * vertex_angle_term(mesh, topo, mesh.triangles[t][j], part);
+  }
+  return e;
+}
+
+// Metropolis-Hastings on E under the balance constraint (eq. 1), keeping the best state: res.triangle_part
+// becomes the lowest-energy partition seen; counts the moves in res. The balance is measured against each
+// part's mean, the mean part area of its face.
+void metropolis_hastings(const TriMesh& mesh, const Topology& topo, const FaceParts& dealt, int nf,
+                         const std::vector<double>& mean, const PartitionOptions& options, PartitionResult& res) {
+  const int k = dealt.k;
+  const std::size_t nt = mesh.triangles.size();
+  std::vector<double> part_area(static_cast<std::size_t>(k), 0.0), lo(static_cast<std::size_t>(k)), hi(static_cast<std::size_t>(k));
+  for (std::size_t t = 0; t < nt; ++t) part_area[res.triangle_part[t]] += topo.area[t];
+  for (int p = 0; p < k; ++p) {
+    lo[p] = (1 - options.balance) * mean[p];
+    hi[p] = (1 + options.balance) * mean[p];
+  }
+  std::vector<std::int32_t>& part = res.triangle_part;
+  std::vector<std::int32_t> best = part;
+  double energy = res.metis.energy, best_energy = energy;
+  std::mt19937_64 rng(options.seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::vector<std::int32_t> order(nt);
+  for (std::size_t t = 0; t < nt; ++t) order[t] = static_cast<std::int32_t>(t);
+  for (int sweep = 0; sweep < options.mh_sweeps && k > nf; ++sweep) {
+    // Annealing: the inverse temperature grows from lambda_mh by mh_anneal over the sweeps, so the walk explores
+    // first and settles into a low-energy state at the end.
+    const double beta = options.lambda_mh *
+                        std::pow(options.mh_anneal, options.mh_sweeps > 1 ? double(sweep) / (options.mh_sweeps - 1) : 1.0);
+    std::shuffle(order.begin(), order.end(), rng);
+    for (std::int32_t t : order) {
+      const std::int32_t a = part[t];
+      std::int32_t cand[3];
+      int nc = 0;
+      for (int j = 0; j < 3; ++j) {
+        const std::int32_t n = topo.neighbour(static_cast<std::size_t>(t), j);
+        if (n >= 0 && part[n] != a && dealt.face_of[part[n]] == dealt.face_of[a] && std::find(cand, cand + nc, part[n]) == cand + nc)
+          cand[nc++] = part[n];
+      }
+      if (nc == 0) continue;
+      const std::int32_t b = cand[std::min(nc - 1, static_cast<int>(unit(rng) * nc))];
+      ++res.mh_proposed;
+      // Balance: never create or worsen a violation of eq. 1.
+      const double na = part_area[a] - topo.area[t], nb = part_area[b] + topo.area[t];
+      if (na < std::min(lo[a], part_area[a]) || nb > std::max(hi[b], part_area[b])) continue;
+      if (!stays_connected(topo, part, t, 256)) continue;
+      const double before = local_energy(mesh, topo, part, options, t);
+      part[t] = b;
+      const double delta = local_energy(mesh, topo, part, options, t) - before;
+      if (delta <= 0 || unit(rng) < std::exp(-beta * delta)) {
+        part_area[a] = na;
+        part_area[b] = nb;
+        energy += delta;
+        ++res.mh_accepted;
+      } else {
+        part[t] = a;
+      }
+    }
+    if (energy < best_energy) { best_energy = energy; best = part; }
+  }
+  part = best;
+}
+
 }  // namespace
 
 PartitionEnergy partition_energy(const TriMesh& mesh, const std::vector<std::int32_t>& triangle_part,
@@ -288,164 +482,27 @@ PartitionResult partition_triangles(const TriMesh& mesh, const PartitionOptions&
   k = std::max(1, std::min<int>(k, static_cast<int>(nt)));
   // Feature faces, each partitioned on its own: k parts dealt to them by half their share of area and half their
   // share of boundary length (ring and feature edges, seen from each side), at least one part per face.
-  int nf = 1;
-  const std::vector<std::int32_t> face = feature_faces(topo, options.min_face_area, nf);
-  std::vector<std::vector<std::int32_t>> face_tris(static_cast<std::size_t>(nf));
-  for (std::size_t t = 0; t < nt; ++t) face_tris[face[t]].push_back(static_cast<std::int32_t>(t));
-  std::vector<double> face_area(static_cast<std::size_t>(nf), 0.0), face_length(static_cast<std::size_t>(nf), 0.0);
-  double total_area = 0, total_length = 0;
-  for (std::size_t t = 0; t < nt; ++t) {
-    face_area[face[t]] += topo.area[t];
-    total_area += topo.area[t];
-    for (int e = 0; e < 3; ++e) {
-      const auto& ed = topo.edges[topo.tri_edges[t][e]];
-      if (ed.t1 < 0 || ed.feature) { face_length[face[t]] += ed.length; total_length += ed.length; }
-    }
-  }
-  k = std::max(k, nf);
-  std::vector<int> face_parts(static_cast<std::size_t>(nf), k);
-  if (nf > 1) {
-    std::vector<double> quota(static_cast<std::size_t>(nf));
-    int sum = 0;
-    for (int f = 0; f < nf; ++f) {
-      const double share = 0.5 * face_area[f] / std::max(total_area, 1e-300) +
-                           0.5 * (total_length > 0 ? face_length[f] / total_length : face_area[f] / std::max(total_area, 1e-300));
-      quota[f] = k * share;
-      face_parts[f] = std::clamp(static_cast<int>(std::floor(quota[f])), 1, static_cast<int>(face_tris[f].size()));
-      sum += face_parts[f];
-    }
-    // Largest remainders up to k; a face over its quota (the minimum of one) is paid by the smallest remainders.
-    while (sum != k) {
-      int pick = -1;
-      for (int f = 0; f < nf; ++f) {
-        const double r = quota[f] - face_parts[f];
-        if (sum < k ? face_parts[f] < static_cast<int>(face_tris[f].size()) &&
-                          (pick < 0 || r > quota[pick] - face_parts[pick])
-                    : face_parts[f] > 1 && (pick < 0 || r < quota[pick] - face_parts[pick]))
-          pick = f;
-      }
-      if (pick < 0) break;
-      face_parts[pick] += sum < k ? 1 : -1;
-      sum += sum < k ? 1 : -1;
-    }
-    k = sum;
-  }
-  std::vector<int> face_first(static_cast<std::size_t>(nf) + 1, 0);
-  for (int f = 0; f < nf; ++f) face_first[f + 1] = face_first[f] + face_parts[f];
-  std::vector<std::int32_t> part_face(static_cast<std::size_t>(k));
-  for (int f = 0; f < nf; ++f)
-    for (int p = face_first[f]; p < face_first[f + 1]; ++p) part_face[p] = f;
+  const Faces faces = faces_of(topo, options.min_face_area, nt);
+  const int nf = faces.count;
+  const FaceParts dealt = deal_parts(faces, k);
+  k = dealt.k;
   res.parts = k;
   res.faces = nf;
   res.triangle_part.assign(nt, 0);
-  for (std::size_t t = 0; t < nt; ++t) res.triangle_part[t] = face_first[face[t]];
+  for (std::size_t t = 0; t < nt; ++t) res.triangle_part[t] = dealt.first[faces.of_triangle[t]];
   if (k > nf) {
-    // METIS wants integer weights: areas and lengths relative to their means, in hundredths.
-    double mean_area = 0;
-    for (double a : topo.area) mean_area += a;
-    mean_area /= static_cast<double>(nt);
-    // METIS draws from one process-wide random state (GKlib): concurrent calls (parts and candidates are
-    // partitioned from several threads) would make the partition depend on timing, so they are serialized.
-    static std::mutex metis_mutex;
-    std::vector<std::int32_t> local(nt, -1);
-    for (int f = 0; f < nf; ++f) {
-      if (face_parts[f] < 2) continue;
-      const auto& tris = face_tris[f];
-      for (std::size_t i = 0; i < tris.size(); ++i) local[tris[i]] = static_cast<std::int32_t>(i);
-      std::vector<idx_t> xadj{0}, adjncy, vwgt, adjwgt;
-      for (std::int32_t t : tris) {
-        vwgt.push_back(std::max<idx_t>(1, static_cast<idx_t>(std::lround(100.0 * topo.area[t] / mean_area))));
-        for (int e = 0; e < 3; ++e) {
-          const std::int32_t n = topo.neighbour(static_cast<std::size_t>(t), e);
-          if (n < 0 || face[n] != f) continue;
-          adjncy.push_back(local[n]);
-          adjwgt.push_back(std::max<idx_t>(1, static_cast<idx_t>(std::lround(topo.edges[topo.tri_edges[t][e]].length))));
-        }
-        xadj.push_back(static_cast<idx_t>(adjncy.size()));
-      }
-      idx_t nv = static_cast<idx_t>(tris.size()), ncon = 1, nparts = face_parts[f], objval = 0;
-      idx_t opts[METIS_NOPTIONS];
-      METIS_SetDefaultOptions(opts);
-      opts[METIS_OPTION_SEED] = static_cast<idx_t>(options.seed % 1000003);
-      opts[METIS_OPTION_CONTIG] = 1;
-      std::vector<idx_t> part(tris.size(), 0);
-      const std::lock_guard<std::mutex> lock(metis_mutex);
-      const int status = METIS_PartGraphKway(&nv, &ncon, xadj.data(), adjncy.data(), vwgt.data(), nullptr, adjwgt.data(),
-                                             &nparts, nullptr, nullptr, opts, &objval, part.data());
-      if (status != METIS_OK) throw MeshingError("partitioning: METIS failed with status " + std::to_string(status));
-      for (std::size_t i = 0; i < tris.size(); ++i) res.triangle_part[tris[i]] = face_first[f] + static_cast<std::int32_t>(part[i]);
-    }
-    make_parts_connected(topo, res.triangle_part, k, part_face);
+    metis_partition_faces(topo, faces, dealt, options.seed, res.triangle_part);
+    make_parts_connected(topo, res.triangle_part, k, dealt.face_of);
   }
   res.metis = energy_of(mesh, topo, res.triangle_part, options);
 
-  // Metropolis-Hastings on E under the balance constraint (eq. 1), keeping the best state.
-  // The balance is measured against the mean part area of each face.
-  std::vector<double> part_area(static_cast<std::size_t>(k), 0.0), lo(static_cast<std::size_t>(k)), hi(static_cast<std::size_t>(k));
-  for (std::size_t t = 0; t < nt; ++t) part_area[res.triangle_part[t]] += topo.area[t];
   std::vector<double> mean(static_cast<std::size_t>(k));
-  for (int p = 0; p < k; ++p) {
-    mean[p] = face_area[part_face[p]] / face_parts[part_face[p]];
-    lo[p] = (1 - options.balance) * mean[p];
-    hi[p] = (1 + options.balance) * mean[p];
-  }
+  for (int p = 0; p < k; ++p) mean[p] = faces.area[dealt.face_of[p]] / dealt.count[dealt.face_of[p]];
+  metropolis_hastings(mesh, topo, dealt, nf, mean, options, res);
   std::vector<std::int32_t>& part = res.triangle_part;
-  std::vector<std::int32_t> best = part;
-  double energy = res.metis.energy, best_energy = energy;
-  std::mt19937_64 rng(options.seed);
-  std::uniform_real_distribution<double> unit(0.0, 1.0);
-  std::vector<std::int32_t> order(nt);
-  for (std::size_t t = 0; t < nt; ++t) order[t] = static_cast<std::int32_t>(t);
-  auto local = [&](std::int32_t t) {  // energy terms that a move of t can change
-    double e = 0;
-    for (int j = 0; j < 3; ++j) {
-      const std::size_t ed = static_cast<std::size_t>(topo.tri_edges[t][j]);
-      if (topo.separator(ed, part))
-        e += topo.edges[ed].length - (topo.edges[ed].feature ? options.lambda_feature * topo.edges[ed].length : 0.0);
-      e += options.lambda_angle * vertex_angle_term(mesh, topo, mesh.triangles[t][j], part);
-    }
-    return e;
-  };
-  for (int sweep = 0; sweep < options.mh_sweeps && k > nf; ++sweep) {
-    // Annealing: the inverse temperature grows from lambda_mh by mh_anneal over the sweeps, so the walk explores
-    // first and settles into a low-energy state at the end.
-    const double beta = options.lambda_mh *
-                        std::pow(options.mh_anneal, options.mh_sweeps > 1 ? double(sweep) / (options.mh_sweeps - 1) : 1.0);
-    std::shuffle(order.begin(), order.end(), rng);
-    for (std::int32_t t : order) {
-      const std::int32_t a = part[t];
-      std::int32_t cand[3];
-      int nc = 0;
-      for (int j = 0; j < 3; ++j) {
-        const std::int32_t n = topo.neighbour(static_cast<std::size_t>(t), j);
-        if (n >= 0 && part[n] != a && part_face[part[n]] == part_face[a] && std::find(cand, cand + nc, part[n]) == cand + nc)
-          cand[nc++] = part[n];
-      }
-      if (nc == 0) continue;
-      const std::int32_t b = cand[std::min(nc - 1, static_cast<int>(unit(rng) * nc))];
-      ++res.mh_proposed;
-      // Balance: never create or worsen a violation of eq. 1.
-      const double na = part_area[a] - topo.area[t], nb = part_area[b] + topo.area[t];
-      if (na < std::min(lo[a], part_area[a]) || nb > std::max(hi[b], part_area[b])) continue;
-      if (!stays_connected(topo, part, t, 256)) continue;
-      const double before = local(t);
-      part[t] = b;
-      const double delta = local(t) - before;
-      if (delta <= 0 || unit(rng) < std::exp(-beta * delta)) {
-        part_area[a] = na;
-        part_area[b] = nb;
-        energy += delta;
-        ++res.mh_accepted;
-      } else {
-        part[t] = a;
-      }
-    }
-    if (energy < best_energy) { best_energy = energy; best = part; }
-  }
-  part = best;
-  res.repaired_triangles = k > nf ? make_parts_connected(topo, part, k, part_face) : 0;
+  res.repaired_triangles = k > nf ? make_parts_connected(topo, part, k, dealt.face_of) : 0;
   res.final = energy_of(mesh, topo, part, options);
-  std::fill(part_area.begin(), part_area.end(), 0.0);
+  std::vector<double> part_area(static_cast<std::size_t>(k), 0.0);
   for (std::size_t t = 0; t < nt; ++t) part_area[part[t]] += topo.area[t];
   for (int p = 0; p < k; ++p) res.balance_max_over_avg = std::max(res.balance_max_over_avg, part_area[p] / mean[p]);
   if (topo.feature_length > 0) {

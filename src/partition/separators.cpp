@@ -417,27 +417,45 @@ int merge_enclosed_parts(const TriMesh& mesh, std::vector<std::int32_t>& triangl
 
 namespace polysquare {
 
-std::size_t separate_pinched_parts(const TriMesh& mesh, std::vector<std::int32_t>& triangle_part, int max_rounds) {
-  const auto owners = edge_owners(mesh);  // edge -> its (one or two) triangles
-  const std::size_t nv = mesh.vertices.size(), nt = mesh.triangles.size();
-  std::vector<std::size_t> off(nv + 1, 0);
-  for (const auto& t : mesh.triangles)
-    for (std::int32_t v : t) off[static_cast<std::size_t>(v) + 1]++;
-  for (std::size_t v = 0; v < nv; ++v) off[v + 1] += off[v];
-  std::vector<std::int32_t> around(off.back());
-  {
+namespace {
+
+// A part's triangles around one vertex, each fan joined through the edges at the vertex its triangles share.
+using Fan = std::vector<std::int32_t>;
+using FansByPart = std::map<std::int32_t, std::vector<Fan>>;
+
+// The mesh's triangles around each vertex and across each edge, and the partition being changed.
+struct PinchSearch {
+  const TriMesh& mesh;
+  std::vector<std::int32_t>& triangle_part;
+  std::unordered_map<std::uint64_t, std::array<std::int32_t, 2>> owners;  // edge -> its (one or two) triangles
+  std::vector<std::size_t> off;  // the triangles at vertex v: around[off[v] .. off[v + 1])
+  std::vector<std::int32_t> around;
+
+  PinchSearch(const TriMesh& m, std::vector<std::int32_t>& part) : mesh(m), triangle_part(part), owners(edge_owners(m)) {
+    const std::size_t nv = mesh.vertices.size(), nt = mesh.triangles.size();
+    off.assign(nv + 1, 0);
+    for (const auto& t : mesh.triangles)
+      for (std::int32_t v : t) off[static_cast<std::size_t>(v) + 1]++;
+    for (std::size_t v = 0; v < nv; ++v) off[v + 1] += off[v];
+    around.resize(off.back());
     std::vector<std::size_t> fill(off.begin(), off.end() - 1);
     for (std::size_t t = 0; t < nt; ++t)
       for (std::int32_t v : mesh.triangles[t]) around[fill[static_cast<std::size_t>(v)]++] = static_cast<std::int32_t>(t);
   }
-  auto across = [&](std::int32_t t, std::int32_t a, std::int32_t b) {
+
+  std::int32_t across(std::int32_t t, std::int32_t a, std::int32_t b) const {
     const auto& o = owners.at(edge_key(a, b));
     return o[0] == t ? o[1] : o[0];
-  };
+  }
+  std::int32_t part_of(std::int32_t t) const { return triangle_part[static_cast<std::size_t>(t)]; }
+  void assign(const Fan& fan, std::int32_t p) {
+    for (std::int32_t t : fan) triangle_part[static_cast<std::size_t>(t)] = p;
+  }
+
   // Whether part p's triangles are still one piece through shared edges.
-  auto connected = [&](std::int32_t p) {
+  bool connected(std::int32_t p) const {
     std::vector<std::int32_t> members;
-    for (std::size_t t = 0; t < nt; ++t)
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
       if (triangle_part[t] == p) members.push_back(static_cast<std::int32_t>(t));
     if (members.empty()) return false;
     std::unordered_set<std::int32_t> seen{members.front()};
@@ -448,94 +466,124 @@ std::size_t separate_pinched_parts(const TriMesh& mesh, std::vector<std::int32_t
       const auto& tr = mesh.triangles[static_cast<std::size_t>(t)];
       for (int k = 0; k < 3; ++k) {
         const std::int32_t n = across(t, tr[k], tr[(k + 1) % 3]);
-        if (n >= 0 && triangle_part[static_cast<std::size_t>(n)] == p && seen.insert(n).second) stack.push_back(n);
+        if (n >= 0 && part_of(n) == p && seen.insert(n).second) stack.push_back(n);
       }
     }
     return seen.size() == members.size();
-  };
+  }
+
+  // Fans of each part around v.
+  FansByPart fans_at(std::size_t v) const {
+    const auto vi = static_cast<std::int32_t>(v);
+    FansByPart fans;
+    std::set<std::int32_t> done;
+    for (std::size_t i = off[v]; i < off[v + 1]; ++i) {
+      const std::int32_t start = around[i];
+      if (done.count(start)) continue;
+      const std::int32_t p = part_of(start);
+      Fan fan{start}, stack{start};
+      done.insert(start);
+      while (!stack.empty()) {
+        const std::int32_t t = stack.back();
+        stack.pop_back();
+        for (std::int32_t w : mesh.triangles[static_cast<std::size_t>(t)]) {
+          if (w == vi) continue;
+          const std::int32_t n = across(t, vi, w);
+          if (n >= 0 && part_of(n) == p && done.insert(n).second) {
+            fan.push_back(n);
+            stack.push_back(n);
+          }
+        }
+      }
+      fans[p].push_back(std::move(fan));
+    }
+    return fans;
+  }
+
+  // The part other than p that the fan borders most around v, -1 when none.
+  std::int32_t most_bordered_part(const Fan& fan, std::int32_t vi, std::int32_t p) const {
+    std::map<std::int32_t, int> border;
+    for (std::int32_t t : fan)
+      for (std::int32_t w : mesh.triangles[static_cast<std::size_t>(t)]) {
+        if (w == vi) continue;
+        const std::int32_t n = across(t, vi, w);
+        if (n >= 0 && part_of(n) != p) border[part_of(n)]++;
+      }
+    if (border.empty()) return -1;
+    return std::max_element(border.begin(), border.end(), [](const auto& a, const auto& b) {
+             return a.second < b.second;
+           })->first;
+  }
+
+  // The fan is p's only link between its sides: p takes a neighbouring part's fan at v instead (the smallest
+  // whose part stays one piece), which joins its fans around v; when no fan can change hands, the smallest part
+  // around v joins p whole (the caller renumbers). Returns whether the partition changed.
+  bool join_fans_of(std::int32_t p, FansByPart& fans, std::size_t& moved) {
+    std::vector<std::pair<std::size_t, std::pair<std::int32_t, std::size_t>>> others;
+    for (const auto& [q, qlist] : fans)
+      if (q != p)
+        for (std::size_t g = 0; g < qlist.size(); ++g) others.push_back({qlist[g].size(), {q, g}});
+    std::sort(others.begin(), others.end());
+    for (const auto& [count, which] : others) {
+      const auto& fan = fans[which.first][which.second];
+      assign(fan, p);
+      if (connected(which.first)) {
+        moved += fan.size();
+        return true;
+      }
+      assign(fan, which.first);
+    }
+    if (others.empty()) return false;
+    const std::size_t nt = mesh.triangles.size();
+    std::map<std::int32_t, std::size_t> size;
+    for (std::size_t t = 0; t < nt; ++t) size[triangle_part[t]]++;
+    std::int32_t q = -1;
+    for (const auto& [count, which] : others)
+      if (q < 0 || size[which.first] < size[q]) q = which.first;
+    for (std::size_t t = 0; t < nt; ++t)
+      if (triangle_part[t] == q) triangle_part[t] = p, ++moved;
+    return true;
+  }
+
+  // One part's fans around v reduced to one where possible: the smaller fans go to the part they border most,
+  // if p stays one piece without them. Sets changed when a fan moved; returns whether v's fans are stale.
+  bool separate_fans(std::int32_t vi, std::int32_t p, std::vector<Fan>& list, FansByPart& fans, std::size_t& moved,
+                     bool& changed) {
+    std::sort(list.begin(), list.end(), [](const auto& a, const auto& b) { return a.size() > b.size(); });
+    for (std::size_t f = 1; f < list.size(); ++f) {
+      const std::int32_t to = most_bordered_part(list[f], vi, p);
+      if (to < 0) continue;
+      assign(list[f], to);
+      if (connected(p)) {
+        moved += list[f].size();
+        changed = true;
+        continue;
+      }
+      assign(list[f], p);
+      if (join_fans_of(p, fans, moved)) {
+        changed = true;
+        return true;
+      }
+      return false;
+    }
+    return false;
+  }
+};
+
+}  // namespace
+
+std::size_t separate_pinched_parts(const TriMesh& mesh, std::vector<std::int32_t>& triangle_part, int max_rounds) {
+  PinchSearch search(mesh, triangle_part);
+  const std::size_t nv = mesh.vertices.size();
   std::size_t moved = 0;
   for (int round = 0; round < max_rounds; ++round) {
     bool changed = false;
     for (std::size_t v = 0; v < nv; ++v) {
-      // Fans of each part around v: its triangles there joined through the edges at v they share.
-      const auto vi = static_cast<std::int32_t>(v);
-      std::map<std::int32_t, std::vector<std::vector<std::int32_t>>> fans;
-      std::set<std::int32_t> done;
-      for (std::size_t i = off[v]; i < off[v + 1]; ++i) {
-        const std::int32_t start = around[i];
-        if (done.count(start)) continue;
-        const std::int32_t p = triangle_part[static_cast<std::size_t>(start)];
-        std::vector<std::int32_t> fan{start}, stack{start};
-        done.insert(start);
-        while (!stack.empty()) {
-          const std::int32_t t = stack.back();
-          stack.pop_back();
-          for (std::int32_t w : mesh.triangles[static_cast<std::size_t>(t)]) {
-            if (w == vi) continue;
-            const std::int32_t n = across(t, vi, w);
-            if (n >= 0 && triangle_part[static_cast<std::size_t>(n)] == p && done.insert(n).second) {
-              fan.push_back(n);
-              stack.push_back(n);
-            }
-          }
-        }
-        fans[p].push_back(std::move(fan));
-      }
-      bool v_changed = false;  // fans of v are stale after a change: the next round looks again
+      FansByPart fans = search.fans_at(v);
       for (auto& [p, list] : fans) {
-        if (v_changed) break;
         if (list.size() < 2) continue;
-        std::sort(list.begin(), list.end(), [](const auto& a, const auto& b) { return a.size() > b.size(); });
-        for (std::size_t f = 1; f < list.size(); ++f) {
-          // The smaller fan goes to the part it borders most around v, if p stays one piece without it.
-          std::map<std::int32_t, int> border;
-          for (std::int32_t t : list[f])
-            for (std::int32_t w : mesh.triangles[static_cast<std::size_t>(t)]) {
-              if (w == vi) continue;
-              const std::int32_t n = across(t, vi, w);
-              if (n >= 0 && triangle_part[static_cast<std::size_t>(n)] != p) border[triangle_part[static_cast<std::size_t>(n)]]++;
-            }
-          if (border.empty()) continue;
-          const std::int32_t to = std::max_element(border.begin(), border.end(), [](const auto& a, const auto& b) {
-                                    return a.second < b.second;
-                                  })->first;
-          for (std::int32_t t : list[f]) triangle_part[static_cast<std::size_t>(t)] = to;
-          if (connected(p)) {
-            moved += list[f].size();
-            changed = true;
-            continue;
-          }
-          for (std::int32_t t : list[f]) triangle_part[static_cast<std::size_t>(t)] = p;
-          // The fan is p's only link between its sides: p takes a neighbouring part's fan at v instead (the
-          // smallest whose part stays one piece), which joins its fans around v.
-          std::vector<std::pair<std::size_t, std::pair<std::int32_t, std::size_t>>> others;
-          for (const auto& [q, qlist] : fans)
-            if (q != p)
-              for (std::size_t g = 0; g < qlist.size(); ++g) others.push_back({qlist[g].size(), {q, g}});
-          std::sort(others.begin(), others.end());
-          for (const auto& [count, which] : others) {
-            const auto& fan = fans[which.first][which.second];
-            for (std::int32_t t : fan) triangle_part[static_cast<std::size_t>(t)] = p;
-            if (connected(which.first)) {
-              moved += fan.size();
-              changed = v_changed = true;
-              break;
-            }
-            for (std::int32_t t : fan) triangle_part[static_cast<std::size_t>(t)] = which.first;
-          }
-          if (!v_changed && !others.empty()) {
-            // No fan can change hands: the smallest part around v joins p whole (the caller renumbers).
-            std::map<std::int32_t, std::size_t> size;
-            for (std::size_t t = 0; t < nt; ++t) size[triangle_part[t]]++;
-            std::int32_t q = -1;
-            for (const auto& [count, which] : others)
-              if (q < 0 || size[which.first] < size[q]) q = which.first;
-            for (std::size_t t = 0; t < nt; ++t)
-              if (triangle_part[t] == q) triangle_part[t] = p, ++moved;
-            changed = v_changed = true;
-          }
-          break;
-        }
+        // Fans of v are stale after a change: the next round looks again.
+        if (search.separate_fans(static_cast<std::int32_t>(v), p, list, fans, moved, changed)) break;
       }
     }
     if (!changed) break;

@@ -161,22 +161,30 @@ std::vector<RegionPart> split_into_parts(const Region& region) {
   return parts;
 }
 
-TriMesh triangulate_part(const Region& region, const RegionPart& part, const TriangulationOptions& options) {
+namespace {
+
+using EdgeKey = std::pair<const void*, const void*>;
+using EdgeSet = std::unordered_set<EdgeKey, PairHash>;
+
+EdgeKey handle_pair(VH a, VH b) {
+  const void* pa = &*a;
+  const void* pb = &*b;
+  return pa < pb ? std::make_pair(pa, pb) : std::make_pair(pb, pa);
+}
+
+// A part's constrained triangulation with the handles of every inserted polyline's vertices (input vertices
+// flagged), kept to trace the chains after refinement.
+struct PartCdt {
   CDT cdt;
-  // Insert every input point once; keep the handles to trace the chains after refinement.
-  auto insert = [&](Vec2 p) { return cdt.insert(K::Point_2(p.x, p.y)); };
+  int part = 0;  // for messages
   std::vector<std::vector<VH>> chain_handles;
-  std::vector<TriChain> chains;
-  std::unordered_set<std::pair<const void*, const void*>, PairHash> ring_edges;
-  auto key = [](VH a, VH b) {
-    const void* pa = &*a;
-    const void* pb = &*b;
-    return pa < pb ? std::make_pair(pa, pb) : std::make_pair(pb, pa);
-  };
-  // Each polyline is inserted with its segments pre-split to options.boundary_edge, so curves are resolved at
-  // the element size while the mesher may grade the interior up to options.max_edge.
   std::vector<std::vector<std::uint8_t>> handle_is_input;
-  auto insert_polyline = [&](const std::vector<Vec2>& pts, bool closed) {
+
+  VH insert(Vec2 p) { return cdt.insert(K::Point_2(p.x, p.y)); }
+
+  // Each polyline is inserted with its segments pre-split to boundary_edge, so curves are resolved at the
+  // element size while the mesher may grade the interior up to max_edge.
+  void insert_polyline(const std::vector<Vec2>& pts, bool closed, double boundary_edge) {
     std::vector<VH> hs;
     std::vector<std::uint8_t> flags;
     const std::size_t nseg = closed ? pts.size() : pts.size() - 1;
@@ -185,7 +193,7 @@ TriMesh triangulate_part(const Region& region, const RegionPart& part, const Tri
       flags.push_back(1);
       if (i >= nseg) continue;
       const Vec2 a = pts[i], b = pts[(i + 1) % pts.size()];
-      const auto pieces = static_cast<std::size_t>(std::ceil(distance(a, b) / options.boundary_edge));
+      const auto pieces = static_cast<std::size_t>(std::ceil(distance(a, b) / boundary_edge));
       for (std::size_t k = 1; k < pieces; ++k) {
         hs.push_back(insert(lerp(a, b, static_cast<double>(k) / static_cast<double>(pieces))));
         flags.push_back(0);
@@ -195,22 +203,11 @@ TriMesh triangulate_part(const Region& region, const RegionPart& part, const Tri
     for (std::size_t i = 0; i < n; ++i) cdt.insert_constraint(hs[i], hs[(i + 1) % hs.size()]);
     chain_handles.push_back(std::move(hs));
     handle_is_input.push_back(std::move(flags));
-  };
-  for (int r : part.rings) {
-    insert_polyline(region.rings[static_cast<std::size_t>(r)].points, true);
-    chains.push_back({TriChain::Kind::ring, r, true, {}, {}});
   }
-  for (int f : part.features) {
-    const FeatureCurve& curve = region.features[static_cast<std::size_t>(f)];
-    insert_polyline(curve.points, curve.closed);
-    chains.push_back({TriChain::Kind::feature, f, curve.closed, {}, {}});
-  }
-  std::vector<VH> point_handles;
-  for (int f : part.feature_points) point_handles.push_back(insert(region.feature_points[static_cast<std::size_t>(f)]));
 
   // Trace an input segment through the vertices lying on it (other constraints' end points before refinement,
   // Steiner points after): the constrained edges collinear with it, from a to b.
-  auto trace = [&](VH a, VH b, std::uint8_t a_is_input, std::vector<VH>& verts, std::vector<std::uint8_t>& is_input) {
+  void trace(VH a, VH b, std::uint8_t a_is_input, std::vector<VH>& verts, std::vector<std::uint8_t>& is_input) {
     const Vec2 pa{a->point().x(), a->point().y()}, pb{b->point().x(), b->point().y()};
     const double len = distance(pa, pb);
     VH cur = a, prev;
@@ -231,29 +228,35 @@ TriMesh triangulate_part(const Region& region, const RegionPart& part, const Tri
         if (dw < best_d) { best_d = dw; best = w; }
       } while (++circ != end);
       if (best == VH())
-        throw MeshingError("triangulation of part " + std::to_string(part.part) + ": lost a constrained segment");
+        throw MeshingError("triangulation of part " + std::to_string(part) + ": lost a constrained segment");
       cur = best;
       if (cur != b) { verts.push_back(cur); is_input.push_back(0); }
     }
-  };
-  auto trace_chain = [&](std::size_t c, bool closed, std::vector<VH>& verts, std::vector<std::uint8_t>& is_input) {
+  }
+
+  void trace_chain(std::size_t c, bool closed, std::vector<VH>& verts, std::vector<std::uint8_t>& is_input) {
     const auto& hs = chain_handles[c];
     const std::size_t nseg = closed ? hs.size() : hs.size() - 1;
     for (std::size_t i = 0; i < nseg; ++i) trace(hs[i], hs[(i + 1) % hs.size()], handle_is_input[c][i], verts, is_input);
     if (!closed) { verts.push_back(hs.back()); is_input.push_back(1); }
-  };
+  }
+
   // Ring edges as they are in the triangulation: a feature ending on a ring splits that ring's segment.
-  for (std::size_t c = 0; c < chains.size(); ++c) {
-    if (chains[c].kind != TriChain::Kind::ring) continue;
-    std::vector<VH> verts;
-    std::vector<std::uint8_t> flags;
-    trace_chain(c, true, verts, flags);
-    for (std::size_t i = 0; i < verts.size(); ++i) ring_edges.insert(key(verts[i], verts[(i + 1) % verts.size()]));
+  EdgeSet ring_edges(const std::vector<TriChain>& chains) {
+    EdgeSet edges;
+    for (std::size_t c = 0; c < chains.size(); ++c) {
+      if (chains[c].kind != TriChain::Kind::ring) continue;
+      std::vector<VH> verts;
+      std::vector<std::uint8_t> flags;
+      trace_chain(c, true, verts, flags);
+      for (std::size_t i = 0; i < verts.size(); ++i) edges.insert(handle_pair(verts[i], verts[(i + 1) % verts.size()]));
+    }
+    return edges;
   }
 
   // Domain = odd nesting depth, counting ring constraints only (feature constraints do not change sides).
-  for (auto f = cdt.all_faces_begin(); f != cdt.all_faces_end(); ++f) f->set_in_domain(false);
-  {
+  void mark_domain(const EdgeSet& ring_edges) {
+    for (auto f = cdt.all_faces_begin(); f != cdt.all_faces_end(); ++f) f->set_in_domain(false);
     std::unordered_map<const void*, int> depth;
     std::deque<std::pair<FH, int>> queue{{cdt.infinite_face(), 0}};
     depth[&*cdt.infinite_face()] = 0;
@@ -265,7 +268,7 @@ TriMesh triangulate_part(const Region& region, const RegionPart& part, const Tri
         FH n = fh->neighbor(i);
         if (depth.count(&*n)) continue;
         const bool crosses_ring = fh->is_constrained(i) &&
-                                  ring_edges.count(key(fh->vertex(CDT::cw(i)), fh->vertex(CDT::ccw(i))));
+                                  ring_edges.count(handle_pair(fh->vertex(CDT::cw(i)), fh->vertex(CDT::ccw(i))));
         const int nd = crosses_ring ? d + 1 : d;
         depth[&*n] = nd;
         // Breadth-first by depth: same-depth neighbours first keeps depths minimal.
@@ -277,35 +280,64 @@ TriMesh triangulate_part(const Region& region, const RegionPart& part, const Tri
   // Refined step by step under a budget: the triangle count follows the geometry (curves split at
   // boundary_edge, interior graded up to max_edge), so no closed-form estimate bounds it; tiny gaps between
   // curves would otherwise refine without end.
-  Mesher mesher(cdt, Criteria(options.shape_bound, options.max_edge));
-  mesher.init(true);
-  // A graded mesh has a few dozen triangles per curve vertex at most; far more means curves closer than the
-  // size (a hole touching a ring), where refinement would run to the memory guard first.
-  const double graded = 64.0 * (static_cast<double>(cdt.number_of_vertices()) +
-                                part_area(region, part) / (options.max_edge * options.max_edge)) + 10000.0;
-  const std::size_t vertex_budget =
-      static_cast<std::size_t>(std::min(graded, static_cast<double>(options.max_triangles))) / 2 + 3;
-  for (std::size_t step = 1; mesher.try_one_step_refine_mesh(); ++step)
-    if (step % 4096 == 0 && cdt.number_of_vertices() > vertex_budget)
-      throw MeshingError("triangulation of part " + std::to_string(part.part) + " needs more than " +
-                         std::to_string(2 * vertex_budget) + " triangles (its budget; about " +
-                         std::to_string(cdt.number_of_vertices()) + " vertices so far): curves closer to each " +
-                         "other than the size, or a size too small for the region");
-
-  TriMesh out;
-  std::int32_t next = 0;
-  for (auto v = cdt.finite_vertices_begin(); v != cdt.finite_vertices_end(); ++v) {
-    v->info() = next++;
-    out.vertices.push_back({v->point().x(), v->point().y()});
-  }
-  for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f) {
-    if (!f->is_in_domain()) continue;
-    out.triangles.push_back({f->vertex(0)->info(), f->vertex(1)->info(), f->vertex(2)->info()});
+  void refine(double area, const TriangulationOptions& options) {
+    Mesher mesher(cdt, Criteria(options.shape_bound, options.max_edge));
+    mesher.init(true);
+    // A graded mesh has a few dozen triangles per curve vertex at most; far more means curves closer than the
+    // size (a hole touching a ring), where refinement would run to the memory guard first.
+    const double graded = 64.0 * (static_cast<double>(cdt.number_of_vertices()) +
+                                  area / (options.max_edge * options.max_edge)) + 10000.0;
+    const std::size_t vertex_budget =
+        static_cast<std::size_t>(std::min(graded, static_cast<double>(options.max_triangles))) / 2 + 3;
+    for (std::size_t step = 1; mesher.try_one_step_refine_mesh(); ++step)
+      if (step % 4096 == 0 && cdt.number_of_vertices() > vertex_budget)
+        throw MeshingError("triangulation of part " + std::to_string(part) + " needs more than " +
+                           std::to_string(2 * vertex_budget) + " triangles (its budget; about " +
+                           std::to_string(cdt.number_of_vertices()) + " vertices so far): curves closer to each " +
+                           "other than the size, or a size too small for the region");
   }
 
+  // The vertices (numbered into their info) and the domain's triangles.
+  TriMesh domain_mesh() {
+    TriMesh out;
+    std::int32_t next = 0;
+    for (auto v = cdt.finite_vertices_begin(); v != cdt.finite_vertices_end(); ++v) {
+      v->info() = next++;
+      out.vertices.push_back({v->point().x(), v->point().y()});
+    }
+    for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f) {
+      if (!f->is_in_domain()) continue;
+      out.triangles.push_back({f->vertex(0)->info(), f->vertex(1)->info(), f->vertex(2)->info()});
+    }
+    return out;
+  }
+};
+
+}  // namespace
+
+TriMesh triangulate_part(const Region& region, const RegionPart& part, const TriangulationOptions& options) {
+  PartCdt pc;
+  pc.part = part.part;
+  // Insert every input point once; keep the handles to trace the chains after refinement.
+  std::vector<TriChain> chains;
+  for (int r : part.rings) {
+    pc.insert_polyline(region.rings[static_cast<std::size_t>(r)].points, true, options.boundary_edge);
+    chains.push_back({TriChain::Kind::ring, r, true, {}, {}});
+  }
+  for (int f : part.features) {
+    const FeatureCurve& curve = region.features[static_cast<std::size_t>(f)];
+    pc.insert_polyline(curve.points, curve.closed, options.boundary_edge);
+    chains.push_back({TriChain::Kind::feature, f, curve.closed, {}, {}});
+  }
+  std::vector<VH> point_handles;
+  for (int f : part.feature_points) point_handles.push_back(pc.insert(region.feature_points[static_cast<std::size_t>(f)]));
+
+  pc.mark_domain(pc.ring_edges(chains));
+  pc.refine(part_area(region, part), options);
+  TriMesh out = pc.domain_mesh();
   for (std::size_t c = 0; c < chains.size(); ++c) {
     std::vector<VH> verts;
-    trace_chain(c, chains[c].closed, verts, chains[c].is_input);
+    pc.trace_chain(c, chains[c].closed, verts, chains[c].is_input);
     for (VH v : verts) chains[c].vertices.push_back(v->info());
   }
   out.chains = std::move(chains);
