@@ -123,27 +123,20 @@ Piece relax_piece(const QuadMesh& mesh, const std::vector<std::size_t>& quads, c
   return piece;
 }
 
-}  // namespace
-
-RelaxValencesStats relax_region_valences(QuadMesh& mesh, const std::vector<std::uint8_t>& region,
-                                         const RelaxValencesOptions& options, const SmoothOptions& smooth,
-                                         std::vector<std::size_t>& origin) {
-  RelaxValencesStats total;
-  origin.clear();
+// The whole mesh's figures, and the flagged quads at each node in `at`.
+NodeTotals node_totals(const QuadMesh& mesh, const std::vector<std::uint8_t>& flagged,
+                       std::vector<std::vector<std::int32_t>>& at) {
   const std::size_t nv = mesh.nodes.size(), nq = mesh.quads.size();
-  auto flagged = [&](std::size_t q) { return q < region.size() && region[q] != 0; };
-  if (!options.enabled) return total;
-
   NodeTotals totals{std::vector<int>(nv, 0), std::vector<double>(nv, 0.0), {}};
   for (const auto* edges : {&mesh.boundary_edges, &mesh.feature_edges})
     for (const auto& e : *edges) totals.curve_edges.insert(edge_key(e[0], e[1]));
-  std::vector<std::vector<std::int32_t>> at(nv);  // flagged quads at each node
+  at.assign(nv, {});
   for (std::size_t q = 0; q < nq; ++q) {
     const auto& x = mesh.quads[q];
     for (int k = 0; k < 4; ++k) {
       const auto v = static_cast<std::size_t>(x[k]);
       totals.quads[v]++;
-      if (flagged(q)) at[v].push_back(static_cast<std::int32_t>(q));
+      if (flagged[q]) at[v].push_back(static_cast<std::int32_t>(q));
       const Vec2 p = mesh.nodes[v], next = mesh.nodes[static_cast<std::size_t>(x[(k + 1) % 4])] - p,
                  prev = mesh.nodes[static_cast<std::size_t>(x[(k + 3) % 4])] - p;
       double a = std::atan2(cross(next, prev), dot(next, prev));
@@ -151,12 +144,18 @@ RelaxValencesStats relax_region_valences(QuadMesh& mesh, const std::vector<std::
       totals.angle[v] += a;
     }
   }
-  // Pieces: flagged quads that share a node. They share no node with each other, so each is relaxed, and kept
-  // or not, on its own (in parallel; the result does not depend on the order).
-  std::vector<std::int32_t> piece_of(nq, -1);
+  return totals;
+}
+
+// Pieces: flagged quads that share a node (`at`: the flagged quads at each node), each quad's piece in piece_of.
+std::vector<std::vector<std::size_t>> flagged_pieces(const QuadMesh& mesh, const std::vector<std::uint8_t>& flagged,
+                                                     const std::vector<std::vector<std::int32_t>>& at,
+                                                     std::vector<std::int32_t>& piece_of) {
+  const std::size_t nq = mesh.quads.size();
+  piece_of.assign(nq, -1);
   std::vector<std::vector<std::size_t>> pieces;
   for (std::size_t q0 = 0; q0 < nq; ++q0) {
-    if (!flagged(q0) || piece_of[q0] >= 0) continue;
+    if (!flagged[q0] || piece_of[q0] >= 0) continue;
     const auto id = static_cast<std::int32_t>(pieces.size());
     pieces.push_back({q0});
     piece_of[q0] = id;
@@ -168,27 +167,18 @@ RelaxValencesStats relax_region_valences(QuadMesh& mesh, const std::vector<std::
             pieces.back().push_back(static_cast<std::size_t>(n));
           }
   }
-  if (pieces.empty()) return total;
-  std::vector<Piece> done(pieces.size());
-  oneapi::tbb::parallel_for(std::size_t{0}, pieces.size(), [&](std::size_t i) {
-    std::sort(pieces[i].begin(), pieces[i].end());
-    done[i] = relax_piece(mesh, pieces[i], totals, options, smooth);
-  });
-  for (const Piece& p : done) {
-    total.region_quads += p.stats.region_quads;
-    total.energy_before += p.stats.energy_before;
-    total.energy_after += p.stats.kept ? p.stats.energy_after : p.stats.energy_before;
-    if (!p.stats.kept) continue;
-    total.kept = true;
-    total.flips += p.stats.flips;
-    total.collapses += p.stats.collapses;
-  }
-  if (!total.kept) return total;
+  return pieces;
+}
 
-  // The mesh again: the quads outside kept pieces in their order, then each kept piece's; unused nodes removed.
+// The mesh again: the quads outside kept pieces in their order, then each kept piece's; unused nodes removed
+// (but not those in no quad before: `quads_at`, not this stage's to drop). origin: each quad's quad before.
+void replace_kept_pieces(QuadMesh& mesh, const std::vector<Piece>& done, const std::vector<std::uint8_t>& flagged,
+                         const std::vector<std::int32_t>& piece_of, const std::vector<int>& quads_at,
+                         std::vector<std::size_t>& origin, RelaxValencesStats& total) {
+  const std::size_t nv = mesh.nodes.size(), nq = mesh.quads.size();
   std::vector<std::array<std::int32_t, 4>> quads;
   for (std::size_t q = 0; q < nq; ++q) {
-    if (flagged(q) && done[static_cast<std::size_t>(piece_of[q])].stats.kept) continue;
+    if (flagged[q] && done[static_cast<std::size_t>(piece_of[q])].stats.kept) continue;
     quads.push_back(mesh.quads[q]);
     origin.push_back(q);
   }
@@ -202,7 +192,7 @@ RelaxValencesStats relax_region_valences(QuadMesh& mesh, const std::vector<std::
   std::vector<std::uint8_t> used(nv, 0);
   for (const auto& x : quads)
     for (std::int32_t v : x) used[static_cast<std::size_t>(v)] = 1;
-  for (std::size_t v = 0; v < nv; ++v) used[v] = used[v] || totals.quads[v] == 0;  // not this stage's to drop
+  for (std::size_t v = 0; v < nv; ++v) used[v] = used[v] || quads_at[v] == 0;  // not this stage's to drop
   std::vector<std::int32_t> index(nv, -1);
   std::size_t n = 0;
   for (std::size_t v = 0; v < nv; ++v) {
@@ -225,6 +215,43 @@ RelaxValencesStats relax_region_valences(QuadMesh& mesh, const std::vector<std::
     mesh.quad_part = std::move(parts);
   }
   mesh.quads = std::move(quads);
+}
+
+}  // namespace
+
+RelaxValencesStats relax_region_valences(QuadMesh& mesh, const std::vector<std::uint8_t>& region,
+                                         const RelaxValencesOptions& options, const SmoothOptions& smooth,
+                                         std::vector<std::size_t>& origin) {
+  RelaxValencesStats total;
+  origin.clear();
+  const std::size_t nq = mesh.quads.size();
+  if (!options.enabled) return total;
+  std::vector<std::uint8_t> flagged(nq, 0);
+  for (std::size_t q = 0; q < nq; ++q) flagged[q] = q < region.size() && region[q] != 0;
+
+  std::vector<std::vector<std::int32_t>> at;  // flagged quads at each node
+  const NodeTotals totals = node_totals(mesh, flagged, at);
+  // Pieces: flagged quads that share a node. They share no node with each other, so each is relaxed, and kept
+  // or not, on its own (in parallel; the result does not depend on the order).
+  std::vector<std::int32_t> piece_of;
+  std::vector<std::vector<std::size_t>> pieces = flagged_pieces(mesh, flagged, at, piece_of);
+  if (pieces.empty()) return total;
+  std::vector<Piece> done(pieces.size());
+  oneapi::tbb::parallel_for(std::size_t{0}, pieces.size(), [&](std::size_t i) {
+    std::sort(pieces[i].begin(), pieces[i].end());
+    done[i] = relax_piece(mesh, pieces[i], totals, options, smooth);
+  });
+  for (const Piece& p : done) {
+    total.region_quads += p.stats.region_quads;
+    total.energy_before += p.stats.energy_before;
+    total.energy_after += p.stats.kept ? p.stats.energy_after : p.stats.energy_before;
+    if (!p.stats.kept) continue;
+    total.kept = true;
+    total.flips += p.stats.flips;
+    total.collapses += p.stats.collapses;
+  }
+  if (!total.kept) return total;
+  replace_kept_pieces(mesh, done, flagged, piece_of, totals.quads, origin, total);
   return total;
 }
 
