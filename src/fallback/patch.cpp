@@ -388,13 +388,10 @@ void break_ears(IndexedCdt& idx, TriMesh& tri, const std::unordered_set<std::uin
   }
 }
 
-// Split construction: every other given node is a vertex of a coarse constrained triangulation (interior vertices
-// 2 h apart), the nodes between are the midpoints of its curve edges, and every cell is split into quads.
-QuadMesh split_patch(const PatchInput& in, const PatchOptions& options) {
-  const double h = options.size;
+// Anchors: nodes on two curves, ends of open curves. They must be coarse vertices; every other node of a curve
+// alternates between coarse vertex and midpoint.
+std::vector<std::uint8_t> split_anchors(const PatchInput& in) {
   const auto nn = static_cast<std::int32_t>(in.nodes.size());
-  // Anchors: nodes on two curves, ends of open curves. They must be coarse vertices; every other node of a curve
-  // alternates between coarse vertex and midpoint.
   std::vector<int> uses(static_cast<std::size_t>(nn), 0);
   for (const PatchCurve& c : in.curves)
     for (std::int32_t v : c.nodes) uses[static_cast<std::size_t>(v)]++;
@@ -405,32 +402,48 @@ QuadMesh split_patch(const PatchInput& in, const PatchOptions& options) {
       anchor[static_cast<std::size_t>(c.nodes.front())] = 1;
       anchor[static_cast<std::size_t>(c.nodes.back())] = 1;
     }
-  struct CoarseEdge {
+  return anchor;
+}
+
+// The position on curve c of its first coarse vertex: its first anchor, else on a closed curve without one the
+// phase that makes more sharp turns coarse vertices (a sharp turn at a midpoint folds the quad there).
+int coarse_start(const PatchInput& in, const PatchCurve& c, const std::vector<std::uint8_t>& anchor) {
+  const int n = static_cast<int>(c.nodes.size());
+  int start = -1;
+  if (c.closed)
+    for (int i = 0; i < n && start < 0; ++i)
+      if (anchor[static_cast<std::size_t>(c.nodes[i])]) start = i;
+  if (start < 0 && c.closed) {
+    int sharp[2] = {0, 0};
+    for (int i = 0; i < n; ++i) {
+      const Vec2 a = in.nodes[static_cast<std::size_t>(c.nodes[(i + n - 1) % n])];
+      const Vec2 b = in.nodes[static_cast<std::size_t>(c.nodes[i])];
+      const Vec2 d = in.nodes[static_cast<std::size_t>(c.nodes[(i + 1) % n])];
+      if (sharp_turn(a, b, d, 30.0)) sharp[i % 2]++;
+    }
+    start = sharp[1] > sharp[0] ? 1 : 0;
+  }
+  return std::max(start, 0);
+}
+
+// The curves' edges in pairs: each pair a coarse edge a - b with the given node m between, its curve, and each
+// curve's chain of coarse vertices.
+struct CoarseCurves {
+  struct Edge {
     std::int32_t a, m, b;
   };
-  std::vector<CoarseEdge> coarse;
-  std::vector<const PatchCurve*> coarse_curve;  // the curve of each coarse edge
+  std::vector<Edge> edges;
+  std::vector<const PatchCurve*> curve;  // the curve of each coarse edge
   std::vector<TriChain> chains;
+};
+
+CoarseCurves coarse_curves(const PatchInput& in) {
+  const std::vector<std::uint8_t> anchor = split_anchors(in);
+  CoarseCurves cc;
   for (const PatchCurve& c : in.curves) {
     const int n = static_cast<int>(c.nodes.size());
     const int edges = c.closed ? n : n - 1;
-    int start = -1;
-    if (c.closed)
-      for (int i = 0; i < n && start < 0; ++i)
-        if (anchor[static_cast<std::size_t>(c.nodes[i])]) start = i;
-    if (start < 0 && c.closed) {
-      // No anchor: the phase that makes more sharp turns coarse vertices (a sharp turn at a midpoint folds the
-      // quad there).
-      int sharp[2] = {0, 0};
-      for (int i = 0; i < n; ++i) {
-        const Vec2 a = in.nodes[static_cast<std::size_t>(c.nodes[(i + n - 1) % n])];
-        const Vec2 b = in.nodes[static_cast<std::size_t>(c.nodes[i])];
-        const Vec2 d = in.nodes[static_cast<std::size_t>(c.nodes[(i + 1) % n])];
-        if (sharp_turn(a, b, d, 30.0)) sharp[i % 2]++;
-      }
-      start = sharp[1] > sharp[0] ? 1 : 0;
-    }
-    start = std::max(start, 0);
+    const int start = coarse_start(in, c, anchor);
     if (edges % 2 != 0)
       throw MeshingError("patch: a curve of " + std::to_string(edges) + " edges near " +
                          at_text(in.nodes[static_cast<std::size_t>(c.nodes.front())]) + " cannot be split in pairs");
@@ -444,24 +457,33 @@ QuadMesh split_patch(const PatchInput& in, const PatchOptions& options) {
         throw MeshingError("patch: an anchor node at " + at_text(in.nodes[static_cast<std::size_t>(m)]) +
                            " falls between two coarse vertices (odd count between anchors)");
       if (a == b) throw MeshingError("patch: a closed curve of two edges at " + at_text(in.nodes[static_cast<std::size_t>(a)]));
-      coarse.push_back({a, m, b});
-      coarse_curve.push_back(&c);
+      cc.edges.push_back({a, m, b});
+      cc.curve.push_back(&c);
       ch.vertices.push_back(a);
     }
     if (!c.closed) ch.vertices.push_back(c.nodes.back());
-    chains.push_back(std::move(ch));
+    cc.chains.push_back(std::move(ch));
   }
+  return cc;
+}
+
+// Split construction: every other given node is a vertex of a coarse constrained triangulation (interior vertices
+// 2 h apart), the nodes between are the midpoints of its curve edges, and every cell is split into quads.
+QuadMesh split_patch(const PatchInput& in, const PatchOptions& options) {
+  const double h = options.size;
+  CoarseCurves cc = coarse_curves(in);
+  const auto& coarse = cc.edges;
   const auto loops = loop_polygons(in);
   SegmentGrid grid{2.0 * h, {}};
-  for (const CoarseEdge& e : coarse) {
+  for (const CoarseCurves::Edge& e : coarse) {
     grid.add(in.nodes[static_cast<std::size_t>(e.a)], in.nodes[static_cast<std::size_t>(e.m)]);
     grid.add(in.nodes[static_cast<std::size_t>(e.m)], in.nodes[static_cast<std::size_t>(e.b)]);
   }
   IndexedCdt idx(in.nodes);
   for (std::size_t k = 0; k < coarse.size(); ++k) {
-    const CoarseEdge& e = coarse[k];
+    const CoarseCurves::Edge& e = coarse[k];
     idx.cdt.insert_constraint(idx.vertex(e.a), idx.vertex(e.b));
-    if (coarse_curve[k]->loop) idx.loop_edges.insert(edge_key(e.a, e.b));
+    if (cc.curve[k]->loop) idx.loop_edges.insert(edge_key(e.a, e.b));
   }
   for (std::int32_t v : in.points) idx.vertex(v);
   TriMesh tri;
@@ -469,12 +491,12 @@ QuadMesh split_patch(const PatchInput& in, const PatchOptions& options) {
   tri.triangles = idx.triangles(lattice_points(loops, grid, 2.0 * h, 1.2 * h), tri.vertices);
   std::unordered_set<std::uint64_t> coarse_edges;
   std::unordered_map<std::uint64_t, std::int32_t> coarse_midpoint;
-  for (const CoarseEdge& e : coarse) {
+  for (const CoarseCurves::Edge& e : coarse) {
     coarse_edges.insert(edge_key(e.a, e.b));
     coarse_midpoint[edge_key(e.a, e.b)] = e.m;
   }
   break_ears(idx, tri, coarse_edges, coarse_midpoint);
-  tri.chains = std::move(chains);
+  tri.chains = std::move(cc.chains);
 
   QuadMesh out;
   out.nodes = tri.vertices;
@@ -483,7 +505,7 @@ QuadMesh split_patch(const PatchInput& in, const PatchOptions& options) {
   // Every coarse edge must be an edge of the triangulation, with the given node as its midpoint.
   const auto owners = edge_owners(tri);
   std::unordered_map<std::uint64_t, std::int32_t> midpoint;
-  for (const CoarseEdge& e : coarse) {
+  for (const CoarseCurves::Edge& e : coarse) {
     if (!owners.count(edge_key(e.a, e.b)))
       throw MeshingError("patch: the curve edge near " + at_text(in.nodes[static_cast<std::size_t>(e.m)]) +
                          " is not kept by the triangulation (curves too close)");

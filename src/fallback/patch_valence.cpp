@@ -66,143 +66,28 @@ class Relaxer {
   // (a valence 3 beside a 5 moves as a pair) until the next greedy passes find them beside one they cancel with.
   std::size_t pass(Moves& moves, std::size_t budget, std::mt19937* plateau = nullptr) {
     index();
-    // A move changes the valence of the nodes of its quads only, and each node at its target adds at least 1 to
-    // the energy when it changes: a move that does not raise the energy has a node off its target among its
-    // quads' nodes. Quads with none (most of a large patch after the first passes) are not searched.
-    const std::size_t nn = m_.nodes.size(), nq = m_.quads.size();
-    off_quad_.assign(nq, 0);
-    near_off_.assign(nn, 0);
-    for (std::size_t i = 0; i < nq; ++i)
-      for (std::int32_t v : m_.quads[i]) {
-        const auto u = static_cast<std::size_t>(v);
-        if (std::abs(val_[u] - target_[u]) > 1e-9) off_quad_[i] = 1;
-      }
-    for (std::size_t i = 0; i < nq; ++i)
-      if (off_quad_[i])
-        for (std::int32_t v : m_.quads[i]) near_off_[static_cast<std::size_t>(v)] = 1;
+    mark_off_target();
     // A quad's moves read the quads at its nodes (their nodes' valences and places, which edges exist): they are
     // searched again only where a node of those quads changed since the last pass (a move's quads, the nodes
     // smoothing moved), and kept from the pass before elsewhere, so that a pass costs what changed, not the
     // patch (about 145 passes on a 46k-quad patch, each searching 40k quads, were a quarter of a coast's run).
     // Each quad keeps the moves that do not raise the energy; a pass takes those above its own least gain.
+    const std::size_t nn = m_.nodes.size(), nq = m_.quads.size();
     if (flips_of_.size() != nq) all_dirty_ = true;
     // The first pass smooths the whole patch, as it came from its construction, and so does each plateau pass
     // (its moves are spread over the patch, and the smoothing in between is what lets later moves keep every
     // quad valid: smoothing only near the greedy moves' nodes raised the patches' singular nodes by 5-7 %).
     smooth_all_ = all_dirty_ || plateau != nullptr;
-    std::vector<std::uint8_t> dirty(nq, all_dirty_ ? 1 : 0);
-    if (!all_dirty_) {
-      std::vector<std::uint8_t> ring(nn, 0);  // nodes of quads with a changed node
-      for (std::size_t i = 0; i < nq; ++i)
-        if (std::any_of(m_.quads[i].begin(), m_.quads[i].end(), [&](std::int32_t v) { return changed_[static_cast<std::size_t>(v)] != 0; }))
-          for (std::int32_t v : m_.quads[i]) ring[static_cast<std::size_t>(v)] = 1;
-      for (std::size_t i = 0; i < nq; ++i)
-        dirty[i] = std::any_of(m_.quads[i].begin(), m_.quads[i].end(), [&](std::int32_t v) { return ring[static_cast<std::size_t>(v)] != 0; });
-    }
+    const std::vector<std::uint8_t> dirty = dirty_quads();
     flips_of_.resize(nq);
     collapses_of_.resize(nq);
     all_dirty_ = false;
     changed_.assign(nn, 0);
     min_gain_ = -1e-9;
-    // The candidates in a fixed order (flips by quad and side, then collapses by quad and diagonal), searched in
-    // blocks of quads that large patches search in parallel.
-    const std::size_t blocks = std::max<std::size_t>(1, nq / kQuadsPerBlock);
-    auto search = [&](std::size_t block) {
-      for (std::size_t i = block * nq / blocks; i < (block + 1) * nq / blocks; ++i) {
-        if (!dirty[i]) continue;
-        flips_of_[i].clear();
-        collapses_of_[i].clear();
-        // A flip's second quad shares two nodes with quad i: none near an off node, no move from quad i.
-        if (std::none_of(m_.quads[i].begin(), m_.quads[i].end(), [&](std::int32_t v) { return near_off_[static_cast<std::size_t>(v)] != 0; }))
-          continue;
-        for (int k = 0; k < 4; ++k) {
-          const std::int32_t a = m_.quads[i][k], b = m_.quads[i][(k + 1) % 4];
-          std::array<std::int32_t, 2> two{};
-          if (edge_quads(a, b, two) == 2 && two[0] == static_cast<std::int32_t>(i) &&
-              (off_quad_[i] || off_quad_[static_cast<std::size_t>(two[1])]) && !kept_.count(edge_key(a, b)))
-            flip_candidates(two[0], two[1], flips_of_[i]);
-        }
-        if (!off_quad_[i]) continue;
-        collapse_candidate(static_cast<std::int32_t>(i), 0, collapses_of_[i]);
-        collapse_candidate(static_cast<std::int32_t>(i), 1, collapses_of_[i]);
-      }
-    };
-    if (blocks == 1) search(0);
-    else oneapi::tbb::parallel_for(std::size_t{0}, blocks, search);
-    const double least = plateau ? -1e-9 : 1e-9;
-    std::vector<Move> found;
-    for (const auto* per_quad : {&flips_of_, &collapses_of_})
-      for (const std::vector<Move>& list : *per_quad)
-        for (const Move& mv : list)
-          if (mv.gain > least) found.push_back(mv);
-    if (plateau) {
-      found.erase(std::remove_if(found.begin(), found.end(), [](const Move& mv) { return mv.gain > 1e-9; }), found.end());
-      std::shuffle(found.begin(), found.end(), *plateau);
-    } else {
-      std::stable_sort(found.begin(), found.end(), [](const Move& x, const Move& y) { return x.gain > y.gain; });
-    }
-    std::vector<std::uint8_t> touched(m_.nodes.size(), 0);
+    search_moves(dirty);
     std::vector<std::int32_t> gone;
-    std::size_t made = 0;
-    for (const Move& mv : found) {
-      if (made >= budget) break;
-      bool free = true;
-      for (int j = 0; j < mv.replaced(); ++j)
-        for (std::int32_t v : m_.quads[static_cast<std::size_t>(mv.quads[static_cast<std::size_t>(j)])]) free = free && !touched[static_cast<std::size_t>(v)];
-      if (mv.merged >= 0)  // a collapse changes every quad at both nodes
-        for (std::int32_t v : {mv.merged, mv.removed})
-          for (std::int32_t q : quads_at_[static_cast<std::size_t>(v)])
-            for (std::int32_t u : m_.quads[static_cast<std::size_t>(q)]) free = free && !touched[static_cast<std::size_t>(u)];
-      if (!free) continue;
-      for (int j = 0; j < mv.replaced(); ++j)
-        for (std::int32_t v : m_.quads[static_cast<std::size_t>(mv.quads[static_cast<std::size_t>(j)])]) touched[static_cast<std::size_t>(v)] = 1;
-      if (mv.merged >= 0) {
-        for (std::int32_t v : {mv.merged, mv.removed})
-          for (std::int32_t q : quads_at_[static_cast<std::size_t>(v)])
-            for (std::int32_t u : m_.quads[static_cast<std::size_t>(q)]) touched[static_cast<std::size_t>(u)] = 1;
-        for (std::int32_t q : quads_at_[static_cast<std::size_t>(mv.removed)])
-          for (std::int32_t& v : m_.quads[static_cast<std::size_t>(q)])
-            if (v == mv.removed) v = mv.merged;
-        m_.nodes[static_cast<std::size_t>(mv.merged)] = mv.at;
-        gone.push_back(mv.quads[0]);
-        ++moves.collapses;
-      } else {
-        for (std::size_t k = 0; k < 2; ++k) m_.quads[static_cast<std::size_t>(mv.quads[k])] = mv.by[k];
-        ++moves.flips;
-      }
-      stale_ = true;
-      ++made;
-    }
-    // The nodes of every quad a move replaced or changed: their valences, quads or places changed.
-    for (std::size_t v = 0; v < touched.size(); ++v) changed_[v] |= touched[v];
-    if (!gone.empty()) {  // one compaction, quad_part and the kept moves alongside
-      std::vector<std::uint8_t> drop(m_.quads.size(), 0);
-      for (std::int32_t q : gone) drop[static_cast<std::size_t>(q)] = 1;
-      std::vector<std::int32_t> renumber(m_.quads.size(), -1);
-      const bool parts = m_.quad_part.size() == m_.quads.size();
-      std::size_t kept = 0;
-      for (std::size_t q = 0; q < m_.quads.size(); ++q) {
-        if (drop[q]) continue;
-        renumber[q] = static_cast<std::int32_t>(kept);
-        m_.quads[kept] = m_.quads[q];
-        flips_of_[kept] = std::move(flips_of_[q]);
-        collapses_of_[kept] = std::move(collapses_of_[q]);
-        if (parts) m_.quad_part[kept] = m_.quad_part[q];
-        ++kept;
-      }
-      m_.quads.resize(kept);
-      flips_of_.resize(kept);
-      collapses_of_.resize(kept);
-      if (parts) m_.quad_part.resize(kept);
-      for (auto* per_quad : {&flips_of_, &collapses_of_})
-        for (std::vector<Move>& list : *per_quad)
-          for (Move& mv : list)
-            for (std::int32_t& q : mv.quads)
-              if (q >= 0) {
-                q = renumber[static_cast<std::size_t>(q)];
-                if (q < 0) all_dirty_ = true;  // a kept move on a removed quad: cannot happen, but search all then
-              }
-    }
+    const std::size_t made = make_moves(found_moves(plateau), budget, moves, gone);
+    if (!gone.empty()) drop_quads(gone);  // one compaction, quad_part and the kept moves alongside
     if (made > 0) smooth(3);
     return made;
   }
@@ -226,6 +111,158 @@ class Relaxer {
   static double sq(double x) { return x * x; }
   Vec2 pos(std::int32_t v) const { return m_.nodes[static_cast<std::size_t>(v)]; }
   bool is_given(std::int32_t v) const { return static_cast<std::size_t>(v) < given_; }
+
+  // A move changes the valence of the nodes of its quads only, and each node at its target adds at least 1 to
+  // the energy when it changes: a move that does not raise the energy has a node off its target among its
+  // quads' nodes. Quads with none (most of a large patch after the first passes) are not searched.
+  void mark_off_target() {
+    const std::size_t nn = m_.nodes.size(), nq = m_.quads.size();
+    off_quad_.assign(nq, 0);
+    near_off_.assign(nn, 0);
+    for (std::size_t i = 0; i < nq; ++i)
+      for (std::int32_t v : m_.quads[i]) {
+        const auto u = static_cast<std::size_t>(v);
+        if (std::abs(val_[u] - target_[u]) > 1e-9) off_quad_[i] = 1;
+      }
+    for (std::size_t i = 0; i < nq; ++i)
+      if (off_quad_[i])
+        for (std::int32_t v : m_.quads[i]) near_off_[static_cast<std::size_t>(v)] = 1;
+  }
+
+  // The quads whose moves are searched again: all of them, or those with a node in a quad with a changed node.
+  std::vector<std::uint8_t> dirty_quads() const {
+    const std::size_t nn = m_.nodes.size(), nq = m_.quads.size();
+    std::vector<std::uint8_t> dirty(nq, all_dirty_ ? 1 : 0);
+    if (all_dirty_) return dirty;
+    std::vector<std::uint8_t> ring(nn, 0);  // nodes of quads with a changed node
+    for (std::size_t i = 0; i < nq; ++i)
+      if (std::any_of(m_.quads[i].begin(), m_.quads[i].end(), [&](std::int32_t v) { return changed_[static_cast<std::size_t>(v)] != 0; }))
+        for (std::int32_t v : m_.quads[i]) ring[static_cast<std::size_t>(v)] = 1;
+    for (std::size_t i = 0; i < nq; ++i)
+      dirty[i] = std::any_of(m_.quads[i].begin(), m_.quads[i].end(), [&](std::int32_t v) { return ring[static_cast<std::size_t>(v)] != 0; });
+    return dirty;
+  }
+
+  // The candidates of the dirty quads in a fixed order (flips by quad and side, then collapses by quad and
+  // diagonal), searched in blocks of quads that large patches search in parallel.
+  void search_moves(const std::vector<std::uint8_t>& dirty) {
+    const std::size_t nq = m_.quads.size();
+    const std::size_t blocks = std::max<std::size_t>(1, nq / kQuadsPerBlock);
+    auto search = [&](std::size_t block) {
+      for (std::size_t i = block * nq / blocks; i < (block + 1) * nq / blocks; ++i)
+        if (dirty[i]) search_quad(i);
+    };
+    if (blocks == 1) search(0);
+    else oneapi::tbb::parallel_for(std::size_t{0}, blocks, search);
+  }
+
+  void search_quad(std::size_t i) {
+    flips_of_[i].clear();
+    collapses_of_[i].clear();
+    // A flip's second quad shares two nodes with quad i: none near an off node, no move from quad i.
+    if (std::none_of(m_.quads[i].begin(), m_.quads[i].end(), [&](std::int32_t v) { return near_off_[static_cast<std::size_t>(v)] != 0; }))
+      return;
+    for (int k = 0; k < 4; ++k) {
+      const std::int32_t a = m_.quads[i][k], b = m_.quads[i][(k + 1) % 4];
+      std::array<std::int32_t, 2> two{};
+      if (edge_quads(a, b, two) == 2 && two[0] == static_cast<std::int32_t>(i) &&
+          (off_quad_[i] || off_quad_[static_cast<std::size_t>(two[1])]) && !kept_.count(edge_key(a, b)))
+        flip_candidates(two[0], two[1], flips_of_[i]);
+    }
+    if (!off_quad_[i]) return;
+    collapse_candidate(static_cast<std::int32_t>(i), 0, collapses_of_[i]);
+    collapse_candidate(static_cast<std::int32_t>(i), 1, collapses_of_[i]);
+  }
+
+  // The kept moves this pass takes: those that lower the energy, best first, or with `plateau` those that keep it,
+  // shuffled.
+  std::vector<Move> found_moves(std::mt19937* plateau) const {
+    const double least = plateau ? -1e-9 : 1e-9;
+    std::vector<Move> found;
+    for (const auto* per_quad : {&flips_of_, &collapses_of_})
+      for (const std::vector<Move>& list : *per_quad)
+        for (const Move& mv : list)
+          if (mv.gain > least) found.push_back(mv);
+    if (plateau) {
+      found.erase(std::remove_if(found.begin(), found.end(), [](const Move& mv) { return mv.gain > 1e-9; }), found.end());
+      std::shuffle(found.begin(), found.end(), *plateau);
+    } else {
+      std::stable_sort(found.begin(), found.end(), [](const Move& x, const Move& y) { return x.gain > y.gain; });
+    }
+    return found;
+  }
+
+  // Calls f(u) for every node whose quads move mv changes: the nodes of its quads, and for a collapse those of
+  // every quad at both its nodes.
+  template <typename F>
+  void for_each_node_touched(const Move& mv, F f) const {
+    for (int j = 0; j < mv.replaced(); ++j)
+      for (std::int32_t v : m_.quads[static_cast<std::size_t>(mv.quads[static_cast<std::size_t>(j)])]) f(v);
+    if (mv.merged >= 0)  // a collapse changes every quad at both nodes
+      for (std::int32_t v : {mv.merged, mv.removed})
+        for (std::int32_t q : quads_at_[static_cast<std::size_t>(v)])
+          for (std::int32_t u : m_.quads[static_cast<std::size_t>(q)]) f(u);
+  }
+
+  // Makes the found moves in order, at most `budget`, skipping those that touch a node an earlier one touched;
+  // a collapse's removed quad goes to `gone`. Returns the moves made.
+  std::size_t make_moves(const std::vector<Move>& found, std::size_t budget, Moves& moves, std::vector<std::int32_t>& gone) {
+    std::vector<std::uint8_t> touched(m_.nodes.size(), 0);
+    std::size_t made = 0;
+    for (const Move& mv : found) {
+      if (made >= budget) break;
+      bool free = true;
+      for_each_node_touched(mv, [&](std::int32_t u) { free = free && !touched[static_cast<std::size_t>(u)]; });
+      if (!free) continue;
+      for_each_node_touched(mv, [&](std::int32_t u) { touched[static_cast<std::size_t>(u)] = 1; });
+      if (mv.merged >= 0) {
+        for (std::int32_t q : quads_at_[static_cast<std::size_t>(mv.removed)])
+          for (std::int32_t& v : m_.quads[static_cast<std::size_t>(q)])
+            if (v == mv.removed) v = mv.merged;
+        m_.nodes[static_cast<std::size_t>(mv.merged)] = mv.at;
+        gone.push_back(mv.quads[0]);
+        ++moves.collapses;
+      } else {
+        for (std::size_t k = 0; k < 2; ++k) m_.quads[static_cast<std::size_t>(mv.quads[k])] = mv.by[k];
+        ++moves.flips;
+      }
+      stale_ = true;
+      ++made;
+    }
+    // The nodes of every quad a move replaced or changed: their valences, quads or places changed.
+    for (std::size_t v = 0; v < touched.size(); ++v) changed_[v] |= touched[v];
+    return made;
+  }
+
+  // Removes the `gone` quads, renumbering quad_part and the kept moves alongside.
+  void drop_quads(const std::vector<std::int32_t>& gone) {
+    std::vector<std::uint8_t> drop(m_.quads.size(), 0);
+    for (std::int32_t q : gone) drop[static_cast<std::size_t>(q)] = 1;
+    std::vector<std::int32_t> renumber(m_.quads.size(), -1);
+    const bool parts = m_.quad_part.size() == m_.quads.size();
+    std::size_t kept = 0;
+    for (std::size_t q = 0; q < m_.quads.size(); ++q) {
+      if (drop[q]) continue;
+      renumber[q] = static_cast<std::int32_t>(kept);
+      m_.quads[kept] = m_.quads[q];
+      flips_of_[kept] = std::move(flips_of_[q]);
+      collapses_of_[kept] = std::move(collapses_of_[q]);
+      if (parts) m_.quad_part[kept] = m_.quad_part[q];
+      ++kept;
+    }
+    m_.quads.resize(kept);
+    flips_of_.resize(kept);
+    collapses_of_.resize(kept);
+    if (parts) m_.quad_part.resize(kept);
+    for (auto* per_quad : {&flips_of_, &collapses_of_})
+      for (std::vector<Move>& list : *per_quad)
+        for (Move& mv : list)
+          for (std::int32_t& q : mv.quads)
+            if (q >= 0) {
+              q = renumber[static_cast<std::size_t>(q)];
+              if (q < 0) all_dirty_ = true;  // a kept move on a removed quad: cannot happen, but search all then
+            }
+  }
 
   // Rebuilt after every change of the quads (not of the positions), keeping its allocations: the per-node lists
   // are cleared, not freed. An edge's quads are found from its end node's quads (about four), not from a table

@@ -167,15 +167,33 @@ std::array<Vec2, 4> quad_points(const QuadMesh& mesh, std::size_t q) {
   return p;
 }
 
-}  // namespace
-
-QuadOverlaps find_overlapping_quads(const QuadMesh& mesh) {
-  QuadOverlaps result;
-  const std::size_t n = mesh.quads.size();
-  if (n < 2) return result;
-  // Grid: cells about the mean quad extent (a quad's box then meets about four cells), no more cells than quads
-  // (a sparse region, a coast in a large bounding box, widens them).
+// The quads' bounding boxes on a grid: each quad listed in every cell its box meets (counting sort: offsets per
+// cell in `start`, then the entries). Cells are about the mean quad extent (a quad's box then meets about four
+// cells), no more cells than quads (a sparse region, a coast in a large bounding box, widens them).
+struct QuadGrid {
   Box2 all;
+  double cell = 0.0;
+  std::size_t nx = 0, ny = 0;
+  std::vector<std::uint32_t> start, in_cell;
+  void cell_of(Vec2 p, std::size_t& ix, std::size_t& iy) const {
+    ix = std::min(nx - 1, static_cast<std::size_t>(std::max(0.0, std::floor((p.x - all.lo.x) / cell))));
+    iy = std::min(ny - 1, static_cast<std::size_t>(std::max(0.0, std::floor((p.y - all.lo.y) / cell))));
+  }
+  // Calls f(c) for every cell c that quad q's box meets.
+  template <typename F>
+  void for_cells(const QuadMesh& mesh, std::size_t q, F&& f) const {
+    const Box2 b = quad_box(mesh, q);
+    std::size_t x0, y0, x1, y1;
+    cell_of(b.lo, x0, y0);
+    cell_of(b.hi, x1, y1);
+    for (std::size_t iy = y0; iy <= y1; ++iy)
+      for (std::size_t ix = x0; ix <= x1; ++ix) f(iy * nx + ix);
+  }
+};
+
+// The grid of the quads with finite coordinates; false when fewer than two have them.
+bool quad_grid(const QuadMesh& mesh, QuadGrid& g) {
+  const std::size_t n = mesh.quads.size();
   double extent_sum = 0.0;
   std::size_t finite = 0;
   std::vector<std::uint8_t> usable(n, 0);
@@ -183,89 +201,93 @@ QuadOverlaps find_overlapping_quads(const QuadMesh& mesh) {
     const Box2 b = quad_box(mesh, q);
     if (!(b.lo.x <= b.hi.x)) continue;  // a non-finite coordinate
     usable[q] = 1;
-    all.add(b.lo);
-    all.add(b.hi);
+    g.all.add(b.lo);
+    g.all.add(b.hi);
     extent_sum += (b.hi.x - b.lo.x) + (b.hi.y - b.lo.y);
     ++finite;
   }
-  if (finite < 2) return result;
-  const double w = all.hi.x - all.lo.x, h = all.hi.y - all.lo.y;
-  double cell = std::max(0.75 * extent_sum / static_cast<double>(finite), std::sqrt(w * h / static_cast<double>(finite)));
-  if (!(cell > 0.0)) cell = std::max({w, h, 1.0});
+  if (finite < 2) return false;
+  const double w = g.all.hi.x - g.all.lo.x, h = g.all.hi.y - g.all.lo.y;
+  g.cell = std::max(0.75 * extent_sum / static_cast<double>(finite), std::sqrt(w * h / static_cast<double>(finite)));
+  if (!(g.cell > 0.0)) g.cell = std::max({w, h, 1.0});
   const auto cells_along = [&](double len) {
-    return static_cast<std::size_t>(std::min(std::floor(len / cell), static_cast<double>(finite))) + 1;
+    return static_cast<std::size_t>(std::min(std::floor(len / g.cell), static_cast<double>(finite))) + 1;
   };
-  const std::size_t nx = cells_along(w), ny = cells_along(h);
-  const auto cell_of = [&](Vec2 p, std::size_t& ix, std::size_t& iy) {
-    ix = std::min(nx - 1, static_cast<std::size_t>(std::max(0.0, std::floor((p.x - all.lo.x) / cell))));
-    iy = std::min(ny - 1, static_cast<std::size_t>(std::max(0.0, std::floor((p.y - all.lo.y) / cell))));
-  };
-  // Each quad listed in every cell its bounding box meets (counting sort: offsets, then entries).
-  std::vector<std::uint32_t> start(nx * ny + 1, 0);
-  auto for_cells = [&](std::size_t q, auto&& f) {
-    const Box2 b = quad_box(mesh, q);
-    std::size_t x0, y0, x1, y1;
-    cell_of(b.lo, x0, y0);
-    cell_of(b.hi, x1, y1);
-    for (std::size_t iy = y0; iy <= y1; ++iy)
-      for (std::size_t ix = x0; ix <= x1; ++ix) f(iy * nx + ix);
-  };
+  g.nx = cells_along(w);
+  g.ny = cells_along(h);
+  const std::size_t nx = g.nx, ny = g.ny;
+  g.start.assign(nx * ny + 1, 0);
   std::size_t entries = 0;
   for (std::size_t q = 0; q < n; ++q)
-    if (usable[q]) for_cells(q, [&](std::size_t c) { ++start[c + 1]; ++entries; });
+    if (usable[q]) g.for_cells(mesh, q, [&](std::size_t c) { ++g.start[c + 1]; ++entries; });
   if (entries >= std::numeric_limits<std::uint32_t>::max())
     throw std::length_error("overlap check: too many grid entries (" + std::to_string(entries) + ")");
-  for (std::size_t c = 0; c < nx * ny; ++c) start[c + 1] += start[c];
-  std::vector<std::uint32_t> fill(start.begin(), start.end() - 1), in_cell(entries);
+  for (std::size_t c = 0; c < nx * ny; ++c) g.start[c + 1] += g.start[c];
+  std::vector<std::uint32_t> fill(g.start.begin(), g.start.end() - 1);
+  g.in_cell.resize(entries);
   for (std::size_t q = 0; q < n; ++q)
-    if (usable[q]) for_cells(q, [&](std::size_t c) { in_cell[fill[c]++] = static_cast<std::uint32_t>(q); });
-  fill.clear();
-  fill.shrink_to_fit();
+    if (usable[q]) g.for_cells(mesh, q, [&](std::size_t c) { g.in_cell[fill[c]++] = static_cast<std::uint32_t>(q); });
+  return true;
+}
 
-  // Pairs whose boxes overlap with positive area (interiors of boxes that only touch cannot meet), each tested
-  // once: in the cell holding the lower-left corner of the two boxes' intersection.
-  struct Found {
-    std::size_t pairs = 0;
-    std::uint32_t a = std::numeric_limits<std::uint32_t>::max(), b = 0;
-  };
-  const auto reduce = [](Found x, const Found& y) {
+// Overlapping pairs: how many, and the first (a < b) in (a, b) order.
+struct Overlaps {
+  std::size_t pairs = 0;
+  std::uint32_t a = std::numeric_limits<std::uint32_t>::max(), b = 0;
+  static Overlaps reduce(Overlaps x, const Overlaps& y) {
     x.pairs += y.pairs;
     if (y.pairs && (y.a < x.a || (y.a == x.a && y.b < x.b))) { x.a = y.a; x.b = y.b; }
     return x;
-  };
-  const Found found = oneapi::tbb::parallel_reduce(
-      oneapi::tbb::blocked_range<std::size_t>(0, nx * ny, 1024), Found{},
-      [&](const oneapi::tbb::blocked_range<std::size_t>& range, Found acc) {
+  }
+};
+
+// Pairs whose boxes overlap with positive area (interiors of boxes that only touch cannot meet), each tested
+// once: in the cell holding the lower-left corner of the two boxes' intersection. Those of cell c into acc;
+// `shapes` is scratch.
+void overlaps_in_cell(const QuadMesh& mesh, const QuadGrid& g, std::size_t c, std::vector<QuadShape>& shapes,
+                      Overlaps& acc) {
+  const std::size_t m = g.start[c + 1] - g.start[c];
+  if (m < 2) return;
+  shapes.resize(m);
+  for (std::size_t i = 0; i < m; ++i) {
+    shapes[i].q = g.in_cell[g.start[c] + i];
+    shapes[i].box = quad_box(mesh, shapes[i].q);
+    shapes[i].complete = false;
+  }
+  for (std::size_t i = 0; i < m; ++i)
+    for (std::size_t j = i + 1; j < m; ++j) {
+      const Box2 &p = shapes[i].box, &r = shapes[j].box;
+      if (!(p.lo.x < r.hi.x && r.lo.x < p.hi.x && p.lo.y < r.hi.y && r.lo.y < p.hi.y)) continue;
+      std::size_t ix, iy;
+      g.cell_of({std::max(p.lo.x, r.lo.x), std::max(p.lo.y, r.lo.y)}, ix, iy);
+      if (iy * g.nx + ix != c) continue;
+      if (!shapes[i].complete) complete_shape(mesh, shapes[i]);
+      if (!shapes[j].complete) complete_shape(mesh, shapes[j]);
+      if (!shapes_overlap(shapes[i], shapes[j])) continue;
+      Overlaps one;
+      one.pairs = 1;
+      one.a = std::min(shapes[i].q, shapes[j].q);
+      one.b = std::max(shapes[i].q, shapes[j].q);
+      acc = Overlaps::reduce(acc, one);
+    }
+}
+
+}  // namespace
+
+QuadOverlaps find_overlapping_quads(const QuadMesh& mesh) {
+  QuadOverlaps result;
+  const std::size_t n = mesh.quads.size();
+  if (n < 2) return result;
+  QuadGrid g;
+  if (!quad_grid(mesh, g)) return result;
+  const Overlaps found = oneapi::tbb::parallel_reduce(
+      oneapi::tbb::blocked_range<std::size_t>(0, g.nx * g.ny, 1024), Overlaps{},
+      [&](const oneapi::tbb::blocked_range<std::size_t>& range, Overlaps acc) {
         std::vector<QuadShape> shapes;
-        for (std::size_t c = range.begin(); c < range.end(); ++c) {
-          const std::size_t m = start[c + 1] - start[c];
-          if (m < 2) continue;
-          shapes.resize(m);
-          for (std::size_t i = 0; i < m; ++i) {
-            shapes[i].q = in_cell[start[c] + i];
-            shapes[i].box = quad_box(mesh, shapes[i].q);
-            shapes[i].complete = false;
-          }
-          for (std::size_t i = 0; i < m; ++i)
-            for (std::size_t j = i + 1; j < m; ++j) {
-              const Box2 &p = shapes[i].box, &r = shapes[j].box;
-              if (!(p.lo.x < r.hi.x && r.lo.x < p.hi.x && p.lo.y < r.hi.y && r.lo.y < p.hi.y)) continue;
-              std::size_t ix, iy;
-              cell_of({std::max(p.lo.x, r.lo.x), std::max(p.lo.y, r.lo.y)}, ix, iy);
-              if (iy * nx + ix != c) continue;
-              if (!shapes[i].complete) complete_shape(mesh, shapes[i]);
-              if (!shapes[j].complete) complete_shape(mesh, shapes[j]);
-              if (!shapes_overlap(shapes[i], shapes[j])) continue;
-              Found one;
-              one.pairs = 1;
-              one.a = std::min(shapes[i].q, shapes[j].q);
-              one.b = std::max(shapes[i].q, shapes[j].q);
-              acc = reduce(acc, one);
-            }
-        }
+        for (std::size_t c = range.begin(); c < range.end(); ++c) overlaps_in_cell(mesh, g, c, shapes, acc);
         return acc;
       },
-      reduce);
+      Overlaps::reduce);
   result.pairs = found.pairs;
   if (found.pairs) {
     result.first_a = found.a;

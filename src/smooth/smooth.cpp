@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include <oneapi/tbb/blocked_range.h>
 #include <oneapi/tbb/parallel_for.h>
@@ -229,6 +230,281 @@ struct Slider {
   std::int32_t prev = -1, next = -1;
 };
 
+// What the sweeps share: the mesh they move, its node -> quad incidence, the nodes that move freely in the plane
+// and for_each_by_colour's clock.
+struct Sweeps {
+  QuadMesh& mesh;
+  const Incidence& inc;
+  const SmoothOptions& options;
+  const std::vector<std::uint8_t>& interior;
+  std::int64_t clock = 0;
+};
+
+// Per-node results of an averaging sweep, reduced in node order afterwards so that the stopping test is
+// deterministic.
+struct AverageResults {
+  std::vector<double> moved_by, edge_of;
+  std::vector<std::uint8_t> moved_flag;
+  explicit AverageResults(std::size_t nn) : moved_by(nn, 0.0), edge_of(nn, 0.0), moved_flag(nn, 0) {}
+};
+
+// Moves interior node v to the mean of its edge neighbours when that improves its score; records the move and
+// v's mean edge length in `out`.
+void average_node(Sweeps& sw, Visits& lap, std::int32_t v, AverageResults& out) {
+  QuadMesh& mesh = sw.mesh;
+  const Incidence& inc = sw.inc;
+  std::int32_t nbrs[32];
+  int n = 0;
+  for (std::size_t k = inc.offset[v]; k < inc.offset[v + 1]; ++k) {
+    const auto& q = mesh.quads[inc.quads[k]];
+    const int at = static_cast<int>(std::find(q.begin(), q.end(), v) - q.begin());
+    for (std::int32_t w : {q[(at + 1) % 4], q[(at + 3) % 4]})
+      if (n < 32 && std::find(nbrs, nbrs + n, w) == nbrs + n) nbrs[n++] = w;
+  }
+  Vec2 mean{};
+  double edge = 0.0;
+  const Vec2 old = mesh.nodes[v];
+  for (int i = 0; i < n; ++i) {
+    mean = mean + mesh.nodes[nbrs[i]];
+    edge += distance(old, mesh.nodes[nbrs[i]]);
+  }
+  mean = (1.0 / n) * mean;
+  out.edge_of[v] = edge / n;
+  out.moved_flag[v] = 0;
+  out.moved_by[v] = 0.0;
+  // Its neighbours unmoved, v is at their mean already or was refused it.
+  if (lap.settled(mesh, inc, v, false)) return;
+  lap.visited[v] = sw.clock;
+  const Incidence::Score before = inc.score(mesh, v);
+  mesh.nodes[v] = mean;
+  if (inc.score(mesh, v).better_than(before)) {
+    out.moved_flag[v] = 1;
+    out.moved_by[v] = distance(old, mean);
+    lap.moved[v] = sw.clock;
+  } else {
+    mesh.nodes[v] = old;
+    out.moved_flag[v] = 0;
+    out.moved_by[v] = 0.0;
+  }
+}
+
+// Gauss-Seidel sweeps of guarded Laplacian smoothing of the interior nodes, until converged.
+void average_sweeps(Sweeps& sw, Visits& lap, SmoothStats& stats) {
+  const std::size_t nn = sw.mesh.nodes.size();
+  const auto interior_classes = colour_classes(sw.mesh, sw.inc, sw.interior);
+  AverageResults out(nn);
+  for (int sweep = 0; sweep < sw.options.iterations; ++sweep) {
+    for_each_by_colour(interior_classes, sw.clock, [&](std::int32_t v) { average_node(sw, lap, v, out); });
+    std::size_t moved = 0;
+    double largest_move = 0.0, edge_sum = 0.0;
+    for (std::size_t v = 0; v < nn; ++v) {
+      if (!sw.interior[v]) continue;
+      moved += out.moved_flag[v];
+      largest_move = std::max(largest_move, out.moved_by[v]);
+      edge_sum += out.edge_of[v];
+    }
+    stats.sweeps = sweep + 1;
+    stats.moves += moved;
+    // Converged when no node moved by more than a small fraction of the mean edge.
+    if (moved == 0 || largest_move < sw.options.converged_fraction * edge_sum / static_cast<double>(nn)) break;
+  }
+}
+
+// Curves of sliding nodes: rings then feature curves of the region, each node with its curve neighbours.
+struct SlideCurves {
+  std::vector<Curve> curves;
+  std::vector<Slider> slider;
+  int feature_base = 0;  // index of the first feature curve (the rings come first)
+  bool slides(const QuadMesh& mesh, std::size_t v) const {
+    const NodeKind k = mesh.node_kind[v];
+    return (k == NodeKind::boundary || k == NodeKind::feature) && slider[v].curve >= 0 && slider[v].prev >= 0 &&
+           slider[v].next >= 0;
+  }
+};
+
+SlideCurves slide_curves(const QuadMesh& mesh, const Region* region, bool slide_on_curves, bool kinds) {
+  SlideCurves sc;
+  sc.slider.resize(mesh.nodes.size());
+  if (region && slide_on_curves && kinds) {
+    for (const Ring& r : region->rings) sc.curves.emplace_back(r.points, true);
+    for (const FeatureCurve& f : region->features) sc.curves.emplace_back(f.points, f.closed);
+    auto link = [&](const std::vector<std::array<std::int32_t, 2>>& edges, const std::vector<std::int32_t>& tag, int base) {
+      for (std::size_t e = 0; e < edges.size(); ++e) {
+        const int c = base + tag[e];
+        for (int side = 0; side < 2; ++side) {
+          Slider& s = sc.slider[edges[e][side]];
+          s.curve = c;
+          (side == 0 ? s.next : s.prev) = edges[e][1 - side];
+        }
+      }
+    };
+    link(mesh.boundary_edges, mesh.boundary_edge_ring, 0);
+    link(mesh.feature_edges, mesh.feature_edge_curve, static_cast<int>(region->rings.size()));
+  }
+  sc.feature_base = region ? static_cast<int>(region->rings.size()) : 0;
+  return sc;
+}
+
+const Vec2 search_dirs[8] = {{1, 0}, {0.7071067811865476, 0.7071067811865476}, {0, 1}, {-0.7071067811865476, 0.7071067811865476},
+                             {-1, 0}, {-0.7071067811865476, -0.7071067811865476}, {0, -1}, {0.7071067811865476, -0.7071067811865476}};
+
+// Pattern search in the plane: 12 levels of the eight directions around the best position so far, the step halved
+// when none is better.
+void search_in_plane(QuadMesh& mesh, const Star& star, std::int32_t v, double step, Incidence::Score& best) {
+  for (int level = 0; level < 12; ++level) {
+    const Vec2 centre = mesh.nodes[v];
+    Vec2 best_p = centre;
+    for (const Vec2& d : search_dirs) {
+      const Vec2 p = centre + step * d;
+      Incidence::Score w;
+      if (star.better_at(p, best, 1e-12, w)) { best = w; best_p = p; }
+    }
+    mesh.nodes[v] = best_p;
+    if (best_p == centre) step *= 0.5;
+  }
+}
+
+// A sliding node's place on its curve: arc parameter s, strictly between its curve neighbours' lo < hi.
+struct CurveSpan {
+  const Curve& c;
+  double s, lo, hi, margin;
+  // How far the mesh edges beside a node at t would stray from the curve.
+  double deviation(double t) const { return std::max(c.chord_deviation(lo, t), c.chord_deviation(t, hi)); }
+};
+
+std::optional<CurveSpan> curve_span(const QuadMesh& mesh, const Curve& c, const Slider& sl, std::int32_t v) {
+  const double s = c.project(mesh.nodes[v]);
+  auto unwrap = [&](double t) {
+    if (!c.closed) return t;
+    const double L = c.length();
+    while (t - s > 0.5 * L) t -= L;
+    while (s - t > 0.5 * L) t += L;
+    return t;
+  };
+  double lo = unwrap(c.project(mesh.nodes[sl.prev])), hi = unwrap(c.project(mesh.nodes[sl.next]));
+  if (lo > hi) std::swap(lo, hi);
+  if (!(lo < s && s < hi)) return std::nullopt;
+  return CurveSpan{c, s, lo, hi, 0.05 * (hi - lo)};
+}
+
+// A feature node whose mesh edges stray beyond the tolerance moves towards the position that balances the two
+// edges, if the worst corner around it stays above the floor. Returns whether it moved; `allowed` is the deviation
+// its later slides may reach.
+bool balance_feature_chords(QuadMesh& mesh, const Incidence& inc, std::int32_t v, CurveSpan& span, double tolerance,
+                            double floor, const Incidence::Score& before, Incidence::Score& best, double& allowed) {
+  const Curve& c = span.c;
+  const double lo = span.lo, hi = span.hi, s = span.s;
+  const double now = span.deviation(s);
+  allowed = std::max(tolerance, now);
+  if (!(now > tolerance)) return false;
+  double a = lo, b = hi;  // bisection on the sign of (left deviation - right deviation)
+  for (int it = 0; it < 40; ++it) {
+    const double mid = 0.5 * (a + b);
+    (c.chord_deviation(lo, mid) < c.chord_deviation(mid, hi) ? a : b) = mid;
+  }
+  const double balanced = std::clamp(0.5 * (a + b), lo + span.margin, hi - span.margin);
+  const Vec2 old = mesh.nodes[v];
+  for (double frac : {1.0, 0.5, 0.25}) {
+    const double cand = s + frac * (balanced - s);
+    const double dev = span.deviation(cand);
+    if (!(dev < now - 1e-12)) continue;
+    mesh.nodes[v] = c.at(cand);
+    const Incidence::Score moved = inc.score(mesh, v);
+    if (moved.min_sj >= floor && moved.folded <= before.folded) {
+      span.s = cand;
+      allowed = std::max(tolerance, dev);
+      best = moved;
+      return true;
+    }
+    mesh.nodes[v] = old;
+  }
+  return false;
+}
+
+// Pattern search along the curve, within the span's margins and, when bounded, the allowed chord deviation.
+void search_on_curve(QuadMesh& mesh, const Star& star, std::int32_t v, CurveSpan& span, bool bounded,
+                     double allowed, double step, Incidence::Score& best) {
+  double& s = span.s;
+  for (int level = 0; level < 12; ++level) {
+    double best_s = s;
+    for (double cand : {s - step, s + step}) {
+      if (cand <= span.lo + span.margin || cand >= span.hi - span.margin) continue;
+      if (bounded && span.deviation(cand) > allowed) continue;
+      Incidence::Score w;
+      if (star.better_at(span.c.at(cand), best, 1e-12, w)) { best = w; best_s = cand; }
+    }
+    if (best_s != s) { s = best_s; mesh.nodes[v] = span.c.at(s); } else step *= 0.5;
+  }
+}
+
+struct SearchMove {
+  std::uint8_t moved = 0, on_curve = 0;
+};
+
+// Pattern search on the worst corner around node v: in the plane for interior nodes, along the curve (strictly
+// between the curve neighbours, so the boundary order never changes) for sliding ones.
+SearchMove search_node(Sweeps& sw, const SlideCurves& sc, std::int32_t v) {
+  QuadMesh& mesh = sw.mesh;
+  const SmoothOptions& options = sw.options;
+  const bool is_inner = sw.interior[v] != 0;
+  const Incidence::Score before = sw.inc.score(mesh, v);
+  if (is_inner && before.worst >= options.worst_threshold) return {};
+  Incidence::Score best = before;
+  const double step = 0.25 * sw.inc.mean_edge(mesh, v);
+  const Star star(mesh, sw.inc, v);
+  if (is_inner) {
+    search_in_plane(mesh, star, v, step, best);
+    return {static_cast<std::uint8_t>(best.better_than(before)), 0};
+  }
+  const Curve& c = sc.curves[static_cast<std::size_t>(sc.slider[v].curve)];
+  std::optional<CurveSpan> span = curve_span(mesh, c, sc.slider[v], v);
+  if (!span) return {};
+  // Feature nodes keep the two mesh edges beside them within the feature tolerance of the curve; a node
+  // that starts outside it first moves towards the position that balances the two edges.
+  const double tolerance = options.feature_tolerance;
+  const bool bounded = tolerance > 0 && sc.slider[v].curve >= sc.feature_base;
+  double allowed = INFINITY;
+  bool repaired = false;
+  if (bounded) {
+    const double floor = std::min(before.min_sj, options.feature_repair_min_sj);
+    repaired = balance_feature_chords(mesh, sw.inc, v, *span, tolerance, floor, before, best, allowed);
+  }
+  if (!repaired && before.worst >= options.worst_threshold) return {};
+  search_on_curve(mesh, star, v, *span, bounded, allowed, step, best);
+  if (repaired || best.better_than(before)) return {1, 1};
+  return {};
+}
+
+// Sweeps of the pattern search on the worst corner around poor nodes: lifts the minimum where averaging cannot
+// (next to poly-square corners), and untangles.
+void search_sweeps(Sweeps& sw, const SlideCurves& sc, const std::vector<std::uint8_t>& searchable, Visits& search,
+                   SmoothStats& stats) {
+  const std::size_t nn = sw.mesh.nodes.size();
+  const auto search_classes = colour_classes(sw.mesh, sw.inc, searchable);
+  std::vector<std::uint8_t> moved_flag(nn, 0), curve_moved(nn, 0);
+  for (int sweep = 0; sweep < sw.options.worst_sweeps; ++sweep) {
+    std::fill(moved_flag.begin(), moved_flag.end(), 0);
+    std::fill(curve_moved.begin(), curve_moved.end(), 0);
+    for_each_by_colour(search_classes, sw.clock, [&](std::int32_t v) {
+      // The search from an unchanged neighbourhood finds what it found last time: nothing, or v moved.
+      if (search.settled(sw.mesh, sw.inc, v, true)) return;
+      search.visited[v] = sw.clock;
+      const Vec2 start = sw.mesh.nodes[v];
+      const SearchMove m = search_node(sw, sc, v);
+      if (m.moved) moved_flag[v] = 1;
+      if (m.on_curve) curve_moved[v] = 1;
+      if (!(sw.mesh.nodes[v] == start)) search.moved[v] = sw.clock;
+    });
+    std::size_t moved = 0;
+    for (std::size_t v = 0; v < nn; ++v) {
+      moved += moved_flag[v];
+      stats.curve_moves += curve_moved[v];
+    }
+    stats.moves += moved;
+    if (moved == 0) break;
+  }
+}
+
 }  // namespace
 
 double quad_min_corner_sj(const QuadMesh& mesh, std::size_t q) {
@@ -242,209 +518,23 @@ SmoothStats smooth_quads(QuadMesh& mesh, const SmoothOptions& options, const Reg
   const Incidence inc(mesh);
   const bool kinds = mesh.node_kind.size() == nn;
   auto allowed = [&](std::size_t v) { return only == nullptr || (*only)[v] != 0; };
-  auto is_interior = [&](std::size_t v) { return kinds && mesh.node_kind[v] == NodeKind::interior && allowed(v); };
   SmoothStats stats;
   std::vector<std::uint8_t> interior(nn, 0);
-  for (std::size_t v = 0; v < nn; ++v) interior[v] = is_interior(v);
+  for (std::size_t v = 0; v < nn; ++v) interior[v] = kinds && mesh.node_kind[v] == NodeKind::interior && allowed(v);
   // The guarded moves below never make a node's worst quad worse, so a folded quad stays folded unless it is
   // untangled first.
   stats.untangle = untangle_quads(mesh, interior, options.untangle);
-  const auto interior_classes = colour_classes(mesh, inc, interior);
-  // Per-node results of a sweep, reduced in node order afterwards so that the stopping test is deterministic.
-  std::vector<double> moved_by(nn, 0.0), edge_of(nn, 0.0);
-  std::vector<std::uint8_t> moved_flag(nn, 0);
-  std::int64_t clock = 0;
+  Sweeps sw{mesh, inc, options, interior};
   Visits lap(nn);
-  for (int sweep = 0; sweep < options.iterations; ++sweep) {
-    for_each_by_colour(interior_classes, clock, [&](std::int32_t v) {
-      std::int32_t nbrs[32];
-      int n = 0;
-      for (std::size_t k = inc.offset[v]; k < inc.offset[v + 1]; ++k) {
-        const auto& q = mesh.quads[inc.quads[k]];
-        const int at = static_cast<int>(std::find(q.begin(), q.end(), v) - q.begin());
-        for (std::int32_t w : {q[(at + 1) % 4], q[(at + 3) % 4]})
-          if (n < 32 && std::find(nbrs, nbrs + n, w) == nbrs + n) nbrs[n++] = w;
-      }
-      Vec2 mean{};
-      double edge = 0.0;
-      const Vec2 old = mesh.nodes[v];
-      for (int i = 0; i < n; ++i) {
-        mean = mean + mesh.nodes[nbrs[i]];
-        edge += distance(old, mesh.nodes[nbrs[i]]);
-      }
-      mean = (1.0 / n) * mean;
-      edge_of[v] = edge / n;
-      moved_flag[v] = 0;
-      moved_by[v] = 0.0;
-      // Its neighbours unmoved, v is at their mean already or was refused it.
-      if (lap.settled(mesh, inc, v, false)) return;
-      lap.visited[v] = clock;
-      const Incidence::Score before = inc.score(mesh, v);
-      mesh.nodes[v] = mean;
-      if (inc.score(mesh, v).better_than(before)) {
-        moved_flag[v] = 1;
-        moved_by[v] = distance(old, mean);
-        lap.moved[v] = clock;
-      } else {
-        mesh.nodes[v] = old;
-        moved_flag[v] = 0;
-        moved_by[v] = 0.0;
-      }
-    });
-    std::size_t moved = 0;
-    double largest_move = 0.0, edge_sum = 0.0;
-    for (std::size_t v = 0; v < nn; ++v) {
-      if (!interior[v]) continue;
-      moved += moved_flag[v];
-      largest_move = std::max(largest_move, moved_by[v]);
-      edge_sum += edge_of[v];
-    }
-    stats.sweeps = sweep + 1;
-    stats.moves += moved;
-    // Converged when no node moved by more than a small fraction of the mean edge.
-    if (moved == 0 || largest_move < options.converged_fraction * edge_sum / static_cast<double>(nn)) break;
-  }
+  average_sweeps(sw, lap, stats);
 
-  // Curves of sliding nodes: rings then feature curves of the region, each node with its curve neighbours.
-  std::vector<Curve> curves;
-  std::vector<Slider> slider(nn);
-  if (region && options.slide_on_curves && kinds) {
-    for (const Ring& r : region->rings) curves.emplace_back(r.points, true);
-    for (const FeatureCurve& f : region->features) curves.emplace_back(f.points, f.closed);
-    auto link = [&](const std::vector<std::array<std::int32_t, 2>>& edges, const std::vector<std::int32_t>& tag, int base) {
-      for (std::size_t e = 0; e < edges.size(); ++e) {
-        const int c = base + tag[e];
-        for (int side = 0; side < 2; ++side) {
-          Slider& s = slider[edges[e][side]];
-          s.curve = c;
-          (side == 0 ? s.next : s.prev) = edges[e][1 - side];
-        }
-      }
-    };
-    link(mesh.boundary_edges, mesh.boundary_edge_ring, 0);
-    link(mesh.feature_edges, mesh.feature_edge_curve, static_cast<int>(region->rings.size()));
-  }
-  const int feature_base = region ? static_cast<int>(region->rings.size()) : 0;
-  const double tolerance = options.feature_tolerance;
-  auto slides = [&](std::size_t v) {
-    const NodeKind k = mesh.node_kind[v];
-    return (k == NodeKind::boundary || k == NodeKind::feature) && slider[v].curve >= 0 && slider[v].prev >= 0 &&
-           slider[v].next >= 0;
-  };
-
-  // Pattern search on the worst corner around poor nodes: lifts the minimum where averaging cannot (next to
-  // poly-square corners), and untangles.
-  const Vec2 dirs[8] = {{1, 0}, {0.7071067811865476, 0.7071067811865476}, {0, 1}, {-0.7071067811865476, 0.7071067811865476},
-                        {-1, 0}, {-0.7071067811865476, -0.7071067811865476}, {0, -1}, {0.7071067811865476, -0.7071067811865476}};
+  const SlideCurves sc = slide_curves(mesh, region, options.slide_on_curves, kinds);
   std::vector<std::uint8_t> searchable(nn, 0);
-  for (std::size_t v = 0; v < nn; ++v) searchable[v] = interior[v] || (kinds && !curves.empty() && slides(v) && allowed(v));
-  const auto search_classes = colour_classes(mesh, inc, searchable);
-  std::vector<std::uint8_t> curve_moved(nn, 0);
+  for (std::size_t v = 0; v < nn; ++v)
+    searchable[v] = interior[v] || (kinds && !sc.curves.empty() && sc.slides(mesh, v) && allowed(v));
   Visits search(nn);
   search.moved = lap.moved;
-  for (int sweep = 0; sweep < options.worst_sweeps; ++sweep) {
-    std::fill(moved_flag.begin(), moved_flag.end(), 0);
-    std::fill(curve_moved.begin(), curve_moved.end(), 0);
-    auto search_node = [&](std::int32_t v) {
-      const bool is_inner = interior[v] != 0;
-      const Incidence::Score before = inc.score(mesh, v);
-      if (is_inner && before.worst >= options.worst_threshold) return;
-      Incidence::Score best = before;
-      double step = 0.25 * inc.mean_edge(mesh, v);
-      const Star star(mesh, inc, v);
-      if (is_inner) {
-        for (int level = 0; level < 12; ++level) {
-          const Vec2 centre = mesh.nodes[v];
-          Vec2 best_p = centre;
-          for (const Vec2& d : dirs) {
-            const Vec2 p = centre + step * d;
-            Incidence::Score w;
-            if (star.better_at(p, best, 1e-12, w)) { best = w; best_p = p; }
-          }
-          mesh.nodes[v] = best_p;
-          if (best_p == centre) step *= 0.5;
-        }
-        moved_flag[v] = best.better_than(before);
-        return;
-      }
-      // Along the curve, strictly between the curve neighbours (so the boundary order never changes).
-      const Curve& c = curves[static_cast<std::size_t>(slider[v].curve)];
-      double s = c.project(mesh.nodes[v]);
-      auto unwrap = [&](double t) {
-        if (!c.closed) return t;
-        const double L = c.length();
-        while (t - s > 0.5 * L) t -= L;
-        while (s - t > 0.5 * L) t += L;
-        return t;
-      };
-      double lo = unwrap(c.project(mesh.nodes[slider[v].prev])), hi = unwrap(c.project(mesh.nodes[slider[v].next]));
-      if (lo > hi) std::swap(lo, hi);
-      if (!(lo < s && s < hi)) return;
-      const double margin = 0.05 * (hi - lo);
-      // Feature nodes keep the two mesh edges beside them within the feature tolerance of the curve; a node
-      // that starts outside it first moves towards the position that balances the two edges.
-      const bool bounded = tolerance > 0 && slider[v].curve >= feature_base;
-      auto deviation = [&](double t) { return std::max(c.chord_deviation(lo, t), c.chord_deviation(t, hi)); };
-      double allowed = INFINITY;
-      bool repaired = false;
-      if (bounded) {
-        const double now = deviation(s);
-        allowed = std::max(tolerance, now);
-        if (now > tolerance) {
-          double a = lo, b = hi;  // bisection on the sign of (left deviation - right deviation)
-          for (int it = 0; it < 40; ++it) {
-            const double mid = 0.5 * (a + b);
-            (c.chord_deviation(lo, mid) < c.chord_deviation(mid, hi) ? a : b) = mid;
-          }
-          const double balanced = std::clamp(0.5 * (a + b), lo + margin, hi - margin);
-          const Vec2 old = mesh.nodes[v];
-          const double floor = std::min(before.min_sj, options.feature_repair_min_sj);
-          for (double frac : {1.0, 0.5, 0.25}) {
-            const double cand = s + frac * (balanced - s);
-            const double dev = deviation(cand);
-            if (!(dev < now - 1e-12)) continue;
-            mesh.nodes[v] = c.at(cand);
-            const Incidence::Score moved = inc.score(mesh, v);
-            if (moved.min_sj >= floor && moved.folded <= before.folded) {
-              s = cand;
-              allowed = std::max(tolerance, dev);
-              best = moved;
-              repaired = true;
-              break;
-            }
-            mesh.nodes[v] = old;
-          }
-        }
-      }
-      if (!repaired && before.worst >= options.worst_threshold) return;
-      for (int level = 0; level < 12; ++level) {
-        double best_s = s;
-        for (double cand : {s - step, s + step}) {
-          if (cand <= lo + margin || cand >= hi - margin) continue;
-          if (bounded && deviation(cand) > allowed) continue;
-          Incidence::Score w;
-          if (star.better_at(c.at(cand), best, 1e-12, w)) { best = w; best_s = cand; }
-        }
-        if (best_s != s) { s = best_s; mesh.nodes[v] = c.at(s); } else step *= 0.5;
-      }
-      if (repaired || best.better_than(before)) moved_flag[v] = curve_moved[v] = 1;
-    };
-    for_each_by_colour(search_classes, clock, [&](std::int32_t v) {
-      // The search from an unchanged neighbourhood finds what it found last time: nothing, or v moved.
-      if (search.settled(mesh, inc, v, true)) return;
-      search.visited[v] = clock;
-      const Vec2 start = mesh.nodes[v];
-      search_node(v);
-      if (!(mesh.nodes[v] == start)) search.moved[v] = clock;
-    });
-    std::size_t moved = 0;
-    for (std::size_t v = 0; v < nn; ++v) {
-      moved += moved_flag[v];
-      stats.curve_moves += curve_moved[v];
-    }
-    stats.moves += moved;
-    if (moved == 0) break;
-  }
+  search_sweeps(sw, sc, searchable, search, stats);
   return stats;
 }
 

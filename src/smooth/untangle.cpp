@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "polysquare/core/geometry.h"
 #include "polysquare/core/quad_topology.h"
@@ -73,22 +74,110 @@ bool corner_condition(Vec2 a, Vec2 b, Vec2 c, int which, HalfPlane& h) {
   return true;
 }
 
+double quad_sj(const QuadMesh& mesh, std::size_t q) {
+  const auto& c = mesh.quads[q];
+  return quad_min_sj(mesh.nodes[static_cast<std::size_t>(c[0])], mesh.nodes[static_cast<std::size_t>(c[1])],
+                     mesh.nodes[static_cast<std::size_t>(c[2])], mesh.nodes[static_cast<std::size_t>(c[3])]);
+}
+
+// The movable nodes of folded quads and of the quads around those nodes.
+std::vector<std::uint8_t> nodes_near_folded(const QuadMesh& mesh, const NodeQuads& at, double target_sj) {
+  std::vector<std::uint8_t> todo(mesh.nodes.size(), 0);
+  for (std::size_t q = 0; q < mesh.quads.size(); ++q) {
+    if (quad_sj(mesh, q) >= target_sj) continue;
+    for (auto v : mesh.quads[q])
+      for (std::size_t k = at.offset[static_cast<std::size_t>(v)]; k < at.offset[static_cast<std::size_t>(v) + 1]; ++k)
+        for (auto u : mesh.quads[static_cast<std::size_t>(at.quads[k])]) todo[static_cast<std::size_t>(u)] = 1;
+  }
+  return todo;
+}
+
+// The conditions of the three corners of each quad that move with v, in coordinates relative to v, into hs; lo
+// and hi bound v's quads.
+void corner_conditions(const QuadMesh& mesh, const NodeQuads& at, std::size_t v, std::vector<HalfPlane>& hs, Vec2& lo,
+                       Vec2& hi) {
+  const Vec2 origin = mesh.nodes[v];
+  hs.clear();
+  lo = Vec2{0, 0};
+  hi = Vec2{0, 0};
+  for (std::size_t k = at.offset[v]; k < at.offset[v + 1]; ++k) {
+    const auto& quad = mesh.quads[static_cast<std::size_t>(at.quads[k])];
+    int i = 0;
+    while (static_cast<std::size_t>(quad[i]) != v) ++i;
+    std::array<Vec2, 4> p;
+    for (int c = 0; c < 4; ++c) {
+      p[c] = mesh.nodes[static_cast<std::size_t>(quad[c])] - origin;
+      lo = Vec2{std::min(lo.x, p[c].x), std::min(lo.y, p[c].y)};
+      hi = Vec2{std::max(hi.x, p[c].x), std::max(hi.y, p[c].y)};
+    }
+    for (int c = 3; c <= 5; ++c) {  // corners i - 1, i, i + 1; v at index 2, 1, 0 of (prev, corner, next)
+      const int corner = (i + c) % 4;
+      HalfPlane h;
+      if (corner_condition(p[(corner + 3) % 4], p[corner], p[(corner + 1) % 4], 5 - c, h)) hs.push_back(h);
+    }
+  }
+}
+
+// A place (relative to v) whose worst condition beats v's own (`worst`, at the origin), within the box lo - hi;
+// nothing when there is none.
+std::optional<Vec2> kernel_place(const std::vector<HalfPlane>& hs, Vec2 lo, Vec2 hi, double worst) {
+  const std::vector<Vec2> box{lo, Vec2{hi.x, lo.y}, hi, Vec2{lo.x, hi.y}};
+  const double span = std::max(hi.x - lo.x, hi.y - lo.y);
+  if (span <= 0.0) return std::nullopt;
+  // Bisection for the largest t with a non-empty kernel {v : every condition >= t}; v itself has t = worst.
+  double t_lo = worst, t_hi = span;
+  for (int it = 0; it < 40 && t_hi - t_lo > 1e-9 * span; ++it) {
+    const double t = 0.5 * (t_lo + t_hi);
+    (kernel(hs, box, t).empty() ? t_hi : t_lo) = t;
+  }
+  if (t_lo <= worst + 1e-9 * span) return std::nullopt;  // no better place
+  // The centre of the kernel a little inside the best level, so that v is not pushed against one corner.
+  const double t = t_lo > 0.0 ? 0.5 * t_lo : t_lo - 1e-6 * span;
+  std::vector<Vec2> poly = kernel(hs, box, std::max(t, worst));
+  if (poly.empty()) return std::nullopt;
+  Vec2 best = centroid(poly);
+  double best_worst = INFINITY;
+  for (const HalfPlane& h : hs) best_worst = std::min(best_worst, h.at(best));
+  if (!(best_worst > worst)) return std::nullopt;
+  return best;
+}
+
+// Moves node v to the best place its corner conditions allow (hs: scratch); false when it stays.
+bool untangle_node(QuadMesh& mesh, const NodeQuads& at, std::size_t v, double target_sj, std::vector<HalfPlane>& hs) {
+  const Vec2 origin = mesh.nodes[v];
+  Vec2 lo, hi;
+  corner_conditions(mesh, at, v, hs, lo, hi);
+  if (hs.empty()) return false;
+  // Quads around v below the target: a move that leaves more of them is refused even when it lifts the worst
+  // corner (lifting one folded corner by folding another's quad spreads the tangle).
+  auto below_around = [&] {
+    std::size_t below = 0;
+    for (std::size_t k = at.offset[v]; k < at.offset[v + 1]; ++k)
+      below += quad_sj(mesh, static_cast<std::size_t>(at.quads[k])) < target_sj;
+    return below;
+  };
+  const std::size_t below_before = below_around();
+  double worst = INFINITY;
+  for (const HalfPlane& h : hs) worst = std::min(worst, h.at(Vec2{0, 0}));
+  const std::optional<Vec2> best = kernel_place(hs, lo, hi, worst);
+  if (!best) return false;
+  mesh.nodes[v] = origin + *best;
+  if (below_around() > below_before) {
+    mesh.nodes[v] = origin;
+    return false;
+  }
+  return true;
+}
+
 }  // namespace
 
 UntangleStats untangle_quads(QuadMesh& mesh, const std::vector<std::uint8_t>& movable, const UntangleOptions& options) {
   UntangleStats stats;
   const std::size_t nn = mesh.nodes.size();
   const NodeQuads at = node_quads(mesh);
-  const std::vector<std::size_t>& offset = at.offset;
-  const std::vector<std::int32_t>& incident = at.quads;
-  auto quad_sj = [&](std::size_t q) {
-    const auto& c = mesh.quads[q];
-    return quad_min_sj(mesh.nodes[static_cast<std::size_t>(c[0])], mesh.nodes[static_cast<std::size_t>(c[1])],
-                       mesh.nodes[static_cast<std::size_t>(c[2])], mesh.nodes[static_cast<std::size_t>(c[3])]);
-  };
   auto count_folded = [&] {
     std::size_t n = 0;
-    for (std::size_t q = 0; q < mesh.quads.size(); ++q) n += quad_sj(q) < options.target_sj;
+    for (std::size_t q = 0; q < mesh.quads.size(); ++q) n += quad_sj(mesh, q) < options.target_sj;
     return n;
   };
   stats.folded_before = count_folded();
@@ -97,72 +186,12 @@ UntangleStats untangle_quads(QuadMesh& mesh, const std::vector<std::uint8_t>& mo
 
   std::vector<HalfPlane> hs;
   for (int sweep = 0; sweep < options.sweeps && stats.folded_after > 0; ++sweep) {
-    // The movable nodes of folded quads and of the quads around those nodes, in node order.
-    std::vector<std::uint8_t> todo(nn, 0);
-    for (std::size_t q = 0; q < mesh.quads.size(); ++q) {
-      if (quad_sj(q) >= options.target_sj) continue;
-      for (auto v : mesh.quads[q])
-        for (std::size_t k = offset[static_cast<std::size_t>(v)]; k < offset[static_cast<std::size_t>(v) + 1]; ++k)
-          for (auto u : mesh.quads[static_cast<std::size_t>(incident[k])]) todo[static_cast<std::size_t>(u)] = 1;
-    }
+    // The nodes near folded quads, in node order.
+    const std::vector<std::uint8_t> todo = nodes_near_folded(mesh, at, options.target_sj);
     std::size_t moved = 0;
     for (std::size_t v = 0; v < nn; ++v) {
-      if (!todo[v] || !movable[v] || offset[v] == offset[v + 1]) continue;
-      const Vec2 origin = mesh.nodes[v];
-      // The conditions of the three corners of each quad that move with v, and a box around v's neighbours.
-      hs.clear();
-      Vec2 lo{0, 0}, hi{0, 0};
-      for (std::size_t k = offset[v]; k < offset[v + 1]; ++k) {
-        const auto& quad = mesh.quads[static_cast<std::size_t>(incident[k])];
-        int i = 0;
-        while (static_cast<std::size_t>(quad[i]) != v) ++i;
-        std::array<Vec2, 4> p;
-        for (int c = 0; c < 4; ++c) {
-          p[c] = mesh.nodes[static_cast<std::size_t>(quad[c])] - origin;
-          lo = Vec2{std::min(lo.x, p[c].x), std::min(lo.y, p[c].y)};
-          hi = Vec2{std::max(hi.x, p[c].x), std::max(hi.y, p[c].y)};
-        }
-        for (int c = 3; c <= 5; ++c) {  // corners i - 1, i, i + 1; v at index 2, 1, 0 of (prev, corner, next)
-          const int corner = (i + c) % 4;
-          HalfPlane h;
-          if (corner_condition(p[(corner + 3) % 4], p[corner], p[(corner + 1) % 4], 5 - c, h)) hs.push_back(h);
-        }
-      }
-      if (hs.empty()) continue;
-      // Quads around v below the target: a move that leaves more of them is refused even when it lifts the worst
-      // corner (lifting one folded corner by folding another's quad spreads the tangle).
-      auto below_around = [&] {
-        std::size_t below = 0;
-        for (std::size_t k = offset[v]; k < offset[v + 1]; ++k) below += quad_sj(static_cast<std::size_t>(incident[k])) < options.target_sj;
-        return below;
-      };
-      const std::size_t below_before = below_around();
-      double worst = INFINITY;
-      for (const HalfPlane& h : hs) worst = std::min(worst, h.at(Vec2{0, 0}));
-      const std::vector<Vec2> box{lo, Vec2{hi.x, lo.y}, hi, Vec2{lo.x, hi.y}};
-      const double span = std::max(hi.x - lo.x, hi.y - lo.y);
-      if (span <= 0.0) continue;
-      // Bisection for the largest t with a non-empty kernel {v : every condition >= t}; v itself has t = worst.
-      double t_lo = worst, t_hi = span;
-      for (int it = 0; it < 40 && t_hi - t_lo > 1e-9 * span; ++it) {
-        const double t = 0.5 * (t_lo + t_hi);
-        (kernel(hs, box, t).empty() ? t_hi : t_lo) = t;
-      }
-      if (t_lo <= worst + 1e-9 * span) continue;  // no better place
-      // The centre of the kernel a little inside the best level, so that v is not pushed against one corner.
-      const double t = t_lo > 0.0 ? 0.5 * t_lo : t_lo - 1e-6 * span;
-      std::vector<Vec2> poly = kernel(hs, box, std::max(t, worst));
-      if (poly.empty()) continue;
-      Vec2 best = centroid(poly);
-      double best_worst = INFINITY;
-      for (const HalfPlane& h : hs) best_worst = std::min(best_worst, h.at(best));
-      if (!(best_worst > worst)) continue;
-      mesh.nodes[v] = origin + best;
-      if (below_around() > below_before) {
-        mesh.nodes[v] = origin;
-        continue;
-      }
-      ++moved;
+      if (!todo[v] || !movable[v] || at.offset[v] == at.offset[v + 1]) continue;
+      moved += untangle_node(mesh, at, v, options.target_sj, hs);
     }
     stats.moves += moved;
     stats.folded_after = count_folded();
