@@ -124,75 +124,82 @@ Box2 parse_window(std::string_view text) {
   return b;
 }
 
-RenderStats render_mesh(const std::filesystem::path& path, const QuadMesh& mesh, const Region* region,
-                        const RenderOptions& options) {
+namespace {
+
+// Layout: the plot on the left, the colour bar and legend in a 190 px column on the right.
+constexpr double kPad = 10.0, kColumn = 190.0, kMaxHeight = 16000.0, kMinHeight = 400.0;
+
+// Checks what is asked before any drawing; returns whether the picture is an SVG.
+bool check_picture_request(const std::filesystem::path& path, const QuadMesh& mesh, const RenderOptions& options) {
   const std::string ext = lower_extension(path);
   const bool svg = ext == ".svg";
   if (!svg && ext != ".png") throw InputError(path.string() + ": pictures are .png or .svg");
   if (mesh.quads.empty()) throw InputError(path.string() + ": the mesh has no quads to draw");
   if (options.width_px < 300 || options.width_px > 16000)
     throw InputError("picture width must be between 300 and 16000 pixels, got " + std::to_string(options.width_px));
+  return svg;
+}
 
-  RenderStats st;
-  // The window: requested, or every quad node with a 2 % margin.
-  if (options.window) {
-    st.window = *options.window;
-  } else {
-    for (const auto& q : mesh.quads)
-      for (std::int32_t v : q) st.window.add(mesh.nodes[static_cast<std::size_t>(v)]);
-    const double m = 0.02 * std::max(st.window.hi.x - st.window.lo.x, st.window.hi.y - st.window.lo.y);
-    st.window.lo = {st.window.lo.x - m, st.window.lo.y - m};
-    st.window.hi = {st.window.hi.x + m, st.window.hi.y + m};
+// The window: requested, or every quad node with a 2 % margin.
+Box2 picture_window(const QuadMesh& mesh, const RenderOptions& options) {
+  if (options.window) return *options.window;
+  Box2 window;
+  for (const auto& q : mesh.quads)
+    for (std::int32_t v : q) window.add(mesh.nodes[static_cast<std::size_t>(v)]);
+  const double m = 0.02 * std::max(window.hi.x - window.lo.x, window.hi.y - window.lo.y);
+  window.lo = {window.lo.x - m, window.lo.y - m};
+  window.hi = {window.hi.x + m, window.hi.y + m};
+  return window;
+}
+
+struct PlotSize {
+  double w = 0, h = 0;  ///< the plot's size in pixels
+};
+
+// The picture's size and the plane's scale on it (into `st`) for a window of wx by wy.
+PlotSize lay_out_picture(RenderStats& st, int width_px, double wx, double wy) {
+  PlotSize plot;
+  plot.w = width_px - kColumn - 2 * kPad;
+  st.scale = plot.w / wx;
+  plot.h = wy * st.scale;
+  if (plot.h + 2 * kPad > kMaxHeight) {
+    st.scale = (kMaxHeight - 2 * kPad) / wy;
+    plot.h = wy * st.scale;
+    plot.w = wx * st.scale;
   }
-  const double wx = st.window.hi.x - st.window.lo.x, wy = st.window.hi.y - st.window.lo.y;
-  if (!(wx > 0) || !(wy > 0)) throw InputError(path.string() + ": the picture window is empty");
+  st.width_px = width_px;
+  st.height_px = static_cast<int>(std::ceil(std::max(kMinHeight, plot.h + 2 * kPad)));
+  st.plot_x0 = kPad;
+  st.plot_y0 = (st.height_px - plot.h) / 2.0;
+  return plot;
+}
 
-  // Layout: the plot on the left, the colour bar and legend in a 190 px column on the right.
-  constexpr double pad = 10.0, column = 190.0, max_height = 16000.0, min_height = 400.0;
-  double plot_w = options.width_px - column - 2 * pad;
-  st.scale = plot_w / wx;
-  double plot_h = wy * st.scale;
-  if (plot_h + 2 * pad > max_height) {
-    st.scale = (max_height - 2 * pad) / wy;
-    plot_h = wy * st.scale;
-    plot_w = wx * st.scale;
-  }
-  st.width_px = options.width_px;
-  st.height_px = static_cast<int>(std::ceil(std::max(min_height, plot_h + 2 * pad)));
-  st.plot_x0 = pad;
-  st.plot_y0 = (st.height_px - plot_h) / 2.0;
-  auto px = [&](Vec2 p) {
-    return std::pair<double, double>{st.plot_x0 + st.scale * (p.x - st.window.lo.x),
-                                     st.plot_y0 + st.scale * (st.window.hi.y - p.y)};
-  };
-  auto node = [&](std::int32_t v) { return mesh.nodes[static_cast<std::size_t>(v)]; };
-
-  // Quads meeting the window.
+// Quads meeting the window.
+std::vector<std::size_t> quads_in_window(const QuadMesh& mesh, const Box2& window) {
   std::vector<std::size_t> visible;
   for (std::size_t i = 0; i < mesh.quads.size(); ++i) {
     Box2 b;
-    for (std::int32_t v : mesh.quads[i]) b.add(node(v));
-    if (b.hi.x >= st.window.lo.x && b.lo.x <= st.window.hi.x && b.hi.y >= st.window.lo.y && b.lo.y <= st.window.hi.y)
+    for (std::int32_t v : mesh.quads[i]) b.add(mesh.nodes[static_cast<std::size_t>(v)]);
+    if (b.hi.x >= window.lo.x && b.lo.x <= window.hi.x && b.hi.y >= window.lo.y && b.lo.y <= window.hi.y)
       visible.push_back(i);
   }
-  st.quads_drawn = visible.size();
-  if (svg && visible.size() > options.svg_max_quads)
-    throw InputError(path.string() + ": " + std::to_string(visible.size()) + " quads are too many for an SVG (limit " +
-                     std::to_string(options.svg_max_quads) + "); write a .png, or narrow the window");
+  return visible;
+}
 
-  // Level of detail from the median edge length on the picture.
+// Level of detail from the median edge length on the picture.
+double median_edge_px(const QuadMesh& mesh, const std::vector<std::size_t>& visible, double scale) {
   std::vector<double> edge_px;
   edge_px.reserve(visible.size());
-  for (std::size_t i : visible) edge_px.push_back(distance(node(mesh.quads[i][0]), node(mesh.quads[i][1])) * st.scale);
-  double median_px = 0.0;
-  if (!edge_px.empty()) {
-    std::nth_element(edge_px.begin(), edge_px.begin() + static_cast<std::ptrdiff_t>(edge_px.size() / 2), edge_px.end());
-    median_px = edge_px[edge_px.size() / 2];
-  }
-  st.edges_drawn = median_px >= options.min_edge_px;
+  for (std::size_t i : visible)
+    edge_px.push_back(distance(mesh.nodes[static_cast<std::size_t>(mesh.quads[i][0])],
+                               mesh.nodes[static_cast<std::size_t>(mesh.quads[i][1])]) * scale);
+  if (edge_px.empty()) return 0.0;
+  std::nth_element(edge_px.begin(), edge_px.begin() + static_cast<std::ptrdiff_t>(edge_px.size() / 2), edge_px.end());
+  return edge_px[edge_px.size() / 2];
+}
 
-  const QuadMetrics metrics = quad_metrics(mesh);
-  const std::vector<double>& values = options.color == RenderColor::skew ? metrics.skew : metrics.sj;
+// The range of the measure over the quads drawn, into `st`.
+void measure_range(RenderStats& st, const std::vector<std::size_t>& visible, const std::vector<double>& values) {
   st.value_min = INFINITY;
   st.value_max = -INFINITY;
   for (std::size_t i : visible) {
@@ -200,212 +207,211 @@ RenderStats render_mesh(const std::filesystem::path& path, const QuadMesh& mesh,
     st.value_max = std::max(st.value_max, values[i]);
   }
   if (visible.empty()) st.value_min = st.value_max = 0.0;
+}
 
-  std::string bytes;
-  cairo_surface_t* surface =
-      svg ? cairo_svg_surface_create_for_stream(append_to_string, &bytes, st.width_px, st.height_px)
-          : cairo_image_surface_create(CAIRO_FORMAT_RGB24, st.width_px, st.height_px);
-  cairo_t* cr = cairo_create(surface);
-  cairo_set_source_rgb(cr, 1, 1, 1);
-  cairo_paint(cr);
-  cairo_save(cr);
-  cairo_rectangle(cr, st.plot_x0, st.plot_y0, plot_w, plot_h);
-  cairo_clip(cr);
+bool colored_by_measure(RenderColor color) { return color == RenderColor::sj || color == RenderColor::skew; }
 
-  // Quads, one path per colour (256 levels of the measure, or the subregion colour): a million quads fill fast,
-  // and the SVG holds a few paths instead of one element per quad.
+// Drawing on the plot: plane (x, y) at RenderStats' pixel position.
+struct Canvas {
+  cairo_t* cr;
+  const QuadMesh& mesh;
+  const RenderStats& st;
+
+  std::pair<double, double> px(Vec2 p) const {
+    return {st.plot_x0 + st.scale * (p.x - st.window.lo.x), st.plot_y0 + st.scale * (st.window.hi.y - p.y)};
+  }
+  Vec2 node(std::int32_t v) const { return mesh.nodes[static_cast<std::size_t>(v)]; }
+  // Adds quad i's outline to the path.
+  void quad_path(std::size_t i) const {
+    const auto& q = mesh.quads[i];
+    for (int k = 0; k < 4; ++k) {
+      const auto [x, y] = px(node(q[static_cast<std::size_t>(k)]));
+      k == 0 ? cairo_move_to(cr, x, y) : cairo_line_to(cr, x, y);
+    }
+    cairo_close_path(cr);
+  }
+  // Adds a polyline to the path (not closed).
+  void line_path(const std::vector<Vec2>& points) const {
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      const auto [x, y] = px(points[i]);
+      i == 0 ? cairo_move_to(cr, x, y) : cairo_line_to(cr, x, y);
+    }
+  }
+};
+
+// Quads, one path per colour (256 levels of the measure, or the subregion colour): a million quads fill fast,
+// and the SVG holds a few paths instead of one element per quad.
+void fill_quads(const Canvas& c, const std::vector<std::size_t>& visible, const std::vector<double>& values,
+                RenderColor color) {
   std::map<int, std::vector<std::size_t>> buckets;
   for (std::size_t i : visible) {
     int key = 0;
-    if (options.color == RenderColor::sj || options.color == RenderColor::skew)
+    if (colored_by_measure(color))
       key = static_cast<int>(std::lround(std::clamp(values[i], 0.0, 1.0) * 255.0));
-    else if (options.color == RenderColor::part)
-      key = mesh.quad_part.size() == mesh.quads.size() ? static_cast<int>((mesh.quad_part[i] % 12 + 12) % 12) : 0;
+    else if (color == RenderColor::part)
+      key = c.mesh.quad_part.size() == c.mesh.quads.size() ? static_cast<int>((c.mesh.quad_part[i] % 12 + 12) % 12) : 0;
     buckets[key].push_back(i);
   }
   // Without edges drawn, antialiased fills would leave faint seams between neighbouring quads.
-  if (!st.edges_drawn) cairo_set_antialias(cr, CAIRO_ANTIALIAS_NONE);
+  if (!c.st.edges_drawn) cairo_set_antialias(c.cr, CAIRO_ANTIALIAS_NONE);
   for (const auto& [key, quads] : buckets) {
-    for (std::size_t i : quads) {
-      const auto& q = mesh.quads[i];
-      for (int k = 0; k < 4; ++k) {
-        const auto [x, y] = px(node(q[static_cast<std::size_t>(k)]));
-        k == 0 ? cairo_move_to(cr, x, y) : cairo_line_to(cr, x, y);
-      }
-      cairo_close_path(cr);
-    }
-    if (options.color == RenderColor::sj || options.color == RenderColor::skew)
-      set(cr, measure_color(options.color, key / 255.0));
-    else if (options.color == RenderColor::part)
-      set(cr, kPalette[static_cast<std::size_t>(key)]);
+    for (std::size_t i : quads) c.quad_path(i);
+    if (colored_by_measure(color))
+      set(c.cr, measure_color(color, key / 255.0));
+    else if (color == RenderColor::part)
+      set(c.cr, kPalette[static_cast<std::size_t>(key)]);
     else
-      set(cr, {0.88, 0.88, 0.88});
-    cairo_fill(cr);
+      set(c.cr, {0.88, 0.88, 0.88});
+    cairo_fill(c.cr);
   }
-  cairo_set_antialias(cr, CAIRO_ANTIALIAS_DEFAULT);
-  if (st.edges_drawn) {
-    for (std::size_t i : visible) {
-      const auto& q = mesh.quads[i];
-      for (int k = 0; k < 4; ++k) {
-        const auto [x, y] = px(node(q[static_cast<std::size_t>(k)]));
-        k == 0 ? cairo_move_to(cr, x, y) : cairo_line_to(cr, x, y);
-      }
-      cairo_close_path(cr);
-    }
-    cairo_set_source_rgba(cr, 0.2, 0.2, 0.2, 0.8);
-    cairo_set_line_width(cr, std::clamp(0.05 * median_px, 0.4, 1.2));
-    cairo_stroke(cr);
-  }
+  cairo_set_antialias(c.cr, CAIRO_ANTIALIAS_DEFAULT);
+}
 
-  // The input region, thin and dashed under the mesh's own curves (it differs where curves were simplified).
-  if (region) {
-    const double dash = 4.0;
-    cairo_set_dash(cr, &dash, 1, 0.0);
-    cairo_set_line_width(cr, 0.8);
-    for (const Ring& r : region->rings) {
-      for (std::size_t i = 0; i < r.points.size(); ++i) {
-        const auto [x, y] = px(r.points[i]);
-        i == 0 ? cairo_move_to(cr, x, y) : cairo_line_to(cr, x, y);
-      }
-      cairo_close_path(cr);
-    }
-    cairo_set_source_rgb(cr, 0.35, 0.35, 0.35);
-    cairo_stroke(cr);
-    for (const FeatureCurve& f : region->features) {
-      for (std::size_t i = 0; i < f.points.size(); ++i) {
-        const auto [x, y] = px(f.points[i]);
-        i == 0 ? cairo_move_to(cr, x, y) : cairo_line_to(cr, x, y);
-      }
-      if (f.closed) cairo_close_path(cr);
-    }
-    cairo_set_source_rgb(cr, 0.3, 0.6, 1.0);
-    cairo_stroke(cr);
-    cairo_set_dash(cr, nullptr, 0, 0.0);
-  }
+void stroke_quad_edges(const Canvas& c, const std::vector<std::size_t>& visible, double median_px) {
+  for (std::size_t i : visible) c.quad_path(i);
+  cairo_set_source_rgba(c.cr, 0.2, 0.2, 0.2, 0.8);
+  cairo_set_line_width(c.cr, std::clamp(0.05 * median_px, 0.4, 1.2));
+  cairo_stroke(c.cr);
+}
 
-  // Valence of every quad node and whether it is on the boundary (edges with one quad).
-  const auto edge_quads = quad_edge_counts(mesh);
-  const NodeValences nv = node_valences(mesh, edge_quads);
-  const std::vector<int>& valence = nv.valence;
-  const std::vector<std::uint8_t>& on_boundary = nv.on_boundary;
+// The input region, thin and dashed under the mesh's own curves (it differs where curves were simplified).
+void draw_region(const Canvas& c, const Region& region) {
+  const double dash = 4.0;
+  cairo_set_dash(c.cr, &dash, 1, 0.0);
+  cairo_set_line_width(c.cr, 0.8);
+  for (const Ring& r : region.rings) {
+    c.line_path(r.points);
+    cairo_close_path(c.cr);
+  }
+  cairo_set_source_rgb(c.cr, 0.35, 0.35, 0.35);
+  cairo_stroke(c.cr);
+  for (const FeatureCurve& f : region.features) {
+    c.line_path(f.points);
+    if (f.closed) cairo_close_path(c.cr);
+  }
+  cairo_set_source_rgb(c.cr, 0.3, 0.6, 1.0);
+  cairo_stroke(c.cr);
+  cairo_set_dash(c.cr, nullptr, 0, 0.0);
+}
+
+void stroke_edges(const Canvas& c, const std::vector<std::array<std::int32_t, 2>>& edges, const Rgb& colour,
+                  double width) {
+  for (const auto& e : edges) {
+    const auto [x0, y0] = c.px(c.node(e[0]));
+    const auto [x1, y1] = c.px(c.node(e[1]));
+    cairo_move_to(c.cr, x0, y0);
+    cairo_line_to(c.cr, x1, y1);
+  }
+  set(c.cr, colour);
+  cairo_set_line_width(c.cr, width);
+  cairo_set_line_cap(c.cr, CAIRO_LINE_CAP_ROUND);
+  cairo_stroke(c.cr);
+}
+
+// Boundary (black) and feature (blue) edges; a mesh read without tags gets its one-quad edges as boundary.
+// Named boundary segments over the boundary: open ones magenta, other kinds orange.
+void draw_boundary_and_features(const Canvas& c, const Region* region, const EdgeCounts& edge_quads) {
   std::vector<std::array<std::int32_t, 2>> derived_boundary;
   for (const auto& [key, count] : edge_quads)
     if (count == 1) derived_boundary.push_back({static_cast<std::int32_t>(key >> 32), static_cast<std::int32_t>(key & 0xffffffffu)});
-
-  // Boundary (black) and feature (blue) edges; a mesh read without tags gets its one-quad edges as boundary.
-  auto stroke_edges = [&](const std::vector<std::array<std::int32_t, 2>>& edges, const Rgb& c, double width) {
-    for (const auto& e : edges) {
-      const auto [x0, y0] = px(node(e[0]));
-      const auto [x1, y1] = px(node(e[1]));
-      cairo_move_to(cr, x0, y0);
-      cairo_line_to(cr, x1, y1);
-    }
-    set(cr, c);
-    cairo_set_line_width(cr, width);
-    cairo_set_line_cap(cr, CAIRO_LINE_CAP_ROUND);
-    cairo_stroke(cr);
-  };
-  stroke_edges(mesh.boundary_edges.empty() ? derived_boundary : mesh.boundary_edges, {0, 0, 0}, 2.0);
-  // Named boundary segments over the boundary: open ones magenta, other kinds orange.
+  stroke_edges(c, c.mesh.boundary_edges.empty() ? derived_boundary : c.mesh.boundary_edges, {0, 0, 0}, 2.0);
   if (region)
     for (const BoundarySegment& b : region->boundary_segments) {
-      for (std::size_t i = 0; i < b.line.size(); ++i) {
-        const auto [x, y] = px(b.line[i]);
-        i == 0 ? cairo_move_to(cr, x, y) : cairo_line_to(cr, x, y);
-      }
-      set(cr, b.kind == "open" ? Rgb{1.0, 0.0, 1.0} : Rgb{1.0, 0.55, 0.0});
-      cairo_set_line_width(cr, 3.0);
-      cairo_stroke(cr);
+      c.line_path(b.line);
+      set(c.cr, b.kind == "open" ? Rgb{1.0, 0.0, 1.0} : Rgb{1.0, 0.55, 0.0});
+      cairo_set_line_width(c.cr, 3.0);
+      cairo_stroke(c.cr);
     }
-  stroke_edges(mesh.feature_edges, {0.0, 0.35, 0.95}, 2.0);
+  stroke_edges(c, c.mesh.feature_edges, {0.0, 0.35, 0.95}, 2.0);
+}
 
-  // Singular nodes by valence: filled discs inside, rings on the boundary. Where they are dense on the picture
-  // (a big mesh seen whole), the marks shrink so that they cover at most a tenth of the plot.
+// Singular nodes by valence: filled discs inside, rings on the boundary. Where they are dense on the picture
+// (a big mesh seen whole), the marks shrink so that they cover at most a tenth of the plot. Returns the marks
+// by extra valence (-1, 1, 2 for two or more); sets st's mark radius and count.
+std::map<int, std::size_t> mark_singular_nodes(const Canvas& c, RenderStats& st, const NodeValences& nv,
+                                               double median_px, const PlotSize& plot) {
+  const std::vector<int>& valence = nv.valence;
+  const std::vector<std::uint8_t>& on_boundary = nv.on_boundary;
   std::vector<std::size_t> singular;
-  for (std::size_t v = 0; v < mesh.nodes.size(); ++v) {
+  for (std::size_t v = 0; v < c.mesh.nodes.size(); ++v) {
     if (valence[v] == 0 || valence[v] == (on_boundary[v] ? 3 : 4)) continue;
-    const Vec2 p = mesh.nodes[v];
+    const Vec2 p = c.mesh.nodes[v];
     if (p.x < st.window.lo.x || p.x > st.window.hi.x || p.y < st.window.lo.y || p.y > st.window.hi.y) continue;
     singular.push_back(v);
   }
   double radius = std::clamp(0.3 * median_px, 2.0, 6.0);
   if (!singular.empty())
-    radius = std::max(1.0, std::min(radius, std::sqrt(0.1 * plot_w * plot_h / (M_PI * static_cast<double>(singular.size())))));
+    radius = std::max(1.0, std::min(radius, std::sqrt(0.1 * plot.w * plot.h / (M_PI * static_cast<double>(singular.size())))));
   st.mark_radius_px = radius;
   std::map<int, std::size_t> marked_by_extra;
   for (std::size_t v : singular) {
     const bool b = on_boundary[v] != 0;
     const int extra = valence[v] - (b ? 3 : 4);
-    const auto [x, y] = px(mesh.nodes[v]);
-    cairo_new_sub_path(cr);
-    cairo_arc(cr, x, y, radius, 0, 2 * M_PI);
-    set(cr, valence_color(valence[v], b));
+    const auto [x, y] = c.px(c.mesh.nodes[v]);
+    cairo_new_sub_path(c.cr);
+    cairo_arc(c.cr, x, y, radius, 0, 2 * M_PI);
+    set(c.cr, valence_color(valence[v], b));
     if (b) {
-      cairo_set_line_width(cr, std::max(1.0, radius / 2.5));
-      cairo_stroke(cr);
+      cairo_set_line_width(c.cr, std::max(1.0, radius / 2.5));
+      cairo_stroke(c.cr);
     } else {
-      cairo_fill_preserve(cr);
-      cairo_set_source_rgb(cr, 1, 1, 1);
-      cairo_set_line_width(cr, 0.6);
-      cairo_stroke(cr);
+      cairo_fill_preserve(c.cr);
+      cairo_set_source_rgb(c.cr, 1, 1, 1);
+      cairo_set_line_width(c.cr, 0.6);
+      cairo_stroke(c.cr);
     }
     ++st.singular_nodes_marked;
     ++marked_by_extra[std::clamp(extra, -1, 2)];
   }
-  cairo_restore(cr);
+  return marked_by_extra;
+}
 
-  // The colour bar with its scale (sj, skew) or the subregion count, then the valence legend.
-  cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
-  cairo_set_font_size(cr, 12);
-  const double lx = options.width_px - column + 10;
-  double ly = pad + 16;
-  cairo_set_source_rgb(cr, 0, 0, 0);
-  if (options.color == RenderColor::sj || options.color == RenderColor::skew) {
-    text(cr, lx, ly, options.color == RenderColor::sj ? "scaled Jacobian" : "skew");
-    const double top = ly + 10, height = 200, bar_w = 20;
-    st.bar_x0 = lx;
-    st.bar_y0 = top;
-    st.bar_w = bar_w;
-    st.bar_h = height;
-    constexpr int slices = 100;
-    for (int s = 0; s < slices; ++s) {  // value 0 at the bottom, 1 at the top
-      const double v = (s + 0.5) / slices;
-      set(cr, measure_color(options.color, v));
-      cairo_rectangle(cr, lx, top + height * (1.0 - (s + 1.0) / slices), bar_w, height / slices + 0.5);
-      cairo_fill(cr);
-    }
-    cairo_set_source_rgb(cr, 0, 0, 0);
-    cairo_set_line_width(cr, 1.0);
-    cairo_rectangle(cr, lx, top, bar_w, height);
-    cairo_stroke(cr);
-    for (int t = 0; t <= 4; ++t) {
-      const double y = top + height * (1.0 - t / 4.0);
-      cairo_move_to(cr, lx + bar_w, y);
-      cairo_line_to(cr, lx + bar_w + 5, y);
-      cairo_stroke(cr);
-      text(cr, lx + bar_w + 8, y + 4, fixed(t / 4.0, 2));
-    }
-    // The range drawn: a bracket beside the bar from the smallest to the largest value.
-    const double ymin = top + height * (1.0 - std::clamp(st.value_min, 0.0, 1.0));
-    const double ymax = top + height * (1.0 - std::clamp(st.value_max, 0.0, 1.0));
-    cairo_move_to(cr, lx - 3, ymin);
-    cairo_line_to(cr, lx - 7, ymin);
-    cairo_line_to(cr, lx - 7, ymax);
-    cairo_line_to(cr, lx - 3, ymax);
-    cairo_set_line_width(cr, 1.5);
-    cairo_stroke(cr);
-    ly = top + height + 20;
-    text(cr, lx, ly, "min " + fixed(st.value_min, 3));
-    ly += 16;
-    text(cr, lx, ly, "max " + fixed(st.value_max, 3));
-    ly += 28;
-  } else if (options.color == RenderColor::part) {
-    int parts = 0;
-    for (std::size_t i : visible)
-      parts = std::max(parts, mesh.quad_part.size() == mesh.quads.size() ? mesh.quad_part[i] + 1 : 1);
-    text(cr, lx, ly, "subregions: " + std::to_string(parts));
-    ly += 28;
+// The colour bar of the measure at (lx, ly) with its scale and the range drawn (into st's bar); returns the y
+// below it.
+double draw_colour_bar(cairo_t* cr, RenderStats& st, RenderColor color, double lx, double ly) {
+  text(cr, lx, ly, color == RenderColor::sj ? "scaled Jacobian" : "skew");
+  const double top = ly + 10, height = 200, bar_w = 20;
+  st.bar_x0 = lx;
+  st.bar_y0 = top;
+  st.bar_w = bar_w;
+  st.bar_h = height;
+  constexpr int slices = 100;
+  for (int s = 0; s < slices; ++s) {  // value 0 at the bottom, 1 at the top
+    const double v = (s + 0.5) / slices;
+    set(cr, measure_color(color, v));
+    cairo_rectangle(cr, lx, top + height * (1.0 - (s + 1.0) / slices), bar_w, height / slices + 0.5);
+    cairo_fill(cr);
   }
+  cairo_set_source_rgb(cr, 0, 0, 0);
+  cairo_set_line_width(cr, 1.0);
+  cairo_rectangle(cr, lx, top, bar_w, height);
+  cairo_stroke(cr);
+  for (int t = 0; t <= 4; ++t) {
+    const double y = top + height * (1.0 - t / 4.0);
+    cairo_move_to(cr, lx + bar_w, y);
+    cairo_line_to(cr, lx + bar_w + 5, y);
+    cairo_stroke(cr);
+    text(cr, lx + bar_w + 8, y + 4, fixed(t / 4.0, 2));
+  }
+  // The range drawn: a bracket beside the bar from the smallest to the largest value.
+  const double ymin = top + height * (1.0 - std::clamp(st.value_min, 0.0, 1.0));
+  const double ymax = top + height * (1.0 - std::clamp(st.value_max, 0.0, 1.0));
+  cairo_move_to(cr, lx - 3, ymin);
+  cairo_line_to(cr, lx - 7, ymin);
+  cairo_line_to(cr, lx - 7, ymax);
+  cairo_line_to(cr, lx - 3, ymax);
+  cairo_set_line_width(cr, 1.5);
+  cairo_stroke(cr);
+  ly = top + height + 20;
+  text(cr, lx, ly, "min " + fixed(st.value_min, 3));
+  ly += 16;
+  text(cr, lx, ly, "max " + fixed(st.value_max, 3));
+  return ly + 28;
+}
+
+// The valence legend at (lx, ly) with the count of each kind of mark.
+void draw_valence_legend(cairo_t* cr, const RenderStats& st, const std::map<int, std::size_t>& marked_by_extra,
+                         double lx, double ly) {
   text(cr, lx, ly, "singular nodes");
   ly += 18;
   const std::array<std::pair<int, const char*>, 3> legend{{{-1, "valence 3 (boundary 2)"}, {1, "5 (boundary 4)"},
@@ -418,14 +424,37 @@ RenderStats render_mesh(const std::filesystem::path& path, const QuadMesh& mesh,
     cairo_set_source_rgb(cr, 0, 0, 0);
     const auto it = marked_by_extra.find(extra);
     text_within(cr, lx + 15, ly, std::string(label) + ": " + std::to_string(it == marked_by_extra.end() ? 0 : it->second),
-                options.width_px - pad);
+                st.width_px - kPad);
     ly += 16;
   }
   text(cr, lx, ly, "(rings: boundary nodes)");
   ly += 16;
   if (!st.edges_drawn) text(cr, lx, ly, "(quad edges hidden)");
+}
 
-  cairo_destroy(cr);
+// The colour bar with its scale (sj, skew) or the subregion count, then the valence legend.
+void draw_legend_column(const Canvas& c, RenderStats& st, RenderColor color, const std::vector<std::size_t>& visible,
+                        const std::map<int, std::size_t>& marked_by_extra) {
+  cairo_t* cr = c.cr;
+  cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
+  cairo_set_font_size(cr, 12);
+  const double lx = st.width_px - kColumn + 10;
+  double ly = kPad + 16;
+  cairo_set_source_rgb(cr, 0, 0, 0);
+  if (colored_by_measure(color)) {
+    ly = draw_colour_bar(cr, st, color, lx, ly);
+  } else if (color == RenderColor::part) {
+    int parts = 0;
+    for (std::size_t i : visible)
+      parts = std::max(parts, c.mesh.quad_part.size() == c.mesh.quads.size() ? c.mesh.quad_part[i] + 1 : 1);
+    text(cr, lx, ly, "subregions: " + std::to_string(parts));
+    ly += 28;
+  }
+  draw_valence_legend(cr, st, marked_by_extra, lx, ly);
+}
+
+// Ends the drawing: the PNG or SVG in `bytes` (the SVG surface streams into it), or a runtime_error naming `path`.
+void finish_surface(cairo_surface_t* surface, std::string& bytes, bool svg, const std::filesystem::path& path) {
   cairo_status_t status = cairo_surface_status(surface);
   if (svg) {
     cairo_surface_finish(surface);  // flushes the SVG into `bytes`
@@ -436,6 +465,54 @@ RenderStats render_mesh(const std::filesystem::path& path, const QuadMesh& mesh,
   cairo_surface_destroy(surface);
   if (status != CAIRO_STATUS_SUCCESS)
     throw std::runtime_error(path.string() + ": drawing failed: " + cairo_status_to_string(status));
+}
+
+}  // namespace
+
+RenderStats render_mesh(const std::filesystem::path& path, const QuadMesh& mesh, const Region* region,
+                        const RenderOptions& options) {
+  const bool svg = check_picture_request(path, mesh, options);
+  RenderStats st;
+  st.window = picture_window(mesh, options);
+  const double wx = st.window.hi.x - st.window.lo.x, wy = st.window.hi.y - st.window.lo.y;
+  if (!(wx > 0) || !(wy > 0)) throw InputError(path.string() + ": the picture window is empty");
+  const PlotSize plot = lay_out_picture(st, options.width_px, wx, wy);
+
+  const std::vector<std::size_t> visible = quads_in_window(mesh, st.window);
+  st.quads_drawn = visible.size();
+  if (svg && visible.size() > options.svg_max_quads)
+    throw InputError(path.string() + ": " + std::to_string(visible.size()) + " quads are too many for an SVG (limit " +
+                     std::to_string(options.svg_max_quads) + "); write a .png, or narrow the window");
+  const double median_px = median_edge_px(mesh, visible, st.scale);
+  st.edges_drawn = median_px >= options.min_edge_px;
+  const QuadMetrics metrics = quad_metrics(mesh);
+  const std::vector<double>& values = options.color == RenderColor::skew ? metrics.skew : metrics.sj;
+  measure_range(st, visible, values);
+
+  std::string bytes;
+  cairo_surface_t* surface =
+      svg ? cairo_svg_surface_create_for_stream(append_to_string, &bytes, st.width_px, st.height_px)
+          : cairo_image_surface_create(CAIRO_FORMAT_RGB24, st.width_px, st.height_px);
+  cairo_t* cr = cairo_create(surface);
+  cairo_set_source_rgb(cr, 1, 1, 1);
+  cairo_paint(cr);
+  cairo_save(cr);
+  cairo_rectangle(cr, st.plot_x0, st.plot_y0, plot.w, plot.h);
+  cairo_clip(cr);
+  const Canvas canvas{cr, mesh, st};
+  fill_quads(canvas, visible, values, options.color);
+  if (st.edges_drawn) stroke_quad_edges(canvas, visible, median_px);
+  if (region) draw_region(canvas, *region);
+  // Valence of every quad node and whether it is on the boundary (edges with one quad).
+  const auto edge_quads = quad_edge_counts(mesh);
+  const NodeValences nv = node_valences(mesh, edge_quads);
+  draw_boundary_and_features(canvas, region, edge_quads);
+  const std::map<int, std::size_t> marked_by_extra = mark_singular_nodes(canvas, st, nv, median_px, plot);
+  cairo_restore(cr);
+  draw_legend_column(canvas, st, options.color, visible, marked_by_extra);
+  cairo_destroy(cr);
+
+  finish_surface(surface, bytes, svg, path);
   write_file_atomically(path, [&](std::ostream& os) { os.write(bytes.data(), static_cast<std::streamsize>(bytes.size())); },
                         true);
   return st;

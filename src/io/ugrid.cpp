@@ -23,137 +23,152 @@ namespace {
 constexpr int kFillInt = -999;  // D-Flow FM's fill value for connectivity
 constexpr double kFillDouble = -999.0;
 
-}  // namespace
+void define_topology(NcFile& f) {
+  const int topo = f.var("mesh2d", NC_INT, {});
+  f.integer(topo, "topology_dimension", 2);
+  f.texts(topo, {{"cf_role", "mesh_topology"},
+                 {"long_name", "Topology data of 2D mesh"},
+                 {"node_coordinates", "mesh2d_node_x mesh2d_node_y"},
+                 {"node_dimension", "mesh2d_nNodes"},
+                 {"max_face_nodes_dimension", "mesh2d_nMax_face_nodes"},
+                 {"edge_node_connectivity", "mesh2d_edge_nodes"},
+                 {"edge_dimension", "mesh2d_nEdges"},
+                 {"edge_coordinates", "mesh2d_edge_x mesh2d_edge_y"},
+                 {"face_node_connectivity", "mesh2d_face_nodes"},
+                 {"face_dimension", "mesh2d_nFaces"},
+                 {"face_coordinates", "mesh2d_face_x mesh2d_face_y"}});
+}
 
-void write_ugrid(const std::filesystem::path& path, const QuadMesh& mesh, const MeshWriteOptions& options) {
-  if (!options.depth.empty() && options.depth.size() != mesh.nodes.size())
-    throw InputError(path.string() + ": " + std::to_string(options.depth.size()) + " depths given for " +
-                     std::to_string(mesh.nodes.size()) + " nodes");
-  if (!mesh.triangles.empty())
-    throw InputError(path.string() + ": the mesh has triangles; the solver writers take all-quad meshes");
-  const EdgeTable edges = edge_table(mesh);
-  const std::vector<Vec2> centres = face_circumcentres(mesh, edges);
-  const crs::CrsInfo info = crs::crs_info(mesh.crs);
+// The CRS as D-Flow FM reads it: the epsg attribute (0 = unknown projected).
+void define_crs(NcFile& f, const crs::CrsInfo& info, const std::string& crs_var, bool geographic) {
+  const int crs = f.var(crs_var, NC_INT, {});
+  f.text(crs, "name", info.known ? info.name : "Unknown projected");
+  f.integer(crs, "epsg", info.epsg);
+  f.text(crs, "grid_mapping_name", geographic ? "latitude_longitude" : "Unknown projected");
+  f.real(crs, "longitude_of_prime_meridian", 0.0);
+  f.real(crs, "semi_major_axis", info.semi_major);
+  f.real(crs, "semi_minor_axis", info.semi_minor);
+  f.real(crs, "inverse_flattening", info.inverse_flattening);
+  f.text(crs, "EPSG_code", "EPSG:" + std::to_string(info.epsg));
+  f.text(crs, "value", "value is equal to EPSG code");
+  f.text(crs, "proj4_params", info.proj4);
+  if (!info.wkt.empty()) f.text(crs, "wkt", info.wkt);
+}
+
+int define_coordinate(NcFile& f, bool geographic, const std::string& name, int dim, const char* location, char axis,
+                      const std::string& what) {
+  const int v = f.var(name, NC_DOUBLE, {dim});
+  f.text(v, "units", geographic ? (axis == 'x' ? "degrees_east" : "degrees_north") : "m");
+  f.text(v, "standard_name", geographic ? (axis == 'x' ? "longitude" : "latitude")
+                                        : (axis == 'x' ? "projection_x_coordinate" : "projection_y_coordinate"));
+  f.text(v, "long_name", std::string(1, axis) + "-coordinate of " + what);
+  f.text(v, "mesh", "mesh2d");
+  f.text(v, "location", location);
+  return v;
+}
+
+// Connectivity, 1-based as D-Flow FM writes it.
+int define_connectivity(NcFile& f, const std::string& name, std::vector<int> dims, const char* location,
+                        const char* long_name) {
+  const int v = f.var(name, NC_INT, std::move(dims));
+  f.text(v, "cf_role", std::string(location) + "_node_connectivity");
+  f.text(v, "mesh", "mesh2d");
+  f.text(v, "location", location);
+  f.text(v, "long_name", long_name);
+  f.integer(v, "start_index", 1);
+  f.integer(v, "_FillValue", kFillInt);
+  return v;
+}
+
+int define_node_z(NcFile& f, int d_nodes, const std::string& crs_var) {
+  const int node_z = f.var("mesh2d_node_z", NC_DOUBLE, {d_nodes});
+  f.texts(node_z, {{"mesh", "mesh2d"},
+                   {"location", "node"},
+                   {"coordinates", "mesh2d_node_x mesh2d_node_y"},
+                   {"standard_name", "altitude"},
+                   {"long_name", "z-coordinate of mesh nodes"},
+                   {"units", "m"},
+                   {"positive", "up"},
+                   {"grid_mapping", crs_var}});
+  f.real(node_z, "_FillValue", kFillDouble);
+  return node_z;
+}
+
+// Variable ids of a net file, from its definitions.
+struct UgridVars {
+  int node_x = -1, node_y = -1, node_z = -1;  ///< node_z: -1 without depths
+  int edge_x = -1, edge_y = -1, edge_nodes = -1;
+  int face_x = -1, face_y = -1, face_nodes = -1;
+};
+
+struct UgridSizes {
+  std::size_t nodes = 0, edges = 0, faces = 0;
+};
+
+UgridVars define_ugrid(NcFile& f, const UgridSizes& n, const crs::CrsInfo& info, bool with_depth, const QuadMesh& mesh) {
   const bool geographic = info.known && info.geographic;
   const std::string crs_var = geographic ? "wgs84" : "projected_coordinate_system";
+  const int d_nodes = f.dim("mesh2d_nNodes", n.nodes), d_edges = f.dim("mesh2d_nEdges", n.edges),
+            d_faces = f.dim("mesh2d_nFaces", n.faces), d_max = f.dim("mesh2d_nMax_face_nodes", 4), d_two = f.dim("Two", 2);
+  define_topology(f);
+  define_crs(f, info, crs_var, geographic);
+  UgridVars v;
+  v.node_x = define_coordinate(f, geographic, "mesh2d_node_x", d_nodes, "node", 'x', "mesh nodes");
+  v.node_y = define_coordinate(f, geographic, "mesh2d_node_y", d_nodes, "node", 'y', "mesh nodes");
+  if (with_depth) v.node_z = define_node_z(f, d_nodes, crs_var);
+  v.edge_x = define_coordinate(f, geographic, "mesh2d_edge_x", d_edges, "edge", 'x', "the mesh edges (midpoint)");
+  v.edge_y = define_coordinate(f, geographic, "mesh2d_edge_y", d_edges, "edge", 'y', "the mesh edges (midpoint)");
+  v.edge_nodes =
+      define_connectivity(f, "mesh2d_edge_nodes", {d_edges, d_two}, "edge", "Start and end nodes of mesh edges");
+  v.face_x = define_coordinate(f, geographic, "mesh2d_face_x", d_faces, "face", 'x', "the mesh faces (circumcentre)");
+  v.face_y = define_coordinate(f, geographic, "mesh2d_face_y", d_faces, "face", 'y', "the mesh faces (circumcentre)");
+  v.face_nodes = define_connectivity(f, "mesh2d_face_nodes", {d_faces, d_max}, "face",
+                                     "Vertex nodes of mesh faces (counterclockwise)");
+
+  f.text(NC_GLOBAL, "Conventions", "CF-1.8 UGRID-1.0 Deltares-0.10");
+  f.text(NC_GLOBAL, "title", "D-Flow FM net file (all quadrilaterals)");
+  f.text(NC_GLOBAL, "source", std::string("polysquare ") + library_version());
+  f.text(NC_GLOBAL, "crs", mesh.crs);
+  return v;
+}
+
+void put_ugrid(NcFile& f, const UgridVars& v, const QuadMesh& mesh, const EdgeTable& edges,
+               const std::vector<Vec2>& centres, const std::vector<double>& depth) {
   const std::size_t nn = mesh.nodes.size(), ne = edges.nodes.size(), nf = mesh.quads.size();
+  std::vector<double> xs(nn), ys(nn);
+  for (std::size_t i = 0; i < nn; ++i) xs[i] = mesh.nodes[i].x, ys[i] = mesh.nodes[i].y;
+  f.put(v.node_x, xs);
+  f.put(v.node_y, ys);
+  if (v.node_z >= 0) {
+    std::vector<double> z(nn);
+    for (std::size_t i = 0; i < nn; ++i) z[i] = -depth[i];
+    f.put(v.node_z, z);
+  }
+  std::vector<double> ex(ne), ey(ne);
+  std::vector<int> en(2 * ne);
+  for (std::size_t e = 0; e < ne; ++e) {
+    const Vec2 m = 0.5 * (mesh.nodes[edges.nodes[e][0]] + mesh.nodes[edges.nodes[e][1]]);
+    ex[e] = m.x, ey[e] = m.y;
+    en[2 * e] = edges.nodes[e][0] + 1;
+    en[2 * e + 1] = edges.nodes[e][1] + 1;
+  }
+  f.put(v.edge_x, ex);
+  f.put(v.edge_y, ey);
+  f.put(v.edge_nodes, en);
+  std::vector<double> fx(nf), fy(nf);
+  std::vector<int> fn(4 * nf);
+  for (std::size_t q = 0; q < nf; ++q) {
+    fx[q] = centres[q].x, fy[q] = centres[q].y;
+    for (int k = 0; k < 4; ++k) fn[4 * q + static_cast<std::size_t>(k)] = mesh.quads[q][static_cast<std::size_t>(k)] + 1;
+  }
+  f.put(v.face_x, fx);
+  f.put(v.face_y, fy);
+  f.put(v.face_nodes, fn);
+}
 
-  write_path_atomically(path, [&](const std::filesystem::path& tmp) {
-    NcFile f(tmp, path.string());
-    const int d_nodes = f.dim("mesh2d_nNodes", nn), d_edges = f.dim("mesh2d_nEdges", ne),
-              d_faces = f.dim("mesh2d_nFaces", nf), d_max = f.dim("mesh2d_nMax_face_nodes", 4), d_two = f.dim("Two", 2);
-
-    const int topo = f.var("mesh2d", NC_INT, {});
-    f.integer(topo, "topology_dimension", 2);
-    f.texts(topo, {{"cf_role", "mesh_topology"},
-                   {"long_name", "Topology data of 2D mesh"},
-                   {"node_coordinates", "mesh2d_node_x mesh2d_node_y"},
-                   {"node_dimension", "mesh2d_nNodes"},
-                   {"max_face_nodes_dimension", "mesh2d_nMax_face_nodes"},
-                   {"edge_node_connectivity", "mesh2d_edge_nodes"},
-                   {"edge_dimension", "mesh2d_nEdges"},
-                   {"edge_coordinates", "mesh2d_edge_x mesh2d_edge_y"},
-                   {"face_node_connectivity", "mesh2d_face_nodes"},
-                   {"face_dimension", "mesh2d_nFaces"},
-                   {"face_coordinates", "mesh2d_face_x mesh2d_face_y"}});
-
-    // The CRS as D-Flow FM reads it: the epsg attribute (0 = unknown projected).
-    const int crs = f.var(crs_var, NC_INT, {});
-    f.text(crs, "name", info.known ? info.name : "Unknown projected");
-    f.integer(crs, "epsg", info.epsg);
-    f.text(crs, "grid_mapping_name", geographic ? "latitude_longitude" : "Unknown projected");
-    f.real(crs, "longitude_of_prime_meridian", 0.0);
-    f.real(crs, "semi_major_axis", info.semi_major);
-    f.real(crs, "semi_minor_axis", info.semi_minor);
-    f.real(crs, "inverse_flattening", info.inverse_flattening);
-    f.text(crs, "EPSG_code", "EPSG:" + std::to_string(info.epsg));
-    f.text(crs, "value", "value is equal to EPSG code");
-    f.text(crs, "proj4_params", info.proj4);
-    if (!info.wkt.empty()) f.text(crs, "wkt", info.wkt);
-
-    auto coordinate = [&](const std::string& name, int dim, const char* location, char axis, const std::string& what) {
-      const int v = f.var(name, NC_DOUBLE, {dim});
-      f.text(v, "units", geographic ? (axis == 'x' ? "degrees_east" : "degrees_north") : "m");
-      f.text(v, "standard_name", geographic ? (axis == 'x' ? "longitude" : "latitude")
-                                            : (axis == 'x' ? "projection_x_coordinate" : "projection_y_coordinate"));
-      f.text(v, "long_name", std::string(1, axis) + "-coordinate of " + what);
-      f.text(v, "mesh", "mesh2d");
-      f.text(v, "location", location);
-      return v;
-    };
-    const int node_x = coordinate("mesh2d_node_x", d_nodes, "node", 'x', "mesh nodes");
-    const int node_y = coordinate("mesh2d_node_y", d_nodes, "node", 'y', "mesh nodes");
-    int node_z = -1;
-    if (!options.depth.empty()) {
-      node_z = f.var("mesh2d_node_z", NC_DOUBLE, {d_nodes});
-      f.texts(node_z, {{"mesh", "mesh2d"},
-                       {"location", "node"},
-                       {"coordinates", "mesh2d_node_x mesh2d_node_y"},
-                       {"standard_name", "altitude"},
-                       {"long_name", "z-coordinate of mesh nodes"},
-                       {"units", "m"},
-                       {"positive", "up"},
-                       {"grid_mapping", crs_var}});
-      f.real(node_z, "_FillValue", kFillDouble);
-    }
-    const int edge_x = coordinate("mesh2d_edge_x", d_edges, "edge", 'x', "the mesh edges (midpoint)");
-    const int edge_y = coordinate("mesh2d_edge_y", d_edges, "edge", 'y', "the mesh edges (midpoint)");
-    // Connectivity, 1-based as D-Flow FM writes it.
-    auto connectivity = [&](const std::string& name, std::vector<int> dims, const char* location, const char* long_name) {
-      const int v = f.var(name, NC_INT, std::move(dims));
-      f.text(v, "cf_role", std::string(location) + "_node_connectivity");
-      f.text(v, "mesh", "mesh2d");
-      f.text(v, "location", location);
-      f.text(v, "long_name", long_name);
-      f.integer(v, "start_index", 1);
-      f.integer(v, "_FillValue", kFillInt);
-      return v;
-    };
-    const int edge_nodes = connectivity("mesh2d_edge_nodes", {d_edges, d_two}, "edge", "Start and end nodes of mesh edges");
-    const int face_x = coordinate("mesh2d_face_x", d_faces, "face", 'x', "the mesh faces (circumcentre)");
-    const int face_y = coordinate("mesh2d_face_y", d_faces, "face", 'y', "the mesh faces (circumcentre)");
-    const int face_nodes =
-        connectivity("mesh2d_face_nodes", {d_faces, d_max}, "face", "Vertex nodes of mesh faces (counterclockwise)");
-
-    f.text(NC_GLOBAL, "Conventions", "CF-1.8 UGRID-1.0 Deltares-0.10");
-    f.text(NC_GLOBAL, "title", "D-Flow FM net file (all quadrilaterals)");
-    f.text(NC_GLOBAL, "source", std::string("polysquare ") + library_version());
-    f.text(NC_GLOBAL, "crs", mesh.crs);
-    f.end_definitions();
-
-    std::vector<double> xs(nn), ys(nn);
-    for (std::size_t i = 0; i < nn; ++i) xs[i] = mesh.nodes[i].x, ys[i] = mesh.nodes[i].y;
-    f.put(node_x, xs);
-    f.put(node_y, ys);
-    if (node_z >= 0) {
-      std::vector<double> z(nn);
-      for (std::size_t i = 0; i < nn; ++i) z[i] = -options.depth[i];
-      f.put(node_z, z);
-    }
-    std::vector<double> ex(ne), ey(ne);
-    std::vector<int> en(2 * ne);
-    for (std::size_t e = 0; e < ne; ++e) {
-      const Vec2 m = 0.5 * (mesh.nodes[edges.nodes[e][0]] + mesh.nodes[edges.nodes[e][1]]);
-      ex[e] = m.x, ey[e] = m.y;
-      en[2 * e] = edges.nodes[e][0] + 1;
-      en[2 * e + 1] = edges.nodes[e][1] + 1;
-    }
-    f.put(edge_x, ex);
-    f.put(edge_y, ey);
-    f.put(edge_nodes, en);
-    std::vector<double> fx(nf), fy(nf);
-    std::vector<int> fn(4 * nf);
-    for (std::size_t q = 0; q < nf; ++q) {
-      fx[q] = centres[q].x, fy[q] = centres[q].y;
-      for (int k = 0; k < 4; ++k) fn[4 * q + static_cast<std::size_t>(k)] = mesh.quads[q][static_cast<std::size_t>(k)] + 1;
-    }
-    f.put(face_x, fx);
-    f.put(face_y, fy);
-    f.put(face_nodes, fn);
-    f.close();
-  });
-  // D-Flow FM takes boundary conditions on polylines (.pli, Tekal blocks: name, "rows 2", then x y per row)
-  // named in its external forcing file; each open segment gets one along its boundary nodes.
+// D-Flow FM takes boundary conditions on polylines (.pli, Tekal blocks: name, "rows 2", then x y per row)
+// named in its external forcing file; each open segment gets one along its boundary nodes.
+void write_pli_files(const std::filesystem::path& path, const QuadMesh& mesh, const MeshWriteOptions& options) {
   const MeshGroups groups = options.groups.empty() ? mesh_groups(mesh) : options.groups;
   for (const CurveGroup& g : groups.segments) {
     if (g.kind != "open") continue;
@@ -166,6 +181,28 @@ void write_ugrid(const std::filesystem::path& path, const QuadMesh& mesh, const 
       }
     }, false);
   }
+}
+
+}  // namespace
+
+void write_ugrid(const std::filesystem::path& path, const QuadMesh& mesh, const MeshWriteOptions& options) {
+  if (!options.depth.empty() && options.depth.size() != mesh.nodes.size())
+    throw InputError(path.string() + ": " + std::to_string(options.depth.size()) + " depths given for " +
+                     std::to_string(mesh.nodes.size()) + " nodes");
+  if (!mesh.triangles.empty())
+    throw InputError(path.string() + ": the mesh has triangles; the solver writers take all-quad meshes");
+  const EdgeTable edges = edge_table(mesh);
+  const std::vector<Vec2> centres = face_circumcentres(mesh, edges);
+  const crs::CrsInfo info = crs::crs_info(mesh.crs);
+  const UgridSizes sizes{mesh.nodes.size(), edges.nodes.size(), mesh.quads.size()};
+  write_path_atomically(path, [&](const std::filesystem::path& tmp) {
+    NcFile f(tmp, path.string());
+    const UgridVars vars = define_ugrid(f, sizes, info, !options.depth.empty(), mesh);
+    f.end_definitions();
+    put_ugrid(f, vars, mesh, edges, centres, options.depth);
+    f.close();
+  });
+  write_pli_files(path, mesh, options);
 }
 
 std::string file_safe(const std::string& name) {

@@ -1,0 +1,521 @@
+// `polysquare mesh`: checks the arguments, reads the input, meshes it (in a local frame far from the origin),
+// measures the mesh, writes every output at once, then says what was left out, patched or refused.
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <iostream>
+#include <map>
+#include <optional>
+#include <sstream>
+
+#include "mesh_command.h"
+#include "polysquare/core/error.h"
+#include "polysquare/io/atomic_file.h"
+#include "polysquare/io/bathymetry.h"
+#include "polysquare/io/mesh_io.h"
+#include "polysquare/io/render.h"
+#include "polysquare/io/solver_files.h"
+#include "polysquare/io/svg.h"
+#include "polysquare/partition/partition.h"
+#include "polysquare/pipeline/check_options.h"
+#include "polysquare/pipeline/invariants.h"
+#include "polysquare/pipeline/local_frame.h"
+#include "polysquare/pipeline/report.h"
+#include "polysquare/quality/quality.h"
+#include "terminal_progress.h"
+#include "time_limit.h"
+
+namespace polysquare::cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+// --picture: PNG, or SVG when the mesh is small enough for one (else a PNG beside it, with a warning).
+void write_picture(const fs::path& picture, const QuadMesh& mesh, const Region& region) {
+  RenderOptions ro;
+  fs::path to = picture;
+  if (lower_extension(picture) == ".svg" && mesh.quads.size() > ro.svg_max_quads) {
+    to.replace_extension(".png");
+    std::cerr << "warning: " << mesh.quads.size() << " quads are too many for an SVG picture (limit "
+              << ro.svg_max_quads << "); wrote " << to.string() << " instead\n";
+  }
+  render_mesh(to, mesh, &region, ro);
+}
+
+// Every output is checked before any work (format, directory, writability, distinct, not an input): a refusal
+// takes milliseconds, not a meshing run.
+void check_outputs(const MeshArgs& args) {
+  check_output_path(args.output);
+  std::vector<std::pair<fs::path, std::string>> outputs{{args.output, "-o"}}, inputs{{args.input, "input"}};
+  if (lower_extension(args.output) == ".gr3")
+    outputs.push_back({fs::path(args.output).replace_extension(".ll"), "the .ll companion of -o"});
+  // A .pvtu's pieces: those asked for, or the first (their number follows the mesh); the others are checked
+  // when they are written, before anything is committed.
+  if (lower_extension(args.output) == ".pvtu")
+    for (std::size_t k = 0; k < std::max<std::size_t>(args.pieces, 1); ++k) {
+      const fs::path piece = pvtu_piece_path(args.output, k);
+      check_output_file(piece, "a piece of -o", {".vtu"});
+      outputs.push_back({piece, "a piece of -o"});
+    }
+  auto optional = [&](const std::string& path, const char* what, const char* ext) {
+    if (path.empty()) return;
+    check_output_file(path, what, {ext});
+    outputs.push_back({path, what});
+  };
+  optional(args.report, "--report", ".json");
+  if (!args.picture.empty()) {
+    check_output_file(args.picture, "--picture", {".png", ".svg"});
+    outputs.push_back({args.picture, "--picture"});
+  }
+  optional(args.partition_picture, "--partition-picture", ".svg");
+  for (const auto& f : args.input_options.feature_files) inputs.push_back({f, "--features file"});
+  if (!args.bathymetry.empty()) inputs.push_back({args.bathymetry, "--bathymetry raster"});
+  check_distinct_files(outputs, inputs);
+}
+
+// What can be refused before minutes of meshing: options, limits, outputs, depths.
+void check_mesh_args(const MeshArgs& args) {
+  check_mesh_options(args.options);
+  if (args.depth_given && !std::isfinite(args.depth))
+    throw InputError("--depth must be a finite number, got " + short_number(args.depth));
+  if (!(std::isfinite(args.time_limit) && args.time_limit >= 0))
+    throw InputError("--time-limit must be a finite number of seconds >= 0 (0 = none), got " + short_number(args.time_limit));
+  if (!(std::isfinite(args.read_time_limit) && args.read_time_limit >= 0))
+    throw InputError("--read-time-limit must be a finite number of seconds >= 0 (0 = none), got " +
+                     short_number(args.read_time_limit));
+  check_outputs(args);  // before minutes of meshing
+  const std::string out_ext = lower_extension(args.output);
+  if (args.pieces > 0 && out_ext != ".pvtu")
+    throw InputError("--pieces writes a parallel VTK file: -o must end in .pvtu, not " + args.output);
+  if ((args.depth_given || !args.bathymetry.empty()) && (out_ext == ".msh" || out_ext == ".vtu" || out_ext == ".pvtu"))
+    std::cerr << "warning: depths are written to .gr3, .nc and .2dm files only, not to " << args.output << "\n";
+  if (args.depth_given && !args.bathymetry.empty()) throw InputError("--depth and --bathymetry exclude each other");
+  if (!args.bathymetry.empty() && !fs::is_regular_file(args.bathymetry))
+    throw InputError(args.bathymetry + ": the bathymetry raster does not exist");
+}
+
+// A .pvtu meshed by several processes: each writes its own pieces (write_pvtu's piece_rank), and all commit
+// them only when every process wrote its share. Every process calls agree() once, also when its part failed
+// (the destructor says so for it), so none waits for another that has stopped.
+class PieceAgreement {
+ public:
+  explicit PieceAgreement(const WorkSharing* sharing) : sharing_(sharing) {}
+  ~PieceAgreement() {
+    if (sharing_ && !agreed_) {
+      try {
+        agree("stopped before writing its pieces");
+      } catch (...) {
+      }
+    }
+  }
+  PieceAgreement(const PieceAgreement&) = delete;
+  PieceAgreement& operator=(const PieceAgreement&) = delete;
+  /// `mine` empty: this process wrote its pieces. Returns the first other process's failure, or empty.
+  std::string agree(const std::string& mine) {
+    agreed_ = true;
+    if (!sharing_) return {};
+    const int n = sharing_->processes();
+    std::vector<std::string> status(static_cast<std::size_t>(n));
+    std::vector<int> owner(static_cast<std::size_t>(n));
+    for (int r = 0; r < n; ++r) owner[static_cast<std::size_t>(r)] = r;
+    status[static_cast<std::size_t>(sharing_->rank())] = mine;
+    sharing_->all_gather(status, owner, "pvtu pieces");
+    for (int r = 0; r < n; ++r)
+      if (r != sharing_->rank() && !status[static_cast<std::size_t>(r)].empty())
+        return "process " + std::to_string(r) + ": " + status[static_cast<std::size_t>(r)];
+    return {};
+  }
+
+ private:
+  const WorkSharing* sharing_;
+  bool agreed_ = false;
+};
+
+// Reads the input and says what reading it changed: of each kind of note the first few, then one line with the
+// count (all of them are in the report).
+Region read_noted_input(const MeshArgs& args, ProgressReporter& progress, InputNotes& notes, std::ostream& info) {
+  progress.start("read input");
+  Region region = read_input(args.input, args.input_options, notes);
+  progress.finish("read input");
+  auto summarise = [](const std::vector<std::string>& lines, const char* prefix, const char* what) {
+    for (std::size_t i = 0; i < lines.size() && i < 5; ++i) std::cerr << "warning: " << prefix << lines[i] << "\n";
+    if (lines.size() > 5) std::cerr << "warning: ... and " << lines.size() - 5 << " more " << what << " (see the report)\n";
+  };
+  summarise(notes.repairs, "repaired: ", "repairs");
+  summarise(notes.warnings, "", "input warnings");
+  summarise(notes.snaps, "", "snapped points");
+  if (notes.reprojected) info << "input in " << notes.input_crs << ", meshed in " << region.crs << " (--size in metres)\n";
+  return region;
+}
+
+// The figure to choose --size from, before minutes of meshing: quads of size h cover about area / h^2.
+void say_size_estimate(std::ostream& info, const Region& region, double size) {
+  const Box2 box = region.bounding_box();
+  const double area = domain_area(region);
+  info << "region " << short_number(box.hi.x - box.lo.x) << " x " << short_number(box.hi.y - box.lo.y)
+       << ", area " << short_number(area) << ": --size " << short_number(size) << " gives about "
+       << static_cast<long long>(std::llround(area / (size * size)))
+       << " quads (area / size^2; half the size, four times as many)\n";
+}
+
+// Far from the origin (1e8 .. 1e11 around a small domain) the region is meshed in a local frame and the mesh
+// moved back before writing; figures are measured in the local frame, places printed in the input's.
+struct LocalFrame {
+  Vec2 origin{0, 0};
+  bool moved = false;
+  Region region;  ///< the input region in the frame
+
+  /// A place of the report (local frame) in the input's coordinates.
+  std::string place(const nlohmann::json& at) const {
+    return "(" + short_number(at[0].get<double>() + origin.x) + ", " + short_number(at[1].get<double>() + origin.y) + ")";
+  }
+};
+
+LocalFrame local_frame(const Region& region) {
+  LocalFrame frame;
+  frame.origin = local_origin(region);
+  frame.moved = frame.origin.x != 0 || frame.origin.y != 0;
+  frame.region = region;
+  if (frame.moved) {
+    const Vec2 origin = frame.origin;
+    translate(frame.region, {-origin.x, -origin.y});
+    std::cerr << "meshed relative to (" << short_number(origin.x) << ", " << short_number(origin.y)
+              << "), " << short_number(std::max(std::abs(origin.x), std::abs(origin.y)) / region.bounding_box().diagonal())
+              << " times the domain's size away from the origin; written back in the input's coordinates\n";
+  }
+  return frame;
+}
+
+// The options the flags give indirectly: map composition and interfaces, partition kept for its picture, progress,
+// processes.
+void set_derived_options(MeshOptions& options, const MeshArgs& args, ProgressCallback progress) {
+  options.keep_partition = !args.partition_picture.empty();
+  options.map.composition = args.map == "gpm" ? MapComposition::gpm : MapComposition::ppm;
+  options.map.layout.straight_interfaces = !args.bend_interfaces;
+  options.progress = std::move(progress);
+  if (args.mpi && args.mpi->active()) {
+    // The processes of one machine share its cores (0 = all cores between them).
+    options.map.sharing = args.mpi->sharing();
+    if (options.threads == 0) options.threads = args.mpi->threads_per_process();
+  }
+}
+
+// Meshes the region in its frame; a failure's places are then relative to the frame's origin, which it says.
+MeshResult mesh_in_frame(const LocalFrame& frame, const MeshOptions& options) {
+  MeshResult result;
+  try {
+    result = mesh_region(frame.region, options);
+  } catch (const MeshingError& e) {
+    if (!frame.moved) throw;
+    throw MeshingError(std::string(e.what()) + " (places relative to (" + short_number(frame.origin.x) + ", " +
+                       short_number(frame.origin.y) + "))");
+  }
+  if (frame.moved) result.report["input"]["local_origin"] = {frame.origin.x, frame.origin.y};
+  return result;
+}
+
+// How a .pvtu is cut: the pieces, and whether each process writes its share of them.
+struct PieceSplit {
+  bool by_process = false;
+  std::size_t pieces = 0;
+};
+
+// Every process holds the mesh; rank 0 measures and writes it, but for the pieces of a .pvtu, which each
+// process writes its share of.
+PieceSplit piece_split(const MeshArgs& args, const QuadMesh& mesh) {
+  PieceSplit split;
+  split.by_process = args.mpi && args.mpi->active() && lower_extension(args.output) == ".pvtu";
+  split.pieces = args.pieces > 0 ? args.pieces
+                                 : std::max<std::size_t>(pvtu_pieces(mesh, 0), split.by_process ? static_cast<std::size_t>(args.mpi->processes()) : 1);
+  return split;
+}
+
+// A process other than rank 0: writes its share of a .pvtu's pieces, if any, and commits them when all did.
+int write_share_of_pieces(const MeshArgs& args, MeshResult& result, Vec2 origin, const PieceSplit& split,
+                          PieceAgreement& agreement) {
+  if (!split.by_process) return 0;
+  std::string failed;
+  OutputBatch batch;
+  try {
+    translate(result.mesh, origin);
+    MeshWriteOptions write;
+    write.pieces = split.pieces;
+    write.piece_rank = static_cast<std::size_t>(args.mpi->rank());
+    write.piece_processes = static_cast<std::size_t>(args.mpi->processes());
+    write_mesh(args.output, result.mesh, write);
+  } catch (const std::exception& e) {
+    failed = e.what();
+  }
+  // Rank 0 says what failed, here or there; this process commits only when all wrote their share.
+  const bool others_wrote = agreement.agree(failed).empty();
+  if (failed.empty() && others_wrote) batch.commit();
+  return 0;
+}
+
+// The mesh's figures, places in the input's frame.
+struct MeshMeasures {
+  QualityReport quality;
+  FiniteVolumeQuality fv;
+  DomainDistance domain;
+  std::optional<DomainDistance> simplified;  ///< against the simplified curves, when simplifying changed them
+};
+
+MeshMeasures measure_mesh(const MeshResult& result, const LocalFrame& frame, const MeshArgs& args) {
+  const Vec2 origin = frame.origin;
+  MeshMeasures m;
+  m.quality = compute_quality(result.mesh);
+  m.quality.schism.angle_ratio_worst_at = m.quality.schism.angle_ratio_worst_at + origin;
+  m.quality.schism.aspect_ratio_worst_at = m.quality.schism.aspect_ratio_worst_at + origin;
+  DomainDistanceOptions measure{args.options.corner_threshold_deg, {}};
+  for (const auto& d : result.report["dropped_parts"]) measure.skip_parts.push_back(d["part"].get<int>());
+  // The mesh covers the (simplified) domain it conforms to, less the parts left out as too small, up to the
+  // chords along curves: a larger change is said, never silent.
+  if (const double change = area_relative_mismatch(result.mesh, result.region, measure.skip_parts);
+      !(std::abs(change) <= 0.01))
+    std::cerr << "warning: the mesh's area differs from the domain's by " << short_number(100 * change)
+              << " % (more than 1 %: chords of coarse curves, or a region read wrongly)\n";
+  m.domain = domain_distance(result.mesh, frame.region, measure);
+  // Places in the input's frame, as every other place the CLI prints.
+  auto to_input_frame = [&](DomainDistance& d) {
+    d.feature_max_at = d.feature_max_at + origin;
+    d.feature_node_max_at = d.feature_node_max_at + origin;
+  };
+  to_input_frame(m.domain);
+  m.fv = finite_volume_quality(result.mesh);
+  m.fv.orthogonality_worst_at = m.fv.orthogonality_worst_at + origin;
+  m.fv.smoothness_worst_at = m.fv.smoothness_worst_at + origin;
+  // Against the simplified curves too, which the mesh conforms to (the input distance includes the simplification).
+  if (result.report["simplify"]["vertices_after"] != result.report["simplify"]["vertices_before"] ||
+      !result.report["dropped_curves"].empty())
+  {
+    m.simplified = domain_distance(result.mesh, result.region, measure);
+    to_input_frame(*m.simplified);
+  }
+  return m;
+}
+
+// The report's quality and input sections; the named groups (domains, ring pieces, features, boundary
+// segments) from the region the mesh conforms to, their warnings said.
+MeshGroups complete_report(MeshResult& result, const MeshMeasures& m, const InputNotes& notes, const Region& region,
+                           double size) {
+  add_quality_to_report(result.report, m.quality, m.fv, m.domain, size, m.simplified ? &*m.simplified : nullptr);
+  result.report["input"]["repairs"] = notes.repairs;
+  result.report["input"]["snapped"] = notes.snaps;
+  result.report["input"]["warnings"] = notes.warnings;
+  result.report["input"]["input_crs"] = notes.input_crs;
+  MeshGroups groups = mesh_groups(result.mesh, &result.region);
+  result.report["groups"] = to_json(groups);
+  result.report["input"]["boundary_segments"] = region.boundary_segments.size();
+  for (const std::string& w : groups.warnings) std::cerr << "warning: " << w << "\n";
+  return groups;
+}
+
+// Moves the mesh back to the input's coordinates, where they may be too coarse for the size: a quad that folds
+// there is refused.
+void move_back(QuadMesh& mesh, const LocalFrame& frame, double size) {
+  translate(mesh, frame.origin);
+  if (const std::int64_t q = frame.moved ? first_folded_quad(mesh) : -1; q >= 0) {
+    const auto& quad = mesh.quads[static_cast<std::size_t>(q)];
+    throw MeshingError("written back in the input's coordinates, " + short_number(std::max(std::abs(frame.origin.x), std::abs(frame.origin.y))) +
+                       " from the origin, quad " + std::to_string(q) + " at " + point_text(mesh.nodes[static_cast<std::size_t>(quad[0])]) +
+                       " folds: coordinates there are too coarse for --size " + short_number(size) +
+                       "; use a larger size or move the input nearer the origin");
+  }
+}
+
+MeshWriteOptions write_options(const MeshArgs& args, const QuadMesh& mesh, const std::string& input_crs,
+                               MeshGroups groups, const PieceSplit& split) {
+  MeshWriteOptions write{args.binary,
+                               args.msh_features == "lines" ? MshFeatures::lines
+                               : args.msh_features == "none" ? MshFeatures::none : MshFeatures::nodes,
+                               args.msh_version == "4.1" ? MshVersion::v4_1 : MshVersion::v2_2,
+                               !args.bathymetry.empty()
+                                   ? sample_bathymetry(args.bathymetry, mesh.nodes, mesh.crs,
+                                                       {args.bathymetry_positive == "down"})
+                               : args.depth_given ? std::vector<double>(mesh.nodes.size(), args.depth)
+                                                  : std::vector<double>{},
+                               input_crs,
+                               std::move(groups)};
+  write.pieces = split.pieces;
+  if (split.by_process) write.piece_processes = static_cast<std::size_t>(args.mpi->processes());
+  return write;
+}
+
+// Outputs are written only after the whole mesh passed its checks, and committed together: each goes to a
+// synced temporary, and all are renamed onto their targets only when every one was written.
+void write_outputs(const MeshArgs& args, const MeshResult& result, const Region& region, const MeshWriteOptions& write,
+                   PieceAgreement& agreement) {
+  OutputBatch batch;
+  write_mesh(args.output, result.mesh, write);
+  if (!args.report.empty())
+    write_file_atomically(args.report, [&](std::ostream& os) { os << report_text(result.report); }, false);
+  if (!args.picture.empty()) write_picture(args.picture, result.mesh, region);
+  if (!args.partition_picture.empty()) {
+    PartitionResult partition;
+    partition.triangle_part = result.background_part;
+    write_partition_svg(args.partition_picture, result.background, partition);
+  }
+  if (const std::string other = agreement.agree(""); !other.empty())
+    throw InputError(args.output + ": a process could not write its pieces (" + other + ")");
+  batch.commit();
+}
+
+// Parts left out as smaller than one element: the first few by place, then one line for the rest; curves
+// around regions narrower than the size, by kind.
+void warn_left_out(const nlohmann::json& report, const LocalFrame& frame) {
+  const auto& dropped = report["dropped_parts"];
+  for (std::size_t i = 0; i < dropped.size() && i < 3; ++i)
+    std::cerr << "warning: part " << dropped[i]["part"] << " left out: its area " << dropped[i]["area"]
+              << " is less than one element, at " << frame.place(dropped[i]["at"]) << "\n";
+  if (dropped.size() > 3) {
+    double area = 0;
+    for (const auto& d : dropped) area += d["area"].get<double>();
+    std::cerr << "warning: " << dropped.size() << " parts smaller than one element left out in all (total area "
+              << short_number(area) << "); the report's dropped_parts lists each\n";
+  }
+  if (const auto& curves = report["dropped_curves"]; !curves.empty()) {
+    std::map<std::string, std::size_t> kinds;
+    const nlohmann::json* widest = &curves.front();
+    for (const auto& d : curves) {
+      kinds[d["kind"].get<std::string>()]++;
+      if (d["width"].get<double>() > (*widest)["width"].get<double>()) widest = &d;
+    }
+    std::cerr << "warning: " << curves.size() << " curves around regions narrower than the size left out (";
+    for (const auto& [kind, n] : kinds) std::cerr << (kind == kinds.begin()->first ? "" : ", ") << n << " " << kind;
+    std::cerr << "; the widest " << (*widest)["width"] << " at " << frame.place((*widest)["at"])
+              << "; the report's dropped_curves lists them; --min-island-width 0 keeps them)\n";
+  }
+}
+
+// Unstructured patches: the first few by place, then one line for the rest; then the simplification and the
+// structured fraction.
+void say_patches_and_simplification(const nlohmann::json& report, const LocalFrame& frame, std::ostream& info) {
+  std::size_t patches = 0, patch_quads = 0;
+  for (const auto& u : report["unstructured"])
+    if (u["meshed_by"] == "patch" && ++patches <= 5)
+      std::cerr << "warning: part " << u["part"] << ": subregion " << u["subregion"] << " at " << frame.place(u["at"])
+                << " is an unstructured patch of " << u["quads"] << " quads: "
+                << u["reason"].get<std::string>() << "\n";
+    else if (u["meshed_by"] == "patch")
+      patch_quads += u["quads"].get<std::size_t>();
+  if (patches > 5)
+    std::cerr << "warning: ... and " << patches - 5 << " more unstructured patches (" << patch_quads
+              << " quads; the report's unstructured lists each)\n";
+  if (const auto& simp = report["simplify"]; simp["vertices_after"] != simp["vertices_before"])
+    info << "simplified curves finer than the size: " << simp["vertices_before"] << " -> " << simp["vertices_after"]
+              << " vertices, largest distance moved " << simp["max_distance"] << " (" << simp["max_distance_over_size"]
+              << " of the size), area change " << simp["area_change"] << " (--simplify 0 keeps them)\n";
+  info << "structured fraction " << report["summary"]["structured_fraction"] << " ("
+            << report["summary"]["unstructured_subregions"] << " of " << report["summary"]["subregions"]
+            << " subregions unstructured)\n";
+}
+
+// The warnings about one part's chosen candidate: quads pinned by sharp input corners, poor quads accepted, or
+// the unstructured fallback.
+void warn_chosen_candidate(const nlohmann::json& c, std::size_t candidates, const LocalFrame& frame) {
+  if (c.contains("quads_pinned_by_sharp_input"))
+    std::cerr << "warning: part " << c["part"] << ": " << c["quads_pinned_by_sharp_input"]
+              << " quads lie in input corners sharper than the --min-sj gate and are left out of it (scaled "
+                 "Jacobian min "
+              << c["pinned_min_scaled_jacobian"] << " at " << frame.place(c["pinned_worst_at"])
+              << "; the others' min is " << c["unpinned_min_scaled_jacobian"] << ")\n";
+  if (c.contains("poor_quads")) {
+    const auto& first = c["poor_quads"]["first"][0];
+    std::cerr << "warning: part " << c["part"] << ": " << c["poor_quads"]["count"]
+              << " quads stay outside --min-sj or --max-edge-ratio after local repair (within --max-poor-fraction); "
+                 "the first at "
+              << frame.place(first["at"]) << " (scaled Jacobian " << first["scaled_jacobian"] << ", edge ratio "
+              << first["edge_ratio"] << "); the report's candidates list them\n";
+  }
+  if (c.contains("fallback"))
+    std::cerr << "warning: part " << c["part"] << ": none of " << candidates - 1
+              << " poly-square candidates meshed it; meshed unstructured by splitting triangles into quads ("
+              << c["interior_singularities"] << " interior singularities, scaled Jacobian min "
+              << c["min_scaled_jacobian"] << "); the report's candidates say why each failed\n";
+}
+
+// Which candidate each part kept, and why the explicitly requested one was not kept.
+void say_candidates(const nlohmann::json& report, int requested_parts, const LocalFrame& frame, std::ostream& info) {
+  for (const auto& part : report["candidates"]) {
+    const bool explicit_parts = requested_parts > 0;
+    for (const auto& c : part) {
+      if (c.contains("chosen")) {
+        warn_chosen_candidate(c, part.size(), frame);
+        if (!c.contains("fallback") && part.size() > 1 && !explicit_parts)
+          info << "part " << c["part"] << ": " << c["subregions"] << " subregion(s) kept of " << part.size()
+               << " candidates (scaled Jacobian min " << c["min_scaled_jacobian"] << ")\n";
+      } else if (explicit_parts && c.contains("error") && c["subregions"].get<int>() == requested_parts) {
+        std::cerr << "warning: part " << c["part"] << " meshed as one poly-square: " << c["error"].get<std::string>() << "\n";
+      }
+    }
+  }
+}
+
+// The summary on stdout: counts, groups, quality (against the simplified curves too), finite-volume figures.
+void print_summary(const MeshResult& result, const MeshMeasures& m, const std::string& output,
+                   const std::string& group_summary) {
+  std::cout << "polysquare: " << result.mesh.quads.size() << " quads, " << result.mesh.nodes.size() << " nodes -> "
+            << output << "\n"
+            << group_summary << format_quality_text(m.quality, &m.domain)
+            << (m.simplified ? "  against the simplified curves the mesh follows: boundary distance max " +
+                                   short_number(m.simplified->boundary_max_distance) + ", feature distance to mesh edges max " +
+                                   short_number(m.simplified->feature_max_distance) + ", feature nodes off curves max " +
+                                   short_number(m.simplified->feature_node_max_distance) + "\n"
+                             : std::string())
+            << format_finite_volume_text(m.fv) << format_schism_text(m.quality.schism)
+            << (result.report["summary"].value("sj_below_0_3_pinned", std::size_t{0}) > 0
+                    ? "  of the quads below scaled Jacobian 0.3, " + result.report["summary"]["sj_below_0_3_pinned"].dump() +
+                          " lie in input corners or wedges sharper than 17.5 degrees; the others are a fraction " +
+                          short_number(result.report["summary"]["sj_below_0_3_unpinned_fraction"].get<double>()) + "\n"
+                    : std::string());
+}
+
+}  // namespace
+
+int run_mesh(const MeshArgs& args) {
+  check_mesh_args(args);
+  // Progress on a terminal (never in a pipe or under CI), stage timings with --verbose; quiet: warnings only.
+  TerminalProgress shown(args.quiet ? Verbosity::quiet : args.verbose ? Verbosity::verbose : Verbosity::normal);
+  TimeLimit limit(args.time_limit, args.read_time_limit, args.input, shown.callback());
+  ProgressReporter progress(limit.callback());
+  std::ostringstream discarded;
+  std::ostream& info = args.quiet ? discarded : std::cerr;
+  InputNotes notes;
+  const Region region = read_noted_input(args, progress, notes, info);
+  MeshOptions options = args.options;
+  check_mesh_size(region, options);
+  say_size_estimate(info, region, options.size);
+  const LocalFrame frame = local_frame(region);
+  set_derived_options(options, args, limit.callback());
+  MeshResult result = mesh_in_frame(frame, options);
+  const PieceSplit split = piece_split(args, result.mesh);
+  PieceAgreement agreement(split.by_process ? args.mpi->sharing().get() : nullptr);
+  if (args.mpi && args.mpi->rank() != 0) return write_share_of_pieces(args, result, frame.origin, split, agreement);
+  if (args.mpi && args.mpi->active()) result.report["summary"]["processes"] = args.mpi->processes();
+
+  progress.start("quality");
+  const MeshMeasures measures = measure_mesh(result, frame, args);
+  MeshGroups groups = complete_report(result, measures, notes, region, args.options.size);
+  const std::string group_summary = format_groups_text(groups);
+  progress.finish("quality");
+
+  limit.stop();  // the outputs are committed whole or not at all, never cut off between two renames
+  progress.start("write");
+  move_back(result.mesh, frame, args.options.size);
+  write_outputs(args, result, region, write_options(args, result.mesh, notes.input_crs, std::move(groups), split),
+                agreement);
+  progress.finish("write");
+
+  if (lower_extension(args.output) == ".nc" && measures.fv.orthogonality_above > 0)
+    std::cerr << "warning: " << measures.fv.orthogonality_above << " of " << measures.fv.interior_edges
+              << " interior edges have a D-Flow FM orthogonality above " << measures.fv.orthogonality_limit
+              << ", which D-Flow FM refuses; the worst, " << measures.fv.orthogonality.max << ", at "
+              << at_text(measures.fv.orthogonality_worst_at) << "\n";
+  warn_left_out(result.report, frame);
+  say_patches_and_simplification(result.report, frame, info);
+  say_candidates(result.report, args.options.parts, frame, info);
+  if (!args.quiet) print_summary(result, measures, args.output, group_summary);
+  return 0;
+}
+
+}  // namespace polysquare::cli
