@@ -1,0 +1,152 @@
+// A finished candidate measured for the search (quality, structure, pinned quads) and judged by the gates: the
+// poor quads every repair left are accepted while few, and the candidate refused otherwise.
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include "pipeline/finish_candidate.h"
+#include "polysquare/core/error.h"
+
+namespace polysquare::pipeline {
+namespace {
+
+// The gated figures: the worst quads the mesher controls (pinned ones left out).
+struct Gated {
+  double sj = 1.0, edge_ratio = 1.0;
+};
+
+// Quads of mapped subregions, less those local patches made; subregion figures follow the final mesh. Also where
+// the interior singular nodes are (`singular_node`, #nodes).
+void measure_structure(FinishWork& w, const std::vector<std::uint8_t>& singular_node) {
+  PartMapResult& r = w.r;
+  for (SubregionStats& sr : r.stats.subregions) sr.quads = sr.local_patch_quads = 0;
+  std::size_t unstructured = 0;
+  // Where the interior singular nodes are: 2 = at a local patch's quad, 1 = at a patched subregion's, 0 = maps.
+  std::vector<std::uint8_t> origin(r.mesh.nodes.size(), 0);
+  for (std::size_t q = 0; q < r.mesh.quads.size(); ++q) {
+    const bool local = q < w.local_patched.size() && w.local_patched[q];
+    const int s = subregion_of(w, q);
+    bool patch = local;
+    if (s >= 0) {
+      SubregionStats& sr = r.stats.subregions[static_cast<std::size_t>(s)];
+      sr.quads++;
+      sr.local_patch_quads += local;
+      unstructured += local || !sr.mapped;
+      patch = patch || !sr.mapped;
+    } else {
+      unstructured += local;
+    }
+    const std::uint8_t o = local ? 2 : (patch ? 1 : 0);
+    for (std::int32_t v : r.mesh.quads[q]) origin[static_cast<std::size_t>(v)] = std::max(origin[static_cast<std::size_t>(v)], o);
+  }
+  w.c.structured = r.mesh.quads.empty() ? 1.0 : 1.0 - static_cast<double>(unstructured) / static_cast<double>(r.mesh.quads.size());
+  std::array<std::size_t, 3> singular{0, 0, 0};
+  for (std::size_t v = 0; v < r.mesh.nodes.size(); ++v)
+    if (singular_node[v]) singular[origin[v]]++;
+  w.c.summary["interior_singularities_at"] = {{"maps", singular[0]}, {"subregion_patches", singular[1]},
+                                              {"local_patches", singular[2]}};
+}
+
+// The candidate's quality for the search: SJ, edge ratio, singular nodes, element size, structured fraction.
+void measure_quality(FinishWork& w) {
+  Candidate& c = w.c;
+  const PartMapResult& r = w.r;
+  std::vector<std::uint8_t> singular_node;
+  const QualityReport q = compute_quality(r.mesh, w.metrics, &singular_node);
+  c.min_sj = q.sj.min;
+  c.max_edge_ratio = q.edge_ratio.max;
+  c.interior_singularities = q.interior_singularities;
+  const double mean_area = mesh_area(r.mesh) / static_cast<double>(r.mesh.quads.size()) / (w.options.size * w.options.size);
+  c.size_deviation = std::abs(std::log(mean_area));
+  c.summary["quads"] = r.mesh.quads.size();
+  const LocalPatchStats& local_stats = w.local_stats;
+  if (local_stats.clusters > 0)
+    c.summary["local_patches"] = {{"clusters", local_stats.clusters}, {"patched", local_stats.patched},
+                                  {"quads_removed", local_stats.quads_removed}, {"quads_added", local_stats.quads_added}};
+  if (!c.summary.contains("fallback")) measure_structure(w, singular_node);
+  c.summary["structured_fraction"] = c.structured;
+  c.summary["min_scaled_jacobian"] = c.min_sj;
+  c.summary["max_edge_ratio"] = c.max_edge_ratio;
+  c.summary["interior_singularities"] = c.interior_singularities;
+  c.summary["mean_area_over_size_squared"] = mean_area;
+}
+
+// The worst quads the mesher controls, and the quads pinned by sharp input corners apart.
+Gated measure_pinned(FinishWork& w) {
+  const QuadMetrics& metrics = w.metrics;
+  const std::vector<std::uint8_t>& pinned = w.pinned;
+  double gated_sj = 1.0, gated_edge_ratio = 1.0, pinned_sj = 1.0;
+  std::size_t pinned_count = 0, pinned_worst = 0;
+  for (std::size_t q = 0; q < pinned.size(); ++q) {
+    if (pinned[q]) {
+      if (pinned_count++ == 0 || metrics.sj[q] < pinned_sj) pinned_worst = q;
+      pinned_sj = std::min(pinned_sj, metrics.sj[q]);
+      continue;
+    }
+    gated_sj = std::min(gated_sj, metrics.sj[q]);
+    gated_edge_ratio = std::max(gated_edge_ratio, metrics.edge_ratio[q]);
+  }
+  w.c.gated_sj = gated_sj;
+  if (pinned_count > 0) {
+    nlohmann::json& summary = w.c.summary;
+    summary["quads_pinned_by_sharp_input"] = pinned_count;
+    summary["pinned_min_scaled_jacobian"] = pinned_sj;
+    const Vec2 p = w.r.mesh.nodes[w.r.mesh.quads[pinned_worst][0]];
+    summary["pinned_worst_at"] = {p.x, p.y};
+    summary["unpinned_min_scaled_jacobian"] = gated_sj;
+  }
+  return {gated_sj, gated_edge_ratio};
+}
+
+// Unpinned quads outside the gates that every repair left as they are: accepted, each reported with its
+// place, while they are few (max_poor_fraction); the mesh is refused with the worst of them otherwise.
+void accept_poor_quads(FinishWork& w, const Gated& gated) {
+  const MeshOptions& options = w.options;
+  const QuadMetrics& metrics = w.metrics;
+  const PartMapResult& r = w.r;
+  std::vector<std::size_t> outside;
+  for (std::size_t q = 0; q < w.pinned.size(); ++q)
+    if (!w.pinned[q] && (metrics.sj[q] < options.min_scaled_jacobian || metrics.edge_ratio[q] > options.max_edge_ratio))
+      outside.push_back(q);
+  w.c.poor_quads = outside.size();
+  const bool refused = static_cast<double>(outside.size()) >
+                       options.max_poor_fraction * static_cast<double>(r.mesh.quads.size());
+  auto at = [&](const std::vector<double>& per_quad, bool largest) {
+    std::size_t worst = outside.front();
+    for (std::size_t q : outside)
+      if (largest ? per_quad[q] > per_quad[worst] : per_quad[q] < per_quad[worst]) worst = q;
+    return at_text(r.mesh.nodes[r.mesh.quads[worst][0]]) + in_subregion(w, worst);
+  };
+  const std::string how_many = " (" + std::to_string(outside.size()) + " of " + std::to_string(r.mesh.quads.size()) +
+                               " quads outside the gates, above --max-poor-fraction " +
+                               std::to_string(options.max_poor_fraction) + ")";
+  if (refused && gated.edge_ratio > options.max_edge_ratio)
+    throw MeshingError(w.name + ": the best mesh has a quad with edge ratio " + std::to_string(gated.edge_ratio) +
+                       " at " + at(metrics.edge_ratio, true) + ", above the maximum " +
+                       std::to_string(options.max_edge_ratio) + " (--max-edge-ratio)" + how_many);
+  if (refused)
+    throw MeshingError(w.name + ": the best mesh has a quad with scaled Jacobian " + std::to_string(gated.sj) + " at " +
+                       at(metrics.sj, false) + ", below the minimum " +
+                       std::to_string(options.min_scaled_jacobian) + " (--min-sj)" + how_many);
+  if (outside.empty()) return;
+  nlohmann::json places = nlohmann::json::array();
+  for (std::size_t q : outside) {
+    if (places.size() == 20) break;
+    const Vec2 p = r.mesh.nodes[r.mesh.quads[q][0]];
+    nlohmann::json j = {{"at", {p.x, p.y}}, {"scaled_jacobian", metrics.sj[q]}, {"edge_ratio", metrics.edge_ratio[q]}};
+    if (subregion_of(w, q) >= 0) j["subregion"] = subregion_of(w, q);
+    places.push_back(std::move(j));
+  }
+  w.c.summary["poor_quads"] = {{"count", outside.size()},
+                               {"fraction", static_cast<double>(outside.size()) / static_cast<double>(r.mesh.quads.size())},
+                               {"first", places}};
+}
+
+}  // namespace
+
+void measure_finished(FinishWork& w) {
+  measure_quality(w);
+  accept_poor_quads(w, measure_pinned(w));
+}
+
+}  // namespace polysquare::pipeline
