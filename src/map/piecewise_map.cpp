@@ -24,6 +24,7 @@
 #include "polysquare/map/quantize.h"
 #include "polysquare/partition/partition.h"
 #include "map/interface_turns.h"
+#include "map/map_common.h"
 
 namespace polysquare {
 namespace {
@@ -662,10 +663,6 @@ PatchInput patch_input(const Subregion& sub, const std::vector<std::uint8_t>& is
   }
   for (std::int32_t v : m.feature_point_vertices) nodes.add_point(v);
   return std::move(nodes.in);
-}
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
 }  // namespace
@@ -1355,8 +1352,8 @@ void quantize_jointly(PiecewiseMap& m) {
   for (std::size_t p = 0; p < m.n; ++p) m.quantized[p] = m.failure[p].empty();
   for (std::size_t p = 0; p < m.n; ++p)
     if (m.failure[p].empty())
-      if (const std::string problem = check_layout(m.layouts[p]); !problem.empty())
-        m.failure[p] = m.sub_name(p) + ": the quantized poly-square is not valid: " + problem;
+      if (std::string invalid = invalid_poly_square(m.layouts[p], m.sub_name(p)); !invalid.empty())
+        m.failure[p] = std::move(invalid);
 }
 
 // Every mapped subregion snapped to its quantized layout and its quads extracted (in parallel).
