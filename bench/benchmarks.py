@@ -4,17 +4,19 @@
 usage: python3 bench/benchmarks.py [--build DIR] [--quick] [--large] [--out docs/benchmarks.md]
                                    [--only CASE,CASE] [--work DIR] [--judge PATH]
 
-Tables (each says its commands, the commit, the machine, the date and the load average):
+Tables, in the order run (each says its commands, the commit, the machine, the date and the load average):
   1. the 12 small cases at the README sizes: the independent judge's figures (shared/tools/judge.py) beside the
      report's, wall time (median of 3 runs; --quick: 1);
   2. Gmsh 4.8.4 on the same cases, from build/compare_gmsh (it meshes both in one run);
-  3. the coasts at 200 m: the same figures plus structured fraction, SJ < 0.3, peak memory (/usr/bin/time -v);
-  4. threads against MPI processes (bench/processes.py) on estuary and fjord_coast at 200 m (--large: also
+  3. threads against MPI processes (bench/processes.py) on estuary at 200 m (--large: also fjord_coast,
      delta_water and delta_box at 200 m);
+  4. the coasts at 200 m: the same figures as 1 plus structured fraction, SJ < 0.3, peak memory (/usr/bin/time -v);
   5. with --large only: delta_box at 40, 20 and 10 m (bench/scale.py, one run each; the 10 m run takes 15 min or
      more on two cores).
-Any failed run stops the script with its command and error, before the page is written. --only restricts every
-table to the named cases (for trying the script; the page then says it is a subset).
+On an idle 2-core machine the default takes about 5 minutes; at a load average of 17 it took about 35.
+Any failed run stops the script with its command and error. The page is rewritten after every row and says
+"Incomplete" until the last one, so a stopped run leaves what it measured. --only restricts every table to the
+named cases (for trying the script; the page then says it is a subset).
 """
 import argparse
 import datetime
@@ -34,9 +36,9 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SMALL = [("letter_I", "2"), ("letter_M", "2"), ("letter_R", "2"), ("pentagon", "3"), ("triangle", "3"),
          ("square_feature", "3"), ("rect_feature", "3"), ("smile", "2.5"), ("turtle_shell", "2.5"),
          ("mechanical_part", "3"), ("dam_channel", "2"), ("key", "2")]
-COASTS = [("delta_water", "200"), ("estuary", "200"), ("fjord_coast", "200"), ("delta_box", "200")]
-PROCESS_CASES = ["estuary:200", "fjord_coast:200"]
-PROCESS_CASES_LARGE = ["delta_water:200", "delta_box:200"]
+COASTS = [("estuary", "200"), ("fjord_coast", "200"), ("delta_water", "200"), ("delta_box", "200")]
+PROCESS_CASES = ["estuary:200"]
+PROCESS_CASES_LARGE = ["fjord_coast:200", "delta_water:200", "delta_box:200"]
 SCALE_SIZES = "40,20,10"
 
 
@@ -50,7 +52,7 @@ def fail(cmd, why):
 
 # ---------------------------------------------------------------------------------------------------- context --
 def sh(cmd):
-    return subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True).stdout.strip()
+    return subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True).stdout.rstrip()
 
 
 def git_state(out_rel):
@@ -113,6 +115,13 @@ class Section:
     def finish(self):
         self.seconds, self.load_end = time.monotonic() - self.t0, load()
         return self
+
+    def timing(self):
+        if hasattr(self, "seconds"):
+            return "started %s, %.0f s, load average %s -> %s" % (self.started, self.seconds, self.load_start,
+                                                                 self.load_end)
+        return "started %s, STILL RUNNING after %.0f s (the rows so far), load average %s at its start" % (
+            self.started, time.monotonic() - self.t0, self.load_start)
 
 
 # ------------------------------------------------------------------------------------------------------- runs --
@@ -196,18 +205,20 @@ def agreement(j, s):
     return "yes" if not diffs else "NO: " + "; ".join(diffs) + " (judge/report)"
 
 
-def small_table(a, cases):
-    sec = Section("The 12 small cases at the README sizes")
-    rows = [mesh_case(a, sec, c, h) for c, h in cases]
+def small_table(a, pg, cases):
+    sec, rows = Section("The 12 small cases at the README sizes"), []
     sec.lines = table_head("case", "h", "kept", "quads", "SJ min", "SJ avg", "edge ratio max",
                            "interior singular nodes", "regular_quad_frac", "wall s",
                            "report: quads, SJ min, int. sing., regular", "judge = report")
-    for r in rows:
+    for c, h in cases:
+        r = mesh_case(a, sec, c, h)
+        rows.append(r)
         j, s = r["judge"], r["report"]["summary"]
         sec.lines.append("| %s | %s | %s | %d | %.3f | %.3f | %.2f | %d | %.4f | %.2f | %d, %.3f, %d, %.4f | %s |" % (
             r["case"], r["size"], kept(r["report"]), j["quads"], j["sj_min"], j["sj_avg"], j["er_max"],
             j["sing_interior"], j["regular_quad_frac"], r["wall"], s["quads"], s["sj_min"],
             s["interior_singularities"], s["regular_quad_fraction"], agreement(j, s)))
+        pg.save(sec)
     sec.notes = [
         "Figures from the judge (`judge.py MESH DOMAIN`, independent of polysquare: SJ is Verdict's, the minimum "
         "of a quad's four corners; `regular_quad_frac` is the fraction of quads touching no interior singular "
@@ -215,6 +226,16 @@ def small_table(a, cases):
         "k subregions). wall: the whole CLI run (reading, the candidate search, checks, writing), %s."
         % walls_word(a), same_mesh_note(rows)]
     return sec.finish(), rows
+
+
+def left_out(report):
+    """The report's dropped curves by kind and its dropped parts, e.g. '15 hole, 1 islet'."""
+    kinds = {}
+    for d in report.get("dropped_curves", []):
+        kinds[d.get("kind", "?")] = kinds.get(d.get("kind", "?"), 0) + 1
+    if report.get("dropped_parts"):
+        kinds["part"] = len(report["dropped_parts"])
+    return ", ".join("%d %s" % (n, k) for k, n in kinds.items()) or "none"
 
 
 def table_head(*columns):
@@ -293,24 +314,29 @@ def gmsh_table(a, cases, small_rows_by_case):
     return sec.finish()
 
 
-def coast_table(a, cases):
-    sec = Section("Coasts at 200 m")
-    rows = [mesh_case(a, sec, c, h) for c, h in cases]
+def coast_table(a, pg, cases):
+    sec, rows = Section("Coasts at 200 m"), []
     sec.lines = table_head("case", "h", "quads", "structured fraction (patched subregions)", "SJ min", "SJ avg",
                            "SJ < 0.3", "edge ratio max", "interior singular nodes (per 1000 quads)",
-                           "regular_quad_frac", "wall s", "peak MB", "judge = report")
-    for r in rows:
+                           "regular_quad_frac", "wall s", "peak MB", "left out as narrower than h",
+                           "judge = report")
+    for c, h in cases:
+        r = mesh_case(a, sec, c, h)
+        rows.append(r)
         j, s = r["judge"], r["report"]["summary"]
         sec.lines.append(
-            "| %s | %s m | %d | %.3f (%d of %d) | %.3f | %.3f | %.3f %% | %.2f | %d (%.2f) | %.4f | %.1f | %.0f | %s |" % (
+            "| %s | %s m | %d | %.3f (%d of %d) | %.3f | %.3f | %.3f %% | %.2f | %d (%.2f) | %.4f | %.1f | %.0f | %s | %s |" % (
                 r["case"], r["size"], j["quads"], s["structured_fraction"], s["unstructured_subregions"],
                 s["subregions"], j["sj_min"], j["sj_avg"], 100.0 * j["frac_sj_below_03"], j["er_max"],
                 j["sing_interior"], j["sing_per_kquad"], j["regular_quad_frac"], r["wall"], r["peak"],
-                agreement(j, s)))
+                left_out(r["report"]), agreement(j, s)))
+        pg.save(sec)
     sec.notes = [
         "Default options (2 threads on this machine). structured fraction: quads of mapped subregions over all "
         "quads (the report's). SJ < 0.3: the judge's fraction of quads below SJ 0.3 (issue 10 allows 0.1 %%). "
-        "wall: %s; peak MB: the largest maximum resident set of the runs (/usr/bin/time -v)." % walls_word(a),
+        "wall: %s; peak MB: the largest maximum resident set of the runs (/usr/bin/time -v). left out: the "
+        "report's `dropped_curves` by kind and its `dropped_parts` (regions narrower than h hold no quad of "
+        "size h)." % walls_word(a),
         same_mesh_note(rows)]
     return sec.finish()
 
@@ -355,36 +381,55 @@ def scale_table(a):
 
 
 # ------------------------------------------------------------------------------------------------------- page --
-def page(a, git, mach, build, sections, started, seconds, tables_left):
-    dirty = ("clean" if not git["changed"] else "DIRTY: " + ", ".join(git["changed"][:12]))
-    stamp = "commit `%s` (%s), %s" % (git["commit"][:12], dirty, machine_line(mach))
-    out = ["# Benchmarks", "",
-           "Written by `%s` on %s (%.0f s in all); run the same command to regenerate this page. "
-           "Nothing here is copied from elsewhere: every figure comes from the runs of that command." % (
-               a.command, started, seconds), "",
-           "- commit: `%s` (%s), %s" % (git["commit"], git["subject"], dirty),
-           "- machine: " + machine_line(mach),
-           "- build: `%s` (%s, %s)" % (a.build_rel, build.get("CMAKE_BUILD_TYPE", "?"),
-                                      build.get("CMAKE_CXX_COMPILER", "?")),
-           "- judge: `/usr/bin/python3 %s MESH DOMAIN` (JSON figures; independent of polysquare's code)" % a.judge,
-           "- load: the machine is shared (several people's builds and runs on its %d cores); load average %s at "
-           "the start, %s at the end. Times are from a loaded machine: read them as upper bounds and compare "
-           "them only within one table." % (mach["nproc"], a.load_start, load()), ""]
-    if tables_left:
-        out += ["**Incomplete**: %d more step(s) of tables were to come when this page was last written (the script writes "
-                "the page after each table; it was stopped or is still running)." % tables_left, ""]
-    if a.only:
-        out += ["**Subset**: `--only %s`, not every case of each table." % ",".join(a.only), ""]
-    if a.quick:
-        out += ["**Quick**: `--quick`, one run per figure instead of the median of 3.", ""]
-    for sec in sections:
-        out += ["## " + sec.title, "",
-                "%s; started %s, %.0f s, load average %s -> %s." % (stamp, sec.started, sec.seconds,
-                                                                     sec.load_start, sec.load_end), "",
-                "Commands (from the repository's root):", "", "```"]
+class Page:
+    """docs/benchmarks.md, rewritten after every row, so a stopped run leaves the rows it measured (marked)."""
+
+    def __init__(self, a):
+        self.a, self.git, self.mach = a, git_state(a.out_rel), machine()
+        self.build = build_info(os.path.join(ROOT, a.build_rel))
+        self.started, self.t0, self.done = now_utc(), time.monotonic(), []
+
+    def add(self, sections):
+        self.done += sections
+        self.save()
+
+    def save(self, current=None, complete=False):
+        sections = self.done + ([current] if current else [])
+        write(self.a.out_rel, "\n".join(self.head(complete) + sum((self.table(s) for s in sections), [])).rstrip()
+              + "\n")
+
+    def head(self, complete):
+        a, git, mach = self.a, self.git, self.mach
+        out = ["# Benchmarks", "",
+               "Written by `%s` on %s (%.0f s in all); run the same command to regenerate this page. Every "
+               "figure comes from the runs of that command." % (a.command, self.started, time.monotonic() - self.t0),
+               "", "- commit: `%s` (%s), %s" % (git["commit"], git["subject"], dirty(git)),
+               "- machine: " + machine_line(mach),
+               "- build: `%s` (%s, %s)" % (a.build_rel, self.build.get("CMAKE_BUILD_TYPE", "?"),
+                                          self.build.get("CMAKE_CXX_COMPILER", "?")),
+               "- judge: `/usr/bin/python3 %s MESH DOMAIN` (JSON figures; independent of polysquare's code)" % a.judge,
+               "- load: the machine is shared (several people's builds and runs on its %d cores); load average %s "
+               "at the start, %s when this page was written. On a loaded machine times are upper bounds: compare "
+               "them only within one table." % (mach["nproc"], a.load_start, load()), ""]
+        if not complete:
+            out += ["**Incomplete**: written while the script was still running (it rewrites the page after "
+                    "every row); the tables below are the ones it had measured so far.", ""]
+        if a.only:
+            out += ["**Subset**: `--only %s`, not every case of each table." % ",".join(a.only), ""]
+        if a.quick:
+            out += ["**Quick**: `--quick`, one run per figure instead of the median of 3.", ""]
+        return out
+
+    def table(self, sec):
+        stamp = "commit `%s` (%s), %s" % (self.git["commit"][:12], dirty(self.git), machine_line(self.mach))
+        out = ["## " + sec.title, "", "%s; %s." % (stamp, sec.timing()), "",
+               "Commands (from the repository's root):", "", "```"]
         out += ["%s%s" % (cmd, "   # x%d" % n if n > 1 else "") for cmd, n in sec.commands.items()]
-        out += ["```", ""] + sec.lines + [""] + [n + "\n" for n in sec.notes]
-    return "\n".join(out).rstrip() + "\n"
+        return out + ["```", ""] + sec.lines + [""] + [n + "\n" for n in sec.notes]
+
+
+def dirty(git):
+    return "clean" if not git["changed"] else "DIRTY: " + ", ".join(git["changed"][:12])
 
 
 def machine_line(m):
@@ -424,31 +469,23 @@ def main():
     a = parse_args()
     check_tools(a)
     os.makedirs(os.path.join(ROOT, a.work_rel), exist_ok=True)
-    git, mach, build = git_state(a.out_rel), machine(), build_info(os.path.join(ROOT, a.build_rel))
-    started, t0 = now_utc(), time.monotonic()
+    pg = Page(a)
     pick = lambda cases: [(c, h) for c, h in cases if not a.only or c in a.only]
     small, coasts = pick(SMALL), pick(COASTS)
     process_cases = [c for c in PROCESS_CASES + (PROCESS_CASES_LARGE if a.large else [])
                      if not a.only or c.split(":")[0] in a.only]
-    todo = []
     if small:
-        todo.append(lambda: small_and_gmsh_tables(a, small))
-    if coasts:
-        todo.append(lambda: [coast_table(a, coasts)])
+        section, rows = small_table(a, pg, small)
+        pg.add([section])
+        pg.add([gmsh_table(a, small, {r["case"]: r for r in rows})])
     if process_cases:
-        todo.append(lambda: [process_table(a, process_cases)])
+        pg.add([process_table(a, process_cases)])
+    if coasts:
+        pg.add([coast_table(a, pg, coasts)])
     if a.large and (not a.only or "delta_box" in a.only):
-        todo.append(lambda: [scale_table(a)])
-    sections = []
-    for i, tables in enumerate(todo):
-        sections += tables()
-        write(a.out_rel, page(a, git, mach, build, sections, started, time.monotonic() - t0, len(todo) - 1 - i))
-    print("wrote %s (%.0f s)" % (a.out_rel, time.monotonic() - t0))
-
-
-def small_and_gmsh_tables(a, small):
-    section, rows = small_table(a, small)
-    return [section, gmsh_table(a, small, {r["case"]: r for r in rows})]
+        pg.add([scale_table(a)])
+    pg.save(complete=True)
+    print("wrote %s (%.0f s)" % (a.out_rel, time.monotonic() - pg.t0))
 
 
 def write(path, text):
