@@ -13,7 +13,8 @@ Tables, in the order run (each says its commands, the commit, the machine, the d
   4. the coasts at 200 m: the same figures as 1 plus structured fraction, SJ < 0.3, peak memory (/usr/bin/time -v);
   5. with --large only: delta_box at 40, 20 and 10 m (bench/scale.py, one run each; the 10 m run takes 15 min or
      more on two cores).
-On an idle 2-core machine the default takes about 5 minutes; at a load average of 17 it took about 35.
+On an idle 2-core machine the default should take about 5 minutes; at a load average of 17 (others' work) its
+parts took about 35 minutes together.
 Any failed run stops the script with its command and error. The page is rewritten after every row and says
 "Incomplete" until the last one, so a stopped run leaves what it measured. --only restricts every table to the
 named cases (for trying the script; the page then says it is a subset).
