@@ -1,0 +1,1 @@
+list(APPEND TEST_SOURCES size/test_size_field.cpp)
