@@ -85,7 +85,9 @@ TEST(Cli, InterruptLeavesNoPartialFile) {
   // A run of a minute or more (2M quads), interrupted at several moments: every run must really be interrupted
   // (a run that finished first would test nothing), exit by the signal and leave no file and no temporary.
   for (const char* delay : {"0.3", "1.0", "2.0"}) {
-    const std::string cmd = std::string(POLYSQUARE_CLI) + " mesh " + data("cases/rect_feature.geojson") + " --size 0.1 -o " +
+    // Job control on (set -m): a non-interactive shell starts background jobs with SIGINT ignored, so on a busy
+    // machine a signal sent before the program installs its handler was lost and the run finished.
+    const std::string cmd = "set -m; " + std::string(POLYSQUARE_CLI) + " mesh " + data("cases/rect_feature.geojson") + " --size 0.1 -o " +
                             out.string() + " > /dev/null 2>&1 & pid=$!; sleep " + delay + "; kill -INT $pid; wait $pid; echo $? > " +
                             (dir / "rc").string();
     ASSERT_EQ(std::system(("bash -c '" + cmd + "'").c_str()), 0);
