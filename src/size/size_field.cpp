@@ -281,12 +281,18 @@ SizeFieldResult make_size_field(const Region& region, const SizeFieldOptions& o)
   out.inside = inside_cells(g, region);
   std::vector<double> h(g.size(), o.size_max);
   const std::vector<Segment> shores = ring_segments(region);
-  std::vector<Segment> curves = shores;
-  for (const Segment& s : feature_segments(region)) curves.push_back(s);
-  const Distances shore = distance_to_segments(g, shores);
+  std::vector<Segment> curves = feature_segments(region);
+  // The distance to the rings is the passage term's, and the distance term's too when there is no feature curve:
+  // each wave over the grid runs once, and only for a term that asks for it.
+  Distances shore, to_curves;
+  if (o.across > 0 || (o.distance_term && curves.empty())) shore = distance_to_segments(g, shores);
   if (o.distance_term) {
-    const Distances all = curves.size() == shores.size() ? shore : distance_to_segments(g, curves);
-    for (std::size_t c = 0; c < g.size(); ++c) h[c] = std::min(h[c], o.size_min + o.grade * all.distance[c]);
+    if (!curves.empty()) {
+      curves.insert(curves.begin(), shores.begin(), shores.end());
+      to_curves = distance_to_segments(g, curves);
+    }
+    const std::vector<double>& d = curves.empty() ? shore.distance : to_curves.distance;
+    for (std::size_t c = 0; c < g.size(); ++c) h[c] = std::min(h[c], o.size_min + o.grade * d[c]);
   }
   if (o.across > 0) {
     const Passages passages = find_passages(g, out.inside, shores, shore, o.medial_angle_deg);
