@@ -59,7 +59,7 @@ int main(int argc, char** argv) {
       try {
         const Region region = read_region(input);
         MeshOptions o;
-        o.size = h;
+        o.size.h = h;
         const MeshResult res = mesh_region(region, o);
         ours_t.push_back(seconds(t0));
         ours = compute_quality(res.mesh);

@@ -31,34 +31,38 @@ void input_flags(CLI::App& t, MeshArgs& m) {
 
 // The curves the mesh follows: corners kept, simplification, smoothing, narrow islands.
 void curve_flags(CLI::App& t, MeshArgs& m) {
-  t.add_option("--corner-angle", m.options.corner_threshold_deg,
-           "input vertices turning by more than this (degrees) become mesh nodes")
+  t.add_option("--corner-angle", m.options.curves.corner_threshold_deg,
+               "input vertices turning by more than this (degrees) become mesh nodes")
       ->capture_default_str();
-  t.add_option("--simplify", m.options.simplify,
-           "simplify curves finer than the size first: drop vertices whose triangle area < (F*size)^2, each within size of the result (0 = off: the mesh follows every input vertex)")
+  t.add_option("--simplify", m.options.curves.simplify,
+               "simplify curves finer than the size first: drop vertices whose triangle area < (F*size)^2, each within "
+               "size of the result (0 = off: the mesh follows every input vertex)")
       ->capture_default_str();
-  t.add_option("--smooth-curves", m.options.smooth_curves,
-           "with --simplify: smooth stretches of curve finer than the size first, each vertex within F*size of the input, so that digitisation steps are not corners (0 = off)")
+  t.add_option("--smooth-curves", m.options.curves.smooth_curves,
+               "with --simplify: smooth stretches of curve finer than the size first, each vertex within F*size of the "
+               "input, so that digitisation steps are not corners (0 = off)")
       ->capture_default_str();
-  t.add_option("--min-island-width", m.options.min_island_width,
-           "with --simplify: leave out (and report) holes, closed feature curves and feature pieces around regions narrower than F*size (0 keeps them)")
+  t.add_option("--min-island-width", m.options.curves.min_island_width,
+               "with --simplify: leave out (and report) holes, closed feature curves and feature pieces around regions "
+               "narrower than F*size (0 keeps them)")
       ->capture_default_str();
 }
 
 void size_flags(CLI::App& t, MeshArgs& m) {
-  t.add_option("--size", m.options.size, "target quad edge length h, in region units (metres for geographic input)")
+  t.add_option("--size", m.options.size.h, "target quad edge length h, in region units (metres for geographic input)")
       ->required();
-  t.add_option("--max-quads", m.options.max_quads, "refuse sizes that need more quads than this")
+  t.add_option("--max-quads", m.options.size.max_quads, "refuse sizes that need more quads than this")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();  // "-5" would otherwise wrap around to 2^64 - 5
 }
 
 void partition_flags(CLI::App& t, MeshArgs& m) {
-  t.add_option("--parts", m.options.parts,
-           "subregions per polygon part (1 = one poly-square per part, 0 = try several counts and keep the best mesh)")
+  t.add_option(
+       "--parts", m.options.subregions.parts,
+       "subregions per polygon part (1 = one poly-square per part, 0 = try several counts and keep the best mesh)")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
-  t.add_option("--seed", m.options.seed, "seed of randomized stages");
+  t.add_option("--seed", m.options.run.seed, "seed of randomized stages");
 }
 
 // Mapping the subregions to poly-squares (deformation, layout, splits).
@@ -102,21 +106,24 @@ void refine_and_smooth_flags(CLI::App& t, MeshArgs& m) {
            "add a layer of quads inside a closed feature curve whose single corner there is flatter than "
            "this (degrees), leaving eight singular nodes; 180 = off")
       ->capture_default_str();
-  t.add_option("--feature-tolerance", m.options.feature_tolerance,
-           "largest distance between a feature curve and the mesh edges along it, as a fraction of the size (0 = unbounded)")
+  t.add_option("--feature-tolerance", m.options.gates.feature_tolerance,
+               "largest distance between a feature curve and the mesh edges along it, as a fraction of the size (0 = "
+               "unbounded)")
       ->capture_default_str();
 }
 
 // The quality gates a mesh must pass (after local repair).
 void gate_flags(CLI::App& t, MeshArgs& m) {
-  t.add_option("--min-sj", m.options.min_scaled_jacobian,
-           "refuse a mesh with quads whose scaled Jacobian is below this (see --max-poor-fraction; 0 accepts any valid mesh)")
+  t.add_option("--min-sj", m.options.gates.min_scaled_jacobian,
+               "refuse a mesh with quads whose scaled Jacobian is below this (see --max-poor-fraction; 0 accepts any "
+               "valid mesh)")
       ->capture_default_str();
-  t.add_option("--max-edge-ratio", m.options.max_edge_ratio,
-           "refuse a mesh with quads whose longest / shortest edge exceeds this (see --max-poor-fraction)")
+  t.add_option("--max-edge-ratio", m.options.gates.max_edge_ratio,
+               "refuse a mesh with quads whose longest / shortest edge exceeds this (see --max-poor-fraction)")
       ->capture_default_str();
-  t.add_option("--max-poor-fraction", m.options.max_poor_fraction,
-           "accept (and report) a mesh whose quads outside --min-sj or --max-edge-ratio, after local repair, are at most this fraction of a part's quads (0 = every quad must pass)")
+  t.add_option("--max-poor-fraction", m.options.gates.max_poor_fraction,
+               "accept (and report) a mesh whose quads outside --min-sj or --max-edge-ratio, after local repair, are "
+               "at most this fraction of a part's quads (0 = every quad must pass)")
       ->capture_default_str();
 }
 
@@ -164,7 +171,7 @@ void depth_flags(CLI::App& t, MeshArgs& m) {
 
 // How the run goes: threads, time limits, what it prints.
 void run_flags(CLI::App& t, MeshArgs& m) {
-  t.add_option("--threads", m.options.threads, "worker threads (0 = all cores); output does not depend on it")
+  t.add_option("--threads", m.options.run.threads, "worker threads (0 = all cores); output does not depend on it")
       ->check(CLI::NonNegativeNumber);
   t.add_option("--time-limit", m.time_limit,
            "seconds of wall time the run may take (reading, meshing, checks; not writing) before it ends "

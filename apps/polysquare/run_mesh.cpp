@@ -189,14 +189,14 @@ LocalFrame local_frame(const Region& region) {
 // The options the flags give indirectly: map composition and interfaces, partition kept for its picture, progress,
 // processes.
 void set_derived_options(MeshOptions& options, const MeshArgs& args, ProgressCallback progress) {
-  options.keep_partition = !args.partition_picture.empty();
+  options.run.keep_partition = !args.partition_picture.empty();
   options.map.composition = args.map == "gpm" ? MapComposition::gpm : MapComposition::ppm;
   options.map.layout.straight_interfaces = !args.bend_interfaces;
-  options.progress = std::move(progress);
+  options.run.progress = std::move(progress);
   if (args.mpi && args.mpi->active()) {
     // The processes of one machine share its cores (0 = all cores between them).
     options.map.sharing = args.mpi->sharing();
-    if (options.threads == 0) options.threads = args.mpi->threads_per_process();
+    if (options.run.threads == 0) options.run.threads = args.mpi->threads_per_process();
   }
 }
 
@@ -266,7 +266,7 @@ MeshMeasures measure_mesh(const MeshResult& result, const LocalFrame& frame, con
   m.quality = compute_quality(result.mesh);
   m.quality.schism.angle_ratio_worst_at = m.quality.schism.angle_ratio_worst_at + origin;
   m.quality.schism.aspect_ratio_worst_at = m.quality.schism.aspect_ratio_worst_at + origin;
-  DomainDistanceOptions measure{args.options.corner_threshold_deg, {}};
+  DomainDistanceOptions measure{args.options.curves.corner_threshold_deg, {}};
   for (const auto& d : result.report["dropped_parts"]) measure.skip_parts.push_back(d["part"].get<int>());
   // The mesh covers the (simplified) domain it conforms to, less the parts left out as too small, up to the
   // chords along curves: a larger change is said, never silent.
@@ -484,7 +484,7 @@ int run_mesh(const MeshArgs& args) {
   const Region region = read_noted_input(args, progress, notes, info);
   MeshOptions options = args.options;
   check_mesh_size(region, options);
-  say_size_estimate(info, region, options.size);
+  say_size_estimate(info, region, options.size.h);
   const LocalFrame frame = local_frame(region);
   set_derived_options(options, args, limit.callback());
   MeshResult result = mesh_in_frame(frame, options);
@@ -495,13 +495,13 @@ int run_mesh(const MeshArgs& args) {
 
   progress.start("quality");
   const MeshMeasures measures = measure_mesh(result, frame, args);
-  MeshGroups groups = complete_report(result, measures, notes, region, args.options.size);
+  MeshGroups groups = complete_report(result, measures, notes, region, args.options.size.h);
   const std::string group_summary = format_groups_text(groups);
   progress.finish("quality");
 
   limit.stop();  // the outputs are committed whole or not at all, never cut off between two renames
   progress.start("write");
-  move_back(result.mesh, frame, args.options.size);
+  move_back(result.mesh, frame, args.options.size.h);
   write_outputs(args, result, region, write_options(args, result.mesh, notes.input_crs, std::move(groups), split),
                 agreement);
   progress.finish("write");
@@ -513,7 +513,7 @@ int run_mesh(const MeshArgs& args) {
               << at_text(measures.fv.orthogonality_worst_at) << "\n";
   warn_left_out(result.report, frame);
   say_patches_and_simplification(result.report, frame, info);
-  say_candidates(result.report, args.options.parts, frame, info);
+  say_candidates(result.report, args.options.subregions.parts, frame, info);
   if (!args.quiet) print_summary(result, measures, args.output, group_summary);
   return 0;
 }

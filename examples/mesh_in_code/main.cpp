@@ -30,8 +30,8 @@ int main(int argc, char** argv) {
     validate_region(region);  // throws InputError naming what is wrong
 
     MeshOptions options;
-    options.size = 4.0;  // target quad edge length, in region units
-    options.threads = 2;
+    options.size.h = 4.0;  // target quad edge length, in region units
+    options.run.threads = 2;
     const MeshResult result = mesh_region(region, options);
 
     const InvariantReport invariants = check_invariants(result.mesh);

@@ -56,7 +56,8 @@ void measure_quality(FinishWork& w) {
   c.min_sj = q.sj.min;
   c.max_edge_ratio = q.edge_ratio.max;
   c.interior_singularities = q.interior_singularities;
-  const double mean_area = mesh_area(r.mesh) / static_cast<double>(r.mesh.quads.size()) / (w.options.size * w.options.size);
+  const double mean_area =
+      mesh_area(r.mesh) / static_cast<double>(r.mesh.quads.size()) / (w.options.size.h * w.options.size.h);
   c.size_deviation = std::abs(std::log(mean_area));
   c.summary["quads"] = r.mesh.quads.size();
   const LocalPatchStats& local_stats = w.local_stats;
@@ -106,11 +107,12 @@ void accept_poor_quads(FinishWork& w, const Gated& gated) {
   const PartMapResult& r = w.r;
   std::vector<std::size_t> outside;
   for (std::size_t q = 0; q < w.pinned.size(); ++q)
-    if (!w.pinned[q] && (metrics.sj[q] < options.min_scaled_jacobian || metrics.edge_ratio[q] > options.max_edge_ratio))
+    if (!w.pinned[q] &&
+        (metrics.sj[q] < options.gates.min_scaled_jacobian || metrics.edge_ratio[q] > options.gates.max_edge_ratio))
       outside.push_back(q);
   w.c.poor_quads = outside.size();
-  const bool refused = static_cast<double>(outside.size()) >
-                       options.max_poor_fraction * static_cast<double>(r.mesh.quads.size());
+  const bool refused =
+      static_cast<double>(outside.size()) > options.gates.max_poor_fraction * static_cast<double>(r.mesh.quads.size());
   auto at = [&](const std::vector<double>& per_quad, bool largest) {
     std::size_t worst = outside.front();
     for (std::size_t q : outside)
@@ -119,15 +121,15 @@ void accept_poor_quads(FinishWork& w, const Gated& gated) {
   };
   const std::string how_many = " (" + std::to_string(outside.size()) + " of " + std::to_string(r.mesh.quads.size()) +
                                " quads outside the gates, above --max-poor-fraction " +
-                               std::to_string(options.max_poor_fraction) + ")";
-  if (refused && gated.edge_ratio > options.max_edge_ratio)
+                               std::to_string(options.gates.max_poor_fraction) + ")";
+  if (refused && gated.edge_ratio > options.gates.max_edge_ratio)
     throw MeshingError(w.name + ": the best mesh has a quad with edge ratio " + std::to_string(gated.edge_ratio) +
                        " at " + at(metrics.edge_ratio, true) + ", above the maximum " +
-                       std::to_string(options.max_edge_ratio) + " (--max-edge-ratio)" + how_many);
+                       std::to_string(options.gates.max_edge_ratio) + " (--max-edge-ratio)" + how_many);
   if (refused)
     throw MeshingError(w.name + ": the best mesh has a quad with scaled Jacobian " + std::to_string(gated.sj) + " at " +
                        at(metrics.sj, false) + ", below the minimum " +
-                       std::to_string(options.min_scaled_jacobian) + " (--min-sj)" + how_many);
+                       std::to_string(options.gates.min_scaled_jacobian) + " (--min-sj)" + how_many);
   if (outside.empty()) return;
   nlohmann::json places = nlohmann::json::array();
   for (std::size_t q : outside) {

@@ -47,8 +47,9 @@ void find_bad_quads(const FinishWork& w, const std::vector<std::uint8_t>& cracke
     ++v.poor_valid;
     if (s < 0 || in_patch || in_large_map(w, q)) continue;
     // Below 1 the quad fails a gate; the smaller, the further.
-    const double ratio = std::min(options.min_scaled_jacobian > 0 ? metrics.sj[q] / options.min_scaled_jacobian : 1.0,
-                                  options.max_edge_ratio / metrics.edge_ratio[q]);
+    const double ratio =
+        std::min(options.gates.min_scaled_jacobian > 0 ? metrics.sj[q] / options.gates.min_scaled_jacobian : 1.0,
+                 options.gates.max_edge_ratio / metrics.edge_ratio[q]);
     auto [it, fresh] = poor_in.try_emplace(s, ratio, 0);
     it->second.first = std::min(it->second.first, ratio);
     it->second.second++;
@@ -63,7 +64,7 @@ void spend_poor_budget(const FinishWork& w, PoorIn& poor_in, RoundVerdict& v) {
     else worst_first.push_back({e.first, s});
   }
   std::sort(worst_first.begin(), worst_first.end());
-  const double budget = w.options.max_poor_fraction * static_cast<double>(w.metrics.sj.size());
+  const double budget = w.options.gates.max_poor_fraction * static_cast<double>(w.metrics.sj.size());
   for (const auto& [ratio, s] : worst_first) {
     if (static_cast<double>(v.poor_valid) <= budget) break;
     v.bad.emplace(s, "its map left " + std::to_string(poor_in[s].second) +

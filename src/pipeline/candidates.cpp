@@ -38,13 +38,13 @@ struct Rounds {
 
 // An explicit --parts K: K subregions, then K with bendable interfaces, then one poly-square, then K unsplit.
 void explicit_rounds(Rounds& rounds, const MeshOptions& options) {
-  rounds.add({options.parts});
+  rounds.add({options.subregions.parts});
   rounds.add_bent_round(options);
   rounds.list.emplace_back();
   rounds.add({1});
-  if (options.parts > 1 && options.map.split_rounds > 0) {  // the retry round (see large_part_rounds)
+  if (options.subregions.parts > 1 && options.map.split_rounds > 0) {  // the retry round (see large_part_rounds)
     rounds.list.emplace_back();
-    rounds.add({options.parts, false, false});
+    rounds.add({options.subregions.parts, false, false});
   }
 }
 
@@ -59,7 +59,7 @@ struct AutomaticCounts {
 
 AutomaticCounts automatic_counts(const Region& region, const RegionPart& part, const MeshOptions& options) {
   AutomaticCounts n;
-  const double quads = part_area(region, part) / (options.size * options.size);
+  const double quads = part_area(region, part) / (options.size.h * options.size.h);
   // Boundary complexity: the length of the rings and, counted twice (a subregion meets them from both sides),
   // of the feature curves. Long, convoluted boundaries (coastlines) need more subregions than their area says.
   double perimeter = 0.0;
@@ -73,11 +73,13 @@ AutomaticCounts automatic_counts(const Region& region, const RegionPart& part, c
     const FeatureCurve& c = region.features[static_cast<std::size_t>(f)];
     add_length(c.points, c.closed, 2.0);
   }
-  const int by_area = std::max(1, static_cast<int>(std::lround(quads / static_cast<double>(options.target_quads_per_part))));
-  const int by_perimeter = static_cast<int>(std::lround(perimeter / (options.perimeter_per_subregion * options.size)));
-  n.automatic = std::max(by_area, std::min(by_perimeter, options.max_automatic_subregions));
+  const int by_area =
+      std::max(1, static_cast<int>(std::lround(quads / static_cast<double>(options.subregions.target_quads_per_part))));
+  const int by_perimeter =
+      static_cast<int>(std::lround(perimeter / (options.subregions.perimeter_per_subregion * options.size.h)));
+  n.automatic = std::max(by_area, std::min(by_perimeter, options.subregions.max_automatic_subregions));
   // A boundary much longer than a square's of the same area (twice over), or features longer than the rings.
-  n.convoluted = ring_length > 8.0 * std::sqrt(quads) * options.size || perimeter > 2.0 * ring_length;
+  n.convoluted = ring_length > 8.0 * std::sqrt(quads) * options.size.h || perimeter > 2.0 * ring_length;
   n.quads = quads;
   n.ring_length = ring_length;
   n.by_area = by_area;
@@ -95,7 +97,8 @@ void large_part_rounds(Rounds& rounds, const AutomaticCounts& n, const MeshOptio
   const bool convoluted = n.convoluted;
   const bool partitioned = automatic > 1 && quads / automatic >= 16.0;
   if (partitioned && convoluted) rounds.add({automatic});
-  const bool single_beside = !(partitioned && convoluted) || quads <= static_cast<double>(options.single_map_quads);
+  const bool single_beside =
+      !(partitioned && convoluted) || quads <= static_cast<double>(options.subregions.single_map_quads);
   if (single_beside) rounds.add({1});
   // A retry round, meshed only when every candidate before it failed: the same subregions without splitting
   // (a split can leave a piece whose repair folds, where the unsplit subregion's patch holds), and the one
@@ -117,16 +120,17 @@ void small_part_rounds(Rounds& rounds, const AutomaticCounts& n, const MeshOptio
   const double quads = n.quads;
   if (n.convoluted && quads / n.automatic >= 16.0) rounds.add({n.automatic});
   rounds.add({n.by_area});
-  const int by_rings = static_cast<int>(std::lround(n.ring_length / (2.0 * options.perimeter_per_subregion * options.size)));
+  const int by_rings = static_cast<int>(
+      std::lround(n.ring_length / (2.0 * options.subregions.perimeter_per_subregion * options.size.h)));
   if (by_rings > 1 && quads / by_rings >= 16.0) rounds.add({by_rings});
-  for (int k : options.search_subregions)
+  for (int k : options.subregions.search_subregions)
     if (quads / k >= 16.0) rounds.add({k});  // at least a 4 x 4 block per subregion
   rounds.add({1});
-  if (quads <= static_cast<double>(options.bent_round_quads)) rounds.add_bent_round(options);
+  if (quads <= static_cast<double>(options.subregions.bent_round_quads)) rounds.add_bent_round(options);
   // Last, the straight candidates again on a finer background triangulation: thin subregions of a coast have
   // about as many vertices on their chains as inside, and a snap or fold that fails there often holds with
   // twice the chain vertices. Meshed only while no candidate is fully structured.
-  if (options.fine_parameterization_ratio > 0.0) {
+  if (options.subregions.fine_parameterization_ratio > 0.0) {
     std::vector<CandidateSpec> fine = rounds.list.front();  // the first round's candidates are the straight ones
     for (CandidateSpec& c : fine) c.fine = true;
     rounds.list.push_back(std::move(fine));
@@ -138,12 +142,13 @@ void small_part_rounds(Rounds& rounds, const AutomaticCounts& n, const MeshOptio
 std::vector<std::vector<CandidateSpec>> candidate_rounds(const Region& region, const RegionPart& part,
                                                          const MeshOptions& options) {
   Rounds rounds;
-  if (options.parts > 0) {
+  if (options.subregions.parts > 0) {
     explicit_rounds(rounds, options);
     return rounds.list;
   }
   const AutomaticCounts n = automatic_counts(region, part, options);
-  if (n.quads > static_cast<double>(options.search_quads)) large_part_rounds(rounds, n, options);
+  if (n.quads > static_cast<double>(options.subregions.search_quads))
+    large_part_rounds(rounds, n, options);
   else small_part_rounds(rounds, n, options);
   return rounds.list;
 }
@@ -261,8 +266,8 @@ Candidate try_split_fallback(const Region& region, const RegionPart& part, const
   nlohmann::json summary = {{"part", part.part}, {"subregions", 0}, {"fallback", "split_triangles"}};
   return finish_candidate(region, part, options, std::move(summary), [&](const Repairs&) {
     SplitOptions so;
-    so.size = options.size;
-    so.corner_threshold_deg = options.corner_threshold_deg;
+    so.size = options.size.h;
+    so.corner_threshold_deg = options.curves.corner_threshold_deg;
     PartMapResult r;
     r.stats.part = part.part;
     r.mesh = split_triangles(region, part, so);

@@ -28,36 +28,37 @@ bool within(double v, double lo, double hi) { return v >= lo && v <= hi; }
 }  // namespace
 
 void check_mesh_options(const MeshOptions& o) {
-  require(std::isfinite(o.size) && o.size > 0, "--size", "size", o.size, "a positive finite number");
-  require(within(o.min_scaled_jacobian, 0.0, 1.0), "--min-sj", "min_scaled_jacobian", o.min_scaled_jacobian,
+  require(std::isfinite(o.size.h) && o.size.h > 0, "--size", "size", o.size.h, "a positive finite number");
+  require(within(o.gates.min_scaled_jacobian, 0.0, 1.0), "--min-sj", "min_scaled_jacobian", o.gates.min_scaled_jacobian,
           "in [0, 1]");
-  require(std::isfinite(o.max_edge_ratio) && o.max_edge_ratio >= 1.0, "--max-edge-ratio", "max_edge_ratio",
-          o.max_edge_ratio, "a finite number >= 1 (the longest edge of a quad over its shortest)");
-  require(within(o.max_poor_fraction, 0.0, 1.0), "--max-poor-fraction", "max_poor_fraction", o.max_poor_fraction,
-          "in [0, 1]");
-  require(within(o.corner_threshold_deg, 0.0, 180.0), "--corner-angle", "corner_threshold_deg", o.corner_threshold_deg,
-          "in [0, 180] degrees");
+  require(std::isfinite(o.gates.max_edge_ratio) && o.gates.max_edge_ratio >= 1.0, "--max-edge-ratio", "max_edge_ratio",
+          o.gates.max_edge_ratio, "a finite number >= 1 (the longest edge of a quad over its shortest)");
+  require(within(o.gates.max_poor_fraction, 0.0, 1.0), "--max-poor-fraction", "max_poor_fraction",
+          o.gates.max_poor_fraction, "in [0, 1]");
+  require(within(o.curves.corner_threshold_deg, 0.0, 180.0), "--corner-angle", "corner_threshold_deg",
+          o.curves.corner_threshold_deg, "in [0, 180] degrees");
   require(within(o.refine.flat_corner_deg, 0.0, 180.0), "--flat-corner-angle", "refine.flat_corner_deg",
           o.refine.flat_corner_deg, "in [0, 180] degrees (180 = off)");
   require(within(o.refine.loop_corner_deg, 0.0, 180.0), "--loop-corner-angle", "refine.loop_corner_deg",
           o.refine.loop_corner_deg, "in [0, 180] degrees (180 = off)");
-  require(std::isfinite(o.simplify) && o.simplify >= 0, "--simplify", "simplify", o.simplify,
+  require(std::isfinite(o.curves.simplify) && o.curves.simplify >= 0, "--simplify", "simplify", o.curves.simplify,
           "a finite number >= 0 (0 = off)");
-  require(std::isfinite(o.smooth_curves) && o.smooth_curves >= 0, "--smooth-curves", "smooth_curves", o.smooth_curves, "a finite fraction of the size, at least 0");
-  require(std::isfinite(o.min_island_width) && o.min_island_width >= 0, "--min-island-width", "min_island_width",
-          o.min_island_width, "a finite fraction of the size, at least 0");
+  require(std::isfinite(o.curves.smooth_curves) && o.curves.smooth_curves >= 0, "--smooth-curves", "smooth_curves",
+          o.curves.smooth_curves, "a finite fraction of the size, at least 0");
+  require(std::isfinite(o.curves.min_island_width) && o.curves.min_island_width >= 0, "--min-island-width",
+          "min_island_width", o.curves.min_island_width, "a finite fraction of the size, at least 0");
   require(std::isfinite(o.map.deform.boundary_weight) && o.map.deform.boundary_weight >= 0, "--boundary-weight",
           "map.deform.boundary_weight", o.map.deform.boundary_weight, "a finite number >= 0");
   require(std::isfinite(o.map.deform.feature_weight) && o.map.deform.feature_weight >= 0, "--feature-weight",
           "map.deform.feature_weight", o.map.deform.feature_weight, "a finite number >= 0");
-  require(std::isfinite(o.feature_tolerance) && o.feature_tolerance >= 0, "--feature-tolerance", "feature_tolerance",
-          o.feature_tolerance, "a finite fraction of the size, at least 0 (0: unbounded)");
+  require(std::isfinite(o.gates.feature_tolerance) && o.gates.feature_tolerance >= 0, "--feature-tolerance",
+          "feature_tolerance", o.gates.feature_tolerance, "a finite fraction of the size, at least 0 (0: unbounded)");
   require(std::isfinite(o.map.layout.agree_turn_elements) && o.map.layout.agree_turn_elements >= 0, "--agree-turns",
           "map.layout.agree_turn_elements", o.map.layout.agree_turn_elements, "a finite number of elements >= 0 (0 = off)");
-  require(o.max_quads >= 1, "--max-quads", "max_quads", static_cast<double>(o.max_quads), "at least 1");
-  require(o.threads >= 0 && o.threads <= kMaxThreads, "--threads", "threads", o.threads,
+  require(o.size.max_quads >= 1, "--max-quads", "max_quads", static_cast<double>(o.size.max_quads), "at least 1");
+  require(o.run.threads >= 0 && o.run.threads <= kMaxThreads, "--threads", "threads", o.run.threads,
           "in [0, 4096] (0 = all cores)");
-  require(o.parts >= 0, "--parts", "parts", o.parts, ">= 0 (0 = automatic)");
+  require(o.subregions.parts >= 0, "--parts", "parts", o.subregions.parts, ">= 0 (0 = automatic)");
 }
 
 void check_mesh_size(const Region& region, const MeshOptions& o) {
@@ -82,26 +83,26 @@ void check_mesh_size(const Region& region, const MeshOptions& o) {
   }
   if (!(std::isfinite(area) && area > 0))
     throw InputError(src + ": the domain's area is not a finite positive number (" + short_number(area) + ")");
-  if (o.size > 0.5 * std::min(w, h))
-    throw InputError(src + ": size " + short_number(o.size) + " is larger than half the region's extent (" +
+  if (o.size.h > 0.5 * std::min(w, h))
+    throw InputError(src + ": size " + short_number(o.size.h) + " is larger than half the region's extent (" +
                      short_number(w) + " x " + short_number(h) + ")");
-  const double estimate = area / (o.size * o.size);
-  if (!(estimate <= static_cast<double>(o.max_quads)))
-    throw InputError(src + ": size " + short_number(o.size) + " would need about " + short_number(estimate) +
+  const double estimate = area / (o.size.h * o.size.h);
+  if (!(estimate <= static_cast<double>(o.size.max_quads)))
+    throw InputError(src + ": size " + short_number(o.size.h) + " would need about " + short_number(estimate) +
                      " quads (area " + short_number(area) + " / size^2), more than the limit of " +
-                     std::to_string(o.max_quads) + " (raise --max-quads)");
+                     std::to_string(o.size.max_quads) + " (raise --max-quads)");
   // Far from the origin the region is meshed in a local frame, but the mesh is written back in the input's
   // coordinates, which there step by the spacing of doubles (ulp): 0.125 at 9e14, 1.2e-4 at 1e12. A size of
   // fewer than kMinSizeInSteps such steps would come back with its quads bent or folded (a 1 x 1 square at 9e14
   // meshed at size 0.1 was written with 36 inverted quads), so it is refused before any work.
   const double far = std::max({std::abs(box.lo.x), std::abs(box.hi.x), std::abs(box.lo.y), std::abs(box.hi.y)});
   const double step = std::nextafter(far, INFINITY) - far;
-  if (!(o.size >= kMinSizeInSteps * step))
-    throw InputError(src + ": size " + short_number(o.size) + " is too fine for coordinates as large as " +
+  if (!(o.size.h >= kMinSizeInSteps * step))
+    throw InputError(src + ": size " + short_number(o.size.h) + " is too fine for coordinates as large as " +
                      short_number(far) + ", which step by " + short_number(step) +
                      " there (double precision): the mesh written back in them would lose its shape; the size must "
-                     "be at least " + short_number(kMinSizeInSteps * step) + " (" +
-                     std::to_string(static_cast<int>(kMinSizeInSteps)) +
+                     "be at least " +
+                     short_number(kMinSizeInSteps * step) + " (" + std::to_string(static_cast<int>(kMinSizeInSteps)) +
                      " steps, at most 2.3e-13 times the largest coordinate), or move the input nearer the origin");
 }
 

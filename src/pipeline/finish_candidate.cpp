@@ -132,7 +132,7 @@ void relax_unstructured_valences(FinishWork& w, const Scope& scope) {
   std::vector<std::size_t> origin;
   RelaxValencesStats relaxed;
   RelaxValencesOptions ro = w.options.relax_valences;
-  ro.poor_sj = w.options.min_scaled_jacobian;
+  ro.poor_sj = w.options.gates.min_scaled_jacobian;
   timed(w.times.relax, [&] { relaxed = relax_region_valences(r.mesh, unstructured_quads, ro, w.smooth, origin); });
   if (relaxed.region_quads > 0) add_relax_summary(w.c.summary["relax_valences"], relaxed, scope);
   if (relaxed.kept) {
@@ -162,7 +162,7 @@ bool schedule_repairs(FinishWork& w, const RoundVerdict& v, std::map<int, std::s
   // Mapped subregions becoming patches are patched in place, unless a crack beside one asks for new nodes
   // on its interfaces; a patch to be rebuilt otherwise (matching, grown) needs the part mapped again.
   const bool in_place_only =
-      w.options.repair_in_place && std::all_of(v.bad.begin(), v.bad.end(), [&](const auto& b) {
+      w.options.repair.in_place && std::all_of(v.bad.begin(), v.bad.end(), [&](const auto& b) {
         return w.r.stats.subregions[static_cast<std::size_t>(b.first)].mapped && !v.cracked_subregion.count(b.first);
       });
   if (!w.repairs.add(v.bad, w.r.stats)) return false;
@@ -183,7 +183,7 @@ void run_rounds(FinishWork& w, const MakeMesh& make_mesh) {
     relax_unstructured_valences(w, scope);
     patch_severe_in_large_maps(w, scope);
     const RoundVerdict verdict = judge_round(w);
-    if (round < w.options.repair_rounds && schedule_repairs(w, verdict, in_place)) continue;
+    if (round < w.options.repair.rounds && schedule_repairs(w, verdict, in_place)) continue;
     // The invariants are checked once the repair rounds are over (a round that continues never reads them).
     check_final_invariants(w, verdict.first_folded);
     return;
@@ -209,13 +209,13 @@ bool measure(FinishWork& w) {
   const MeshOptions& options = w.options;
   timed(w.times.measure, [&] {
     w.metrics = quad_metrics(w.r.mesh);
-    w.pinned = quads_pinned_by_sharp_input(w.r.mesh, options.min_scaled_jacobian, options.size);
+    w.pinned = quads_pinned_by_sharp_input(w.r.mesh, options.gates.min_scaled_jacobian, options.size.h);
   });
   w.poor.assign(w.metrics.sj.size(), 0);
   bool any = false;
   for (std::size_t q = 0; q < w.metrics.sj.size(); ++q) {
-    w.poor[q] = w.metrics.sj[q] <= 0.0 || (!w.pinned[q] && (w.metrics.sj[q] < options.min_scaled_jacobian ||
-                                                            w.metrics.edge_ratio[q] > options.max_edge_ratio));
+    w.poor[q] = w.metrics.sj[q] <= 0.0 || (!w.pinned[q] && (w.metrics.sj[q] < options.gates.min_scaled_jacobian ||
+                                                            w.metrics.edge_ratio[q] > options.gates.max_edge_ratio));
     any = any || w.poor[q];
   }
   return any;
@@ -223,7 +223,7 @@ bool measure(FinishWork& w) {
 
 bool patch_locally(FinishWork& w, const std::vector<std::uint8_t>& flagged, int rings, std::size_t max_quads) {
   LocalPatchOptions lp = w.options.local_patch;
-  lp.size = w.options.size;
+  lp.size = w.options.size.h;
   lp.max_rings = rings;
   lp.max_quads = max_quads;
   LocalPatchStats done;
@@ -242,13 +242,14 @@ bool patch_locally(FinishWork& w, const std::vector<std::uint8_t>& flagged, int 
 bool severe(const FinishWork& w, std::size_t q) {
   const MeshOptions& options = w.options;
   return w.metrics.sj[q] > 0.0 && !w.pinned[q] &&
-         (w.metrics.sj[q] < 0.5 * options.min_scaled_jacobian || w.metrics.edge_ratio[q] > 2.0 * options.max_edge_ratio);
+         (w.metrics.sj[q] < 0.5 * options.gates.min_scaled_jacobian ||
+          w.metrics.edge_ratio[q] > 2.0 * options.gates.max_edge_ratio);
 }
 
 bool in_large_map(const FinishWork& w, std::size_t q) {
   const int s = subregion_of(w, q);
   return s >= 0 && w.r.stats.subregions[static_cast<std::size_t>(s)].mapped &&
-         w.r.stats.subregions[static_cast<std::size_t>(s)].quads > w.options.keep_map_above_quads;
+         w.r.stats.subregions[static_cast<std::size_t>(s)].quads > w.options.repair.keep_map_above_quads;
 }
 
 Candidate finish_candidate(const Region& region, const RegionPart& part, const MeshOptions& options,

@@ -44,7 +44,7 @@ void timed(double& total, F&& f) {
 struct FinishWork {
   FinishWork(const Region& region, const RegionPart& part, const MeshOptions& options, Candidate& c)
       : region(region), options(options), c(c), name(name_of(region, part)), smooth(options.smooth) {
-    smooth.feature_tolerance = options.feature_tolerance * options.size;
+    smooth.feature_tolerance = options.gates.feature_tolerance * options.size.h;
   }
 
   const Region& region;

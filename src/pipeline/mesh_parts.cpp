@@ -53,7 +53,7 @@ void mesh_round(CandidateSearch& search, const std::vector<CandidateSpec>& round
     part_map.partition.parts = ks[c].subregions;
     part_map.layout.straight_interfaces = !ks[c].bend_interfaces;
     if (!ks[c].split) part_map.split_rounds = 0;
-    if (ks[c].fine) part_map.parameterization_ratio = options.fine_parameterization_ratio;
+    if (ks[c].fine) part_map.parameterization_ratio = options.subregions.fine_parameterization_ratio;
     cands[c] = try_candidate(work, part, part_map, options);
   };
   if (share_candidates)
@@ -107,7 +107,7 @@ PartOutcome mesh_part(const Region& work, const RegionPart& part, const Polysqua
     if (search.best >= 0 && b.poor_quads == 0 && (b.structured >= 1.0 || !options.map.patch_subregions.empty()))
       break;
   }
-  if (search.best < 0 && options.split_fallback) {
+  if (search.best < 0 && options.repair.split_fallback) {
     search.cands.push_back(try_split_fallback(work, part, options));
     search.ks.push_back({0, false});
     out.tried.push_back(search.cands.back().summary);

@@ -26,28 +26,28 @@ SimplifiedRegion simplify_curves(const Region& region, const MeshOptions& option
   SimplifiedRegion out;
   Region& simplified = out.region;
   simplified = region;
-  if (options.simplify <= 0.0) {
+  if (options.curves.simplify <= 0.0) {
     // Unsimplified rings are still meshed with chords: where one could cut across another curve, ring vertices
     // become nodes (as simplify_region does last), so that parts and islands close to each other do not overlap.
-    out.stats.chord_pins = pin_chords_clear_of_curves(simplified, options.size).size();
+    out.stats.chord_pins = pin_chords_clear_of_curves(simplified, options.size.h).size();
     return out;
   }
   // Islands and faces between curves narrower than the size hold no quad of that size: their curves go first.
-  out.dropped_curves = drop_narrow_islands(simplified, options.min_island_width * options.size);
-  for (DroppedCurve& d : collapse_narrow_faces(simplified, options.min_island_width * options.size))
+  out.dropped_curves = drop_narrow_islands(simplified, options.curves.min_island_width * options.size.h);
+  for (DroppedCurve& d : collapse_narrow_faces(simplified, options.curves.min_island_width * options.size.h))
     out.dropped_curves.push_back(d);
-  for (DroppedCurve& d : open_narrow_wedges(simplified, options.min_island_width * options.size))
+  for (DroppedCurve& d : open_narrow_wedges(simplified, options.curves.min_island_width * options.size.h))
     out.dropped_curves.push_back(d);
   // Feature curves that end a small fraction of the size short of the boundary or of another curve (crossing
   // points computed in another projection) are joined to it first: a gap far below h cannot be meshed, and a
   // curve that reaches the boundary splits the part into feature faces for the partition.
   const Box2 box = region.bounding_box();
-  out.end_snaps = snap_near_coincident(simplified, 0.1 * options.size / std::max(box.diagonal(), 1e-300), nullptr);
+  out.end_snaps = snap_near_coincident(simplified, 0.1 * options.size.h / std::max(box.diagonal(), 1e-300), nullptr);
   SimplifyOptions so;
-  so.min_area = (options.simplify * options.size) * (options.simplify * options.size);
-  so.max_distance = options.size;  // the simplified curves stay within h of the input
-  so.max_segment = options.size;   // and are coarsened to the size, not beyond
-  so.smooth_distance = options.smooth_curves * options.size;
+  so.min_area = (options.curves.simplify * options.size.h) * (options.curves.simplify * options.size.h);
+  so.max_distance = options.size.h;  // the simplified curves stay within h of the input
+  so.max_segment = options.size.h;   // and are coarsened to the size, not beyond
+  so.smooth_distance = options.curves.smooth_curves * options.size.h;
   out.stats = simplify_region(simplified, so);
   return out;
 }
@@ -57,10 +57,10 @@ PolysquareMapOptions run_map_options(const MeshOptions& options) {
   PolysquareMapOptions map = options.map;
   map.deform.memo = std::make_shared<DeformMemo>();  // this run's solved deformations (repair rounds repeat them)
   map.quantize.memo = std::make_shared<QuantizeMemo>();  // and its layouts quantized alone
-  map.size = options.size;
-  map.layout.corner_threshold_deg = options.corner_threshold_deg;
-  map.keep_partition = options.keep_partition;
-  map.partition.seed = options.seed;
+  map.size = options.size.h;
+  map.layout.corner_threshold_deg = options.curves.corner_threshold_deg;
+  map.keep_partition = options.run.keep_partition;
+  map.partition.seed = options.run.seed;
   return map;
 }
 
@@ -70,7 +70,7 @@ RegionParts split_parts(const Region& work, const MeshOptions& options, const st
   RegionParts out;
   for (RegionPart& p : split_into_parts(work)) {
     const double a = part_area(work, p);
-    if (options.drop_small_parts && a < options.size * options.size) {
+    if (options.curves.drop_small_parts && a < options.size.h * options.size.h) {
       const Vec2 at = work.rings[static_cast<std::size_t>(p.rings.front())].points.front();
       out.dropped.push_back({{"part", p.part}, {"area", a}, {"at", {at.x, at.y}}});
       continue;
@@ -79,12 +79,13 @@ RegionParts split_parts(const Region& work, const MeshOptions& options, const st
   }
   if (out.parts.empty())
     throw MeshingError(src + ": every polygon part is smaller than one element (size^2 = " +
-                       std::to_string(options.size * options.size) + "); use a smaller size");
+                       std::to_string(options.size.h * options.size.h) + "); use a smaller size");
   return out;
 }
 
 std::size_t thread_limit(const MeshOptions& options) {
-  const int threads = options.threads > 0 ? options.threads : static_cast<int>(oneapi::tbb::info::default_concurrency());
+  const int threads =
+      options.run.threads > 0 ? options.run.threads : static_cast<int>(oneapi::tbb::info::default_concurrency());
   return static_cast<std::size_t>(threads);
 }
 
@@ -103,7 +104,7 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
   check_mesh_options(options);      // NaN gates and out-of-range values, named by their flag
   check_mesh_size(region, options);  // size against the region's extent and the quad budget
   RegionTimes times;
-  ProgressReporter progress(options.progress);
+  ProgressReporter progress(options.run.progress);
 
   progress.start("simplify");
   SimplifiedRegion simplified = simplify_curves(region, options);
@@ -123,7 +124,7 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
   progress.finish("mesh parts");
 
   progress.start("assemble");
-  MeshResult out = assemble_parts(meshed, region, options.keep_partition);
+  MeshResult out = assemble_parts(meshed, region, options.run.keep_partition);
   check_assembled(out.mesh, src);
   out.report = region_report({region, options, map, simplified, parts, meshed, out, times});
   out.region = std::move(simplified.region);

@@ -38,7 +38,7 @@ bool patch_subregions_in_place(QuadMesh& mesh, const std::map<int, std::string>&
     made[q] = q < local_patched.size() && local_patched[q] ? 2 : 0;  // the new quads come back as 1
   }
   LocalPatchOptions lp = options.local_patch;
-  lp.size = options.size;
+  lp.size = options.size.h;
   lp.min_rings = 0;
   lp.holes = true;           // a subregion around an island
   lp.inner_features = true;  // a subregion a feature runs into

@@ -132,7 +132,7 @@ nlohmann::json summary_json(const ReportInput& in, const Structure& structure) {
   // sharper than asin(0.3) (17.5 degrees) and within a size of it. Reported apart from the rest below 0.3.
   std::size_t below_0_3 = 0, pinned_below_0_3 = 0;
   {
-    const std::vector<std::uint8_t> pinned = quads_pinned_by_sharp_input(mesh, 0.3, in.options.size);
+    const std::vector<std::uint8_t> pinned = quads_pinned_by_sharp_input(mesh, 0.3, in.options.size.h);
     for (std::size_t q = 0; q < mesh.quads.size(); ++q)
       if (quad_min_corner_sj(mesh, q) < 0.3) {
         ++below_0_3;
@@ -162,15 +162,22 @@ nlohmann::json input_json(const Region& region) {
 }
 
 nlohmann::json options_json(const MeshOptions& options, const PolysquareMapOptions& map) {
-  return {{"size", options.size}, {"threads", options.threads}, {"seed", options.seed},
-          {"corner_threshold_deg", options.corner_threshold_deg}, {"max_quads", options.max_quads},
-          {"min_scaled_jacobian", options.min_scaled_jacobian}, {"max_edge_ratio", options.max_edge_ratio},
-          {"map", options.parts == 1 ? "single poly-square per part"
-                                     : (map.composition == MapComposition::gpm ? "gpm" : "ppm")}, {"subregions_per_part", options.parts},
-          {"amips_alpha", map.deform.amips_alpha}, {"amips_s", map.deform.amips_s},
-          {"boundary_weight", map.deform.boundary_weight}, {"feature_weight", map.deform.feature_weight},
+  return {{"size", options.size.h},
+          {"threads", options.run.threads},
+          {"seed", options.run.seed},
+          {"corner_threshold_deg", options.curves.corner_threshold_deg},
+          {"max_quads", options.size.max_quads},
+          {"min_scaled_jacobian", options.gates.min_scaled_jacobian},
+          {"max_edge_ratio", options.gates.max_edge_ratio},
+          {"map", options.subregions.parts == 1 ? "single poly-square per part"
+                                                : (map.composition == MapComposition::gpm ? "gpm" : "ppm")},
+          {"subregions_per_part", options.subregions.parts},
+          {"amips_alpha", map.deform.amips_alpha},
+          {"amips_s", map.deform.amips_s},
+          {"boundary_weight", map.deform.boundary_weight},
+          {"feature_weight", map.deform.feature_weight},
           {"parameterization_ratio", map.parameterization_ratio},
-          {"feature_tolerance", options.feature_tolerance},
+          {"feature_tolerance", options.gates.feature_tolerance},
           {"flat_corner_deg", options.refine.enabled ? options.refine.flat_corner_deg : 180.0},
           {"loop_corner_deg", options.refine.enabled ? options.refine.loop_corner_deg : 180.0}};
 }
@@ -180,10 +187,13 @@ nlohmann::json simplify_json(const ReportInput& in) {
   const SimplifyStats& simplify_stats = in.simplified.stats;
   const SnapStats& end_snaps = in.simplified.end_snaps;
   const double area = region_area(in.region);
-  return {{"fraction_of_size", options.simplify}, {"smooth_curves_fraction_of_size", options.smooth_curves}, {"vertices_before", simplify_stats.vertices_before},
-          {"vertices_after", simplify_stats.vertices_after}, {"refused", simplify_stats.refused},
+  return {{"fraction_of_size", options.curves.simplify},
+          {"smooth_curves_fraction_of_size", options.curves.smooth_curves},
+          {"vertices_before", simplify_stats.vertices_before},
+          {"vertices_after", simplify_stats.vertices_after},
+          {"refused", simplify_stats.refused},
           {"max_distance", simplify_stats.max_distance},
-          {"max_distance_over_size", simplify_stats.max_distance / options.size},
+          {"max_distance_over_size", simplify_stats.max_distance / options.size.h},
           {"chord_pins", simplify_stats.chord_pins},
           {"end_points_snapped", end_snaps.to_vertex + end_snaps.to_segment},
           {"largest_snap", end_snaps.largest_move},

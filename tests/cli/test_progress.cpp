@@ -65,12 +65,12 @@ TEST(ProgressEvents, MeshRegionReportsEveryStageAndEveryPartWithoutChangingTheMe
   region.num_parts = 2;
   validate_region(region);
   MeshOptions options;
-  options.size = 1.0;
-  options.threads = 2;
+  options.size.h = 1.0;
+  options.run.threads = 2;
   std::vector<ProgressEvent> events;
-  options.progress = [&](const ProgressEvent& e) { events.push_back(e); };
+  options.run.progress = [&](const ProgressEvent& e) { events.push_back(e); };
   const MeshResult with = mesh_region(region, options);
-  options.progress = nullptr;
+  options.run.progress = nullptr;
   const MeshResult without = mesh_region(region, options);
   EXPECT_EQ(with.mesh.nodes, without.mesh.nodes);
   EXPECT_EQ(with.mesh.quads, without.mesh.quads);

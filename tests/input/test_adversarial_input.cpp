@@ -131,7 +131,7 @@ TEST(AdversarialInput, FarFromTheOriginRingsKeepTheirArea) {
 
 TEST(MeshOptionsCheck, DefaultsPassAndEveryNaNIsRefusedByName) {
   MeshOptions ok;
-  ok.size = 1;
+  ok.size.h = 1;
   EXPECT_NO_THROW(check_mesh_options(ok));
   const double nan = std::nan("");
   struct Case {
@@ -139,19 +139,19 @@ TEST(MeshOptionsCheck, DefaultsPassAndEveryNaNIsRefusedByName) {
     void (*set)(MeshOptions&, double);
   };
   const Case cases[] = {
-      {"--size", [](MeshOptions& o, double v) { o.size = v; }},
-      {"--min-sj", [](MeshOptions& o, double v) { o.min_scaled_jacobian = v; }},
-      {"--max-edge-ratio", [](MeshOptions& o, double v) { o.max_edge_ratio = v; }},
-      {"--max-poor-fraction", [](MeshOptions& o, double v) { o.max_poor_fraction = v; }},
-      {"--corner-angle", [](MeshOptions& o, double v) { o.corner_threshold_deg = v; }},
-      {"--simplify", [](MeshOptions& o, double v) { o.simplify = v; }},
-      {"--smooth-curves", [](MeshOptions& o, double v) { o.smooth_curves = v; }},
-      {"--min-island-width", [](MeshOptions& o, double v) { o.min_island_width = v; }},
+      {"--size", [](MeshOptions& o, double v) { o.size.h = v; }},
+      {"--min-sj", [](MeshOptions& o, double v) { o.gates.min_scaled_jacobian = v; }},
+      {"--max-edge-ratio", [](MeshOptions& o, double v) { o.gates.max_edge_ratio = v; }},
+      {"--max-poor-fraction", [](MeshOptions& o, double v) { o.gates.max_poor_fraction = v; }},
+      {"--corner-angle", [](MeshOptions& o, double v) { o.curves.corner_threshold_deg = v; }},
+      {"--simplify", [](MeshOptions& o, double v) { o.curves.simplify = v; }},
+      {"--smooth-curves", [](MeshOptions& o, double v) { o.curves.smooth_curves = v; }},
+      {"--min-island-width", [](MeshOptions& o, double v) { o.curves.min_island_width = v; }},
       {"--boundary-weight", [](MeshOptions& o, double v) { o.map.deform.boundary_weight = v; }},
       {"--feature-weight", [](MeshOptions& o, double v) { o.map.deform.feature_weight = v; }},
       {"--flat-corner-angle", [](MeshOptions& o, double v) { o.refine.flat_corner_deg = v; }},
       {"--loop-corner-angle", [](MeshOptions& o, double v) { o.refine.loop_corner_deg = v; }},
-      {"--feature-tolerance", [](MeshOptions& o, double v) { o.feature_tolerance = v; }},
+      {"--feature-tolerance", [](MeshOptions& o, double v) { o.gates.feature_tolerance = v; }},
       {"--agree-turns", [](MeshOptions& o, double v) { o.map.layout.agree_turn_elements = v; }},
   };
   for (const Case& c : cases)
@@ -166,13 +166,13 @@ TEST(MeshOptionsCheck, DefaultsPassAndEveryNaNIsRefusedByName) {
       }
     }
   MeshOptions o = ok;
-  o.max_edge_ratio = 0;
+  o.gates.max_edge_ratio = 0;
   EXPECT_THROW(check_mesh_options(o), InputError);
   o = ok;
-  o.threads = 1'000'000'000;
+  o.run.threads = 1'000'000'000;
   EXPECT_THROW(check_mesh_options(o), InputError);
   o = ok;
-  o.max_quads = 0;
+  o.size.max_quads = 0;
   EXPECT_THROW(check_mesh_options(o), InputError);
 }
 
@@ -180,7 +180,7 @@ TEST(MeshOptionsCheck, SizeMessagesArePlainNumbers) {
   InputNotes notes;
   const Region r = read_input(adversarial("far_square_1e11.geojson"), {}, notes);
   MeshOptions o;
-  o.size = 1e-150;
+  o.size.h = 1e-150;
   try {
     check_mesh_size(r, o);
     ADD_FAILURE() << "1e-150 accepted";
@@ -189,7 +189,7 @@ TEST(MeshOptionsCheck, SizeMessagesArePlainNumbers) {
     EXPECT_NE(what.find("would need about 1e+304 quads"), std::string::npos) << what;
     EXPECT_LT(what.size(), 300u) << what;
   }
-  o.size = 1e9;
+  o.size.h = 1e9;
   try {
     check_mesh_size(r, o);
     ADD_FAILURE() << "1e9 accepted";

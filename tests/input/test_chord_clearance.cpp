@@ -80,7 +80,7 @@ TEST(ChordClearance, SimplificationPinsAndTheCloseRingsMeshWithoutOverlap) {
     so.max_distance = so.max_segment = 2.0;
     EXPECT_GT(simplify_region(region, so).chord_pins, 0u);
     MeshOptions options;
-    options.size = 2.0;
+    options.size.h = 2.0;
     // Before the pins these meshes had 9 to 33 overlapping quad pairs and mesh_region refused them.
     const MeshResult result = mesh_region(read_region(adversarial(std::string(name) + ".geojson")), options);
     EXPECT_EQ(find_overlapping_quads(result.mesh).pairs, 0u);

@@ -163,8 +163,8 @@ TEST(GdalInput, LonLatDeltaBoxMeshesAt200Metres) {
   const Region region = read_region(dir / "ll.geojson");
   ASSERT_EQ(region.crs, "EPSG:32616");
   MeshOptions options;
-  options.size = 200;  // metres; in degrees this size was refused as larger than the region
-  options.parts = 1;   // one candidate (about a minute): the default search takes many minutes on this part
+  options.size.h = 200;          // metres; in degrees this size was refused as larger than the region
+  options.subregions.parts = 1;  // one candidate (about a minute): the default search takes many minutes on this part
   const MeshResult result = mesh_region(region, options);
   EXPECT_GT(result.mesh.quads.size(), 30000u);  // about 1.7e9 m^2 / 200^2 = 42,000 elements of h^2
   EXPECT_EQ(result.mesh.crs, "EPSG:32616");
@@ -261,7 +261,7 @@ TEST(GdalInput, NearCoincidentPointsAreSnappedAndReported) {
   EXPECT_TRUE(r.feature_points[0] == (Vec2{300, 500}));
   // The snapped region meshes; its curves end on mesh nodes on the boundary.
   MeshOptions options;
-  options.size = 50;
+  options.size.h = 50;
   const MeshResult result = mesh_region(r, options);
   EXPECT_GT(result.mesh.quads.size(), 100u);
   bool node_at_end = false;

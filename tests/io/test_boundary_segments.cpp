@@ -53,7 +53,7 @@ Meshed mesh_file(const fs::path& path, double size) {
   Meshed m;
   const Region region = read_region(path);
   MeshOptions o;
-  o.size = size;
+  o.size.h = size;
   m.result = mesh_region(region, o);
   m.groups = mesh_groups(m.result.mesh, &m.result.region);
   return m;

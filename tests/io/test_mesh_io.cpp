@@ -24,7 +24,7 @@ namespace fs = std::filesystem;
 namespace {
 QuadMesh sample_mesh() {
   MeshOptions o;
-  o.size = 3.0;
+  o.size.h = 3.0;
   return mesh_region(read_region(std::string(POLYSQUARE_DATA_DIR) + "/cases/square_feature.geojson"), o).mesh;
 }
 fs::path temp(const std::string& name) { return fs::temp_directory_path() / ("polysquare_test_" + std::to_string(::getpid()) + "_" + name); }
@@ -134,9 +134,9 @@ TEST(MeshIo, DealiiReadsTheDefaultMshOfEveryCase) {
     if (c.stem() == "delta_box") continue;
     const Region region = read_region(c);
     MeshOptions o;
-    o.size = region.bounding_box().diagonal() / 50;  // one to three thousand quads on every case
-    o.parts = 1;                                     // the fast path: this test is about the file, not the mesh
-    o.simplify = 0.5;
+    o.size.h = region.bounding_box().diagonal() / 50;  // one to three thousand quads on every case
+    o.subregions.parts = 1;                            // the fast path: this test is about the file, not the mesh
+    o.curves.simplify = 0.5;
     const QuadMesh m = mesh_region(region, o).mesh;
     write_mesh(p, m);
     const auto [status, text] = read_with_dealii();

@@ -46,7 +46,7 @@ Case mesh_case(const std::string& name, double size) {
   Case c;
   c.region = read_region(std::string(POLYSQUARE_DATA_DIR) + "/cases/" + name + ".geojson");
   MeshOptions o;
-  o.size = size;
+  o.size.h = size;
   c.mesh = mesh_region(c.region, o).mesh;
   return c;
 }

@@ -103,8 +103,8 @@ TEST(Multipass, IndependentOfTheThreadCount) {
 
 TEST(Multipass, MeshesFromItKeepTheInvariants) {
   MeshOptions o;
-  o.size = 2.0;
-  o.parts = 8;
+  o.size.h = 2.0;
+  o.subregions.parts = 8;
   o.map.multipass.max_passes = 4;
   const MeshResult r = mesh_region(load("letter_M"), o);
   const std::set<std::int32_t> used(r.mesh.quad_part.begin(), r.mesh.quad_part.end());

@@ -311,9 +311,9 @@ TEST(PartitionRepair, TheSubregionCapGrowsWithThePartsQuads) {
 namespace {
 MeshResult ppm(const char* name, double size, int parts, int threads = 0) {
   MeshOptions o;
-  o.size = size;
-  o.parts = parts;
-  o.threads = threads;
+  o.size.h = size;
+  o.subregions.parts = parts;
+  o.run.threads = threads;
   return mesh_region(load(name), o);
 }
 }  // namespace

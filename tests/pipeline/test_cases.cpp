@@ -30,20 +30,20 @@ Region load(const std::string& name) { return read_region(std::string(POLYSQUARE
 
 MeshResult mesh(const Region& r, double size, int threads = 0) {
   MeshOptions o;
-  o.size = size;
-  o.threads = threads;
+  o.size.h = size;
+  o.run.threads = threads;
   return mesh_region(r, o);
 }
 
 // One poly-square per part, without the stage 8 templates and without the quality gate: the map's raw corners.
 MeshOptions raw_single_map(double size) {
   MeshOptions o;
-  o.size = size;
-  o.parts = 1;
-  o.min_scaled_jacobian = 0.0;
+  o.size.h = size;
+  o.subregions.parts = 1;
+  o.gates.min_scaled_jacobian = 0.0;
   o.local_patch.mend_below_sj = 0.0;  // the raw map: no local patch mends its valid quads
   o.refine.enabled = false;
-  o.simplify = 0.0;  // the input's own curves
+  o.curves.simplify = 0.0;  // the input's own curves
   return o;
 }
 
@@ -83,7 +83,7 @@ TEST_P(SlicedCase, HoldsEveryInvariant) {
   // Feature curves lie on mesh edges: no point of a feature polyline farther than 0.1 h from the mesh edges.
   EXPECT_LE(d.feature_max_distance, 0.1 * c.size) << c.name;
   // Gmsh's SJ min, or the quality gate where Gmsh's lies below it (mechanical_part: 0.18), so that the floor can fail.
-  EXPECT_GT(q.sj.min, std::max(c.sj_floor, MeshOptions{}.min_scaled_jacobian)) << c.name;
+  EXPECT_GT(q.sj.min, std::max(c.sj_floor, MeshOptions{}.gates.min_scaled_jacobian)) << c.name;
   EXPECT_LT(q.edge_ratio.max, 10.0) << c.name;  // no collapsed edge hiding behind good angles
   // Element size follows the requested size: mean quad area within 40% of h^2.
   double area = 0;
@@ -109,16 +109,16 @@ INSTANTIATE_TEST_SUITE_P(Cases, SlicedCase,
 TEST(Pipeline, FeatureToleranceBoundsTheChordsAlongFeatures) {
   const Region r = load("smile");
   MeshOptions o = raw_single_map(2.5);
-  o.feature_tolerance = 0.0;
+  o.gates.feature_tolerance = 0.0;
   auto feature_distance = [&] {
     const MeshResult res = mesh_region(r, o);
     return domain_distance(res.mesh, res.region).feature_max_distance;
   };
   const double loose = feature_distance();
-  EXPECT_GT(loose, 0.15 * o.size);
-  o.feature_tolerance = 0.05;
+  EXPECT_GT(loose, 0.15 * o.size.h);
+  o.gates.feature_tolerance = 0.05;
   const double tight = feature_distance();
-  EXPECT_LE(tight, 0.05 * o.size);
+  EXPECT_LE(tight, 0.05 * o.size.h);
 }
 
 TEST(Pipeline, LetterIIsAPerfectStructuredGrid) {
@@ -143,8 +143,8 @@ TEST(Pipeline, BadSizesAreInputErrors) {
   EXPECT_THROW(mesh(r, -1.0), InputError);
   EXPECT_THROW(mesh(r, 1000.0), InputError);  // larger than the region
   MeshOptions o;
-  o.size = 0.01;
-  o.max_quads = 1000;
+  o.size.h = 0.01;
+  o.size.max_quads = 1000;
   EXPECT_THROW(mesh_region(r, o), InputError);  // would need ~14 million quads
 }
 
@@ -159,7 +159,7 @@ TEST(Pipeline, PartsSmallerThanOneElementAreLeftOutAndReported) {
   }
   const Region r = read_region(path.string());
   MeshOptions o;
-  o.size = 2.0;
+  o.size.h = 2.0;
   const MeshResult res = mesh_region(r, o);
   ASSERT_EQ(res.report["dropped_parts"].size(), 1u);
   EXPECT_NEAR(res.report["dropped_parts"][0]["area"].get<double>(), 1.0, 1e-12);
@@ -171,7 +171,7 @@ TEST(Pipeline, PartsSmallerThanOneElementAreLeftOutAndReported) {
   const DomainDistance without = domain_distance(res.mesh, r, {30.0, {res.report["dropped_parts"][0]["part"].get<int>()}});
   EXPECT_EQ(without.sharp_vertices_missing, 0u);
   EXPECT_LT(std::abs(without.area_relative_change), 1e-12);
-  o.drop_small_parts = false;
+  o.curves.drop_small_parts = false;
   EXPECT_THROW(mesh_region(r, o), MeshingError);
   std::filesystem::remove(path);
 }

@@ -25,7 +25,7 @@ MeshResult mesh_checked(const Region& region, const MeshOptions& o, QualityRepor
   EXPECT_EQ(q.inverted, 0u);
   // No quad is near-degenerate (below the untangling's target) unless an input corner sharper than the SJ gate pins it.
   const QuadMetrics m = quad_metrics(r.mesh);
-  const std::vector<std::uint8_t> pinned = quads_pinned_by_sharp_input(r.mesh, o.min_scaled_jacobian, o.size);
+  const std::vector<std::uint8_t> pinned = quads_pinned_by_sharp_input(r.mesh, o.gates.min_scaled_jacobian, o.size.h);
   for (std::size_t k = 0; k < m.sj.size(); ++k)
     if (!pinned[k]) EXPECT_GE(m.sj[k], o.smooth.untangle.target_sj) << "quad " << k;
   return r;
@@ -36,7 +36,7 @@ MeshResult mesh_checked(const Region& region, const MeshOptions& o, QualityRepor
 TEST(Coasts, DeltaWaterAt200MetresIsSemiStructured) {
   const Region region = coast("delta_water");
   MeshOptions o;
-  o.size = 200.0;
+  o.size.h = 200.0;
   QualityReport q;
   const MeshResult r = mesh_checked(region, o, q);
   const auto& summary = r.report["summary"];
@@ -50,13 +50,14 @@ TEST(Coasts, DeltaWaterAt200MetresIsSemiStructured) {
   std::size_t below = 0, gated = 0;
   for (double sj : m.sj) {
     below += sj < 0.3;
-    gated += sj < o.min_scaled_jacobian;
+    gated += sj < o.gates.min_scaled_jacobian;
   }
   // The floor: at most 0.1 % below 0.3 (valid quads there are mended by local patches that do better).
   EXPECT_LE(static_cast<double>(below), 0.001 * static_cast<double>(r.mesh.quads.size()));
   EXPECT_LE(summary["sj_below_0_3_pinned"].get<std::size_t>(), below);
   EXPECT_NEAR(q.sj_below_0_3_fraction, static_cast<double>(below) / static_cast<double>(r.mesh.quads.size()), 1e-12);
-  EXPECT_LE(static_cast<double>(summary["poor_quads"].get<std::size_t>()), o.max_poor_fraction * static_cast<double>(r.mesh.quads.size()));
+  EXPECT_LE(static_cast<double>(summary["poor_quads"].get<std::size_t>()),
+            o.gates.max_poor_fraction * static_cast<double>(r.mesh.quads.size()));
   EXPECT_LE(gated, summary["poor_quads"].get<std::size_t>());
   // No whole part fell back to split triangles.
   for (const auto& u : r.report["unstructured"]) EXPECT_NE(u["meshed_by"], "split_triangles") << u.dump();
@@ -65,12 +66,12 @@ TEST(Coasts, DeltaWaterAt200MetresIsSemiStructured) {
   EXPECT_GT(r.report["dropped_curves"].size(), 0u);
   for (const auto& d : r.report["dropped_curves"]) {
     EXPECT_EQ(d["kind"], "hole");
-    EXPECT_LT(d["width"].get<double>(), o.size);
+    EXPECT_LT(d["width"].get<double>(), o.size.h);
   }
   DomainDistanceOptions measure;
   for (const auto& d : r.report["dropped_parts"]) measure.skip_parts.push_back(d["part"].get<int>());
   EXPECT_LT(domain_distance(r.mesh, r.region, measure).boundary_max_relative, 1e-9);
-  EXPECT_LE(domain_distance(r.mesh, region, measure).boundary_max_distance, o.size);
+  EXPECT_LE(domain_distance(r.mesh, region, measure).boundary_max_distance, o.size.h);
   EXPECT_LT(std::abs(domain_distance(r.mesh, region, measure).area_relative_change), 0.03);
 }
 
@@ -79,7 +80,7 @@ TEST(Coasts, FjordCoastAt400MetresIsSemiStructured) {
   // background triangulation, so a round on a finer one (MeshOptions::fine_parameterization_ratio) is tried.
   const Region region = coast("fjord_coast");
   MeshOptions o;
-  o.size = 400.0;
+  o.size.h = 400.0;
   QualityReport q;
   const MeshResult r = mesh_checked(region, o, q);
   EXPECT_GE(r.report["summary"]["structured_fraction"].get<double>(), 0.95);
@@ -91,7 +92,7 @@ TEST(Coasts, FjordCoastAt400MetresIsSemiStructured) {
   for (const auto& part : r.report["candidates"]) {
     bool full = false, fine = false;
     for (const auto& c : part) {
-      const bool on_fine = c.value("parameterization_ratio", 0.0) == o.fine_parameterization_ratio;
+      const bool on_fine = c.value("parameterization_ratio", 0.0) == o.subregions.fine_parameterization_ratio;
       fine = fine || on_fine;
       full = full || (!on_fine && c.value("structured_fraction", 0.0) == 1.0);
     }
@@ -103,7 +104,7 @@ TEST(Coasts, FjordCoastAt400MetresIsSemiStructured) {
   DomainDistanceOptions measure;
   for (const auto& d : r.report["dropped_parts"]) measure.skip_parts.push_back(d["part"].get<int>());
   EXPECT_LT(domain_distance(r.mesh, r.region, measure).boundary_max_relative, 1e-9);
-  EXPECT_LE(domain_distance(r.mesh, region, measure).boundary_max_distance, o.size);
+  EXPECT_LE(domain_distance(r.mesh, region, measure).boundary_max_distance, o.size.h);
 }
 
 TEST(Coasts, FjordCoastAt200MetresIsSemiStructured) {
@@ -111,7 +112,7 @@ TEST(Coasts, FjordCoastAt200MetresIsSemiStructured) {
   // (smooth/untangle.h) keeps them mapped instead of sending them to patches.
   const Region region = coast("fjord_coast");
   MeshOptions o;
-  o.size = 200.0;
+  o.size.h = 200.0;
   QualityReport q;
   const MeshResult r = mesh_checked(region, o, q);
   EXPECT_GE(r.report["summary"]["structured_fraction"].get<double>(), 0.95);

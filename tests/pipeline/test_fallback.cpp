@@ -58,8 +58,8 @@ TEST(Pipeline, CoastlinePartsThatNoMapMeshesFallBackAndAreReported) {
   // to split triangles, and every part above one element is in the mesh with its reason on record.
   const Region region = load("delta_water");
   MeshOptions o;
-  o.size = 600.0;
-  o.parts = 1;
+  o.size.h = 600.0;
+  o.subregions.parts = 1;
   const MeshResult r = mesh_region(region, o);
   EXPECT_TRUE(check_invariants(r.mesh).ok()) << check_invariants(r.mesh).first_problem;
   std::size_t fallbacks = 0, kept = 0;
@@ -80,7 +80,7 @@ TEST(Pipeline, CoastlinePartsThatNoMapMeshesFallBackAndAreReported) {
   // poor_quads) or lying in an input corner sharper than the gate (the chosen candidates' pinned quads).
   const QuadMetrics m = quad_metrics(r.mesh);
   const auto below = static_cast<std::size_t>(
-      std::count_if(m.sj.begin(), m.sj.end(), [&](double s) { return s < o.min_scaled_jacobian; }));
+      std::count_if(m.sj.begin(), m.sj.end(), [&](double s) { return s < o.gates.min_scaled_jacobian; }));
   std::size_t pinned = 0;
   for (const auto& part : r.report["candidates"])
     for (const auto& c : part)
@@ -97,13 +97,13 @@ TEST(Pipeline, DeltaCasesMeshAt200Metres) {
   for (const char* name : {"delta_water", "delta_box"}) {
     const Region region = load(name);
     MeshOptions o;
-    o.size = 200.0;
-    o.parts = 1;
+    o.size.h = 200.0;
+    o.subregions.parts = 1;
     const MeshResult r = mesh_region(region, o);
     EXPECT_TRUE(check_invariants(r.mesh).ok()) << name << ": " << check_invariants(r.mesh).first_problem;
     const QualityReport q = compute_quality(r.mesh);
     EXPECT_EQ(q.inverted, 0u) << name;
-    EXPECT_GE(q.sj.min, o.min_scaled_jacobian) << name;
+    EXPECT_GE(q.sj.min, o.gates.min_scaled_jacobian) << name;
     for (const auto& part : r.report["candidates"])
       for (const auto& c : part)
         if (c.contains("chosen")) EXPECT_FALSE(c.contains("quads_pinned_by_sharp_input")) << name;
@@ -111,9 +111,9 @@ TEST(Pipeline, DeltaCasesMeshAt200Metres) {
       bool near_crossing = false;
       for (const auto& d : r.report["dropped_curves"]) {
         EXPECT_NE(d["kind"], "hole");  // island loops narrower than h, and pieces of slivers
-        EXPECT_LT(d["width"].get<double>(), o.size);
+        EXPECT_LT(d["width"].get<double>(), o.size.h);
         if (d["kind"] != "feature_piece") continue;
-        EXPECT_LE(d["distance"].get<double>(), o.size);
+        EXPECT_LE(d["distance"].get<double>(), o.size.h);
         near_crossing = near_crossing || std::hypot(d["at"][0].get<double>() - 276780.0, d["at"][1].get<double>() - 3219350.0) < 700.0;
       }
       EXPECT_TRUE(near_crossing);
@@ -123,10 +123,10 @@ TEST(Pipeline, DeltaCasesMeshAt200Metres) {
     const DomainDistance d = domain_distance(r.mesh, r.region, measure);
     EXPECT_LT(d.boundary_max_relative, 1e-9) << name;
     // The shorelines were simplified to the size: the mesh boundary stays within h of the input.
-    EXPECT_LE(domain_distance(r.mesh, region, measure).boundary_max_distance, o.size) << name;
+    EXPECT_LE(domain_distance(r.mesh, region, measure).boundary_max_distance, o.size.h) << name;
     EXPECT_EQ(d.sharp_vertices_missing, 0u) << name;
     EXPECT_LT(d.feature_node_max_distance, 1e-9 * region.bounding_box().diagonal()) << name;
-    EXPECT_LE(d.feature_max_distance, 0.1 * o.size) << name;
+    EXPECT_LE(d.feature_max_distance, 0.1 * o.size.h) << name;
     if (!region.features.empty()) EXPECT_GT(r.mesh.feature_edges.size(), 0u) << name;
   }
 }

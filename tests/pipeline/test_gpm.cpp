@@ -14,10 +14,10 @@ using namespace polysquare;
 namespace {
 MeshResult gpm(const char* name, double size, int parts, int threads = 0) {
   MeshOptions o;
-  o.size = size;
-  o.parts = parts;
-  o.threads = threads;
-  o.keep_partition = true;
+  o.size.h = size;
+  o.subregions.parts = parts;
+  o.run.threads = threads;
+  o.run.keep_partition = true;
   o.map.composition = MapComposition::gpm;
   o.refine.enabled = false;  // these tests are about the map: the corner template would add interior nodes,
   o.local_patch.mend_below_sj = 0.0;  // and so would local patches mending valid quads

@@ -57,7 +57,7 @@ TEST_P(HardGeometry, ValidMeshOrPreciseRefusal) {
   std::ifstream in(path);
   const double size = nlohmann::json::parse(in)["features"][0]["properties"]["size"].get<double>();
   MeshOptions options;
-  options.size = size;
+  options.size.h = size;
   try {
     const Region region = read_region(path);
     check_mesh_size(region, options);  // as the CLI does before meshing
@@ -66,14 +66,15 @@ TEST_P(HardGeometry, ValidMeshOrPreciseRefusal) {
     EXPECT_TRUE(inv.ok()) << inv.first_problem;
     // The gates judge every quad but those an input corner sharper than the gate pins (wedge_5deg's tip).
     const QuadMetrics metrics = quad_metrics(result.mesh);
-    const auto pinned = pinned_by_input(result.mesh, region, options.min_scaled_jacobian, options.size);
+    const auto pinned = pinned_by_input(result.mesh, region, options.gates.min_scaled_jacobian, options.size.h);
     // Quads outside the gates that no repair mended are accepted only within max_poor_fraction, and reported.
     std::size_t outside = 0;
     for (std::size_t k = 0; k < metrics.sj.size(); ++k)
-      outside += !pinned[k] && (metrics.sj[k] < options.min_scaled_jacobian || metrics.edge_ratio[k] > options.max_edge_ratio);
-    EXPECT_LE(static_cast<double>(outside), options.max_poor_fraction * static_cast<double>(metrics.sj.size()));
+      outside += !pinned[k] && (metrics.sj[k] < options.gates.min_scaled_jacobian ||
+                                metrics.edge_ratio[k] > options.gates.max_edge_ratio);
+    EXPECT_LE(static_cast<double>(outside), options.gates.max_poor_fraction * static_cast<double>(metrics.sj.size()));
     EXPECT_LE(result.report["summary"]["poor_quads"].get<double>(),
-              options.max_poor_fraction * static_cast<double>(metrics.sj.size()));
+              options.gates.max_poor_fraction * static_cast<double>(metrics.sj.size()));
     EXPECT_EQ(compute_quality(result.mesh).inverted, 0u);
     EXPECT_LT(domain_distance(result.mesh, result.region).boundary_max_relative, 1e-9);
     EXPECT_EQ(refusal(GetParam()), "") << GetParam() << " was expected to be refused";
@@ -96,7 +97,7 @@ TEST(HardGeometry, CombAndIslandsAreMeshed) {
   for (const char* name : {"comb_50", "islands_200"}) {
     const fs::path path = fs::path(POLYSQUARE_TEST_DATA_DIR) / "hard" / (std::string(name) + ".geojson");
     MeshOptions options;
-    options.size = std::string(name) == "comb_50" ? 0.5 : 1.0;
+    options.size.h = std::string(name) == "comb_50" ? 0.5 : 1.0;
     const QuadMesh m = mesh_region(read_region(path), options).mesh;
     const QualityReport q = compute_quality(m);
     EXPECT_GT(q.sj.min, 0.5) << name;
@@ -112,8 +113,8 @@ TEST(HardGeometry, ALargeConvolutedPartTriesOnePolySquareBesideItsPartitionOnlyU
   const Region region = read_region(path);
   auto tried = [&](std::size_t single_map_quads, std::size_t& singles, bool& single_chosen) {
     MeshOptions options;
-    options.size = 0.5;
-    options.single_map_quads = single_map_quads;
+    options.size.h = 0.5;
+    options.subregions.single_map_quads = single_map_quads;
     const MeshResult r = mesh_region(region, options);
     EXPECT_TRUE(check_invariants(r.mesh).ok());
     singles = 0;
@@ -130,7 +131,7 @@ TEST(HardGeometry, ALargeConvolutedPartTriesOnePolySquareBesideItsPartitionOnlyU
   };
   std::size_t singles = 0;
   bool chosen = false;
-  EXPECT_EQ(tried(MeshOptions{}.single_map_quads, singles, chosen), 2u);
+  EXPECT_EQ(tried(MeshOptions{}.subregions.single_map_quads, singles, chosen), 2u);
   EXPECT_EQ(singles, 1u);
   EXPECT_TRUE(chosen);
   EXPECT_EQ(tried(10'000, singles, chosen), 1u);
@@ -143,7 +144,7 @@ TEST(HardGeometry, APartFinerThanTheSizeThroughoutIsMeshedByTheFallbackWithoutMa
   const fs::path path = fs::path(POLYSQUARE_TEST_DATA_DIR) / "adversarial" / "star_64_spikes.geojson";
   const Region region = read_region(path);
   MeshOptions options;
-  options.size = 2;
+  options.size.h = 2;
   const MeshResult r = mesh_region(region, options);
   EXPECT_TRUE(check_invariants(r.mesh).ok());
   EXPECT_EQ(compute_quality(r.mesh).inverted, 0u);

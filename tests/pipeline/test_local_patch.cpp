@@ -106,9 +106,9 @@ TEST(LocalPatch, MendPoorCornersOfACoastInPlace) {
   // counts each run picks its own winner among candidates that tie within the ranking's margins).
   const Region region = read_region(std::string(POLYSQUARE_DATA_DIR) + "/cases/estuary.geojson");
   MeshOptions o;
-  o.size = 400.0;
-  o.smooth_curves = 0.0;  // smoothed, this coast has no corner below 0.3 to mend (SJ min 0.48 without patches)
-  o.parts = 3;
+  o.size.h = 400.0;
+  o.curves.smooth_curves = 0.0;  // smoothed, this coast has no corner below 0.3 to mend (SJ min 0.48 without patches)
+  o.subregions.parts = 3;
   const MeshResult with = mesh_region(region, o);
   EXPECT_TRUE(check_invariants(with.mesh).ok());
   EXPECT_GT(with.report["summary"]["local_patch_quads"].get<std::size_t>(), 0u);

@@ -186,8 +186,8 @@ TEST(LocalRepair, ASubregionMadeToFailIsPatchedAndOnlyIt) {
   // their interface nodes, and the mesh holds every invariant with the boundary exactly on the input.
   const Region region = load("letter_M");
   MeshOptions o;
-  o.size = 2.0;
-  o.parts = 4;
+  o.size.h = 2.0;
+  o.subregions.parts = 4;
   o.map.patch_subregions = {1};
   const MeshResult r = mesh_region(region, o);
   EXPECT_TRUE(check_invariants(r.mesh).ok()) << check_invariants(r.mesh).first_problem;
@@ -269,8 +269,8 @@ TEST(LocalRepair, AnUnrepairedMeshIsFullyStructured) {
   // The same case without a forced patch: every subregion mapped, structured fraction 1.
   const Region region = load("letter_M");
   MeshOptions o;
-  o.size = 2.0;
-  o.parts = 4;
+  o.size.h = 2.0;
+  o.subregions.parts = 4;
   const MeshResult r = mesh_region(region, o);
   EXPECT_DOUBLE_EQ(r.report["summary"]["structured_fraction"].get<double>(), 1.0);
   EXPECT_EQ(r.report["summary"]["unstructured_subregions"].get<int>(), 0);
@@ -282,8 +282,8 @@ TEST(LocalRepair, TheReportSaysWhereACandidatesTimeWent) {
   // are all placed.
   const Region region = load("letter_M");
   MeshOptions o;
-  o.size = 2.0;
-  o.parts = 4;
+  o.size.h = 2.0;
+  o.subregions.parts = 4;
   o.map.patch_subregions = {1};
   const MeshResult r = mesh_region(region, o);
   bool found = false;
@@ -316,8 +316,8 @@ TEST(LocalRepair, NewCoastsHoldTheInvariantsAndTheSummaryAccountsForEveryQuad) {
   for (const char* name : {"fjord_coast", "estuary"}) {
     const Region region = load(name);
     MeshOptions o;
-    o.size = 400.0;
-    o.parts = 1;
+    o.size.h = 400.0;
+    o.subregions.parts = 1;
     const MeshResult r = mesh_region(region, o);
     EXPECT_TRUE(check_invariants(r.mesh).ok()) << name << ": " << check_invariants(r.mesh).first_problem;
     EXPECT_EQ(compute_quality(r.mesh).inverted, 0u) << name;
@@ -345,10 +345,10 @@ TEST(LocalRepair, NewCoastsHoldTheInvariantsAndTheSummaryAccountsForEveryQuad) {
 // patches off and every poor quad accepted: what decides a subregion's fate is its map's quads alone.
 static MeshOptions fjord_under_a_high_gate() {
   MeshOptions o;
-  o.size = 400.0;
-  o.parts = 4;
-  o.min_scaled_jacobian = 0.5;
-  o.max_poor_fraction = 1.0;
+  o.size.h = 400.0;
+  o.subregions.parts = 4;
+  o.gates.min_scaled_jacobian = 0.5;
+  o.gates.max_poor_fraction = 1.0;
   o.local_patch.enabled = false;
   return o;
 }
@@ -361,7 +361,7 @@ TEST(LocalRepair, ALargeMapKeepsItsMapForValidQuadsFarOutsideTheGates) {
   const Region region = load("fjord_coast");
   auto run = [&](std::size_t keep_above) {
     MeshOptions o = fjord_under_a_high_gate();
-    o.keep_map_above_quads = keep_above;
+    o.repair.keep_map_above_quads = keep_above;
     return mesh_region(region, o);
   };
   auto demoted_for_quads = [](const MeshResult& r) {
@@ -396,8 +396,8 @@ TEST(LocalRepair, APatchCrossedByFeaturesGetsEvenCountsFromItsMappedNeighbours) 
   region.source = "three_features";
   for (int s = 0; s < 9; ++s) {
     MeshOptions o;
-    o.size = 3.0;
-    o.parts = 9;
+    o.size.h = 3.0;
+    o.subregions.parts = 9;
     o.map.patch_subregions = {s};
     const MeshResult r = mesh_region(region, o);
     ASSERT_EQ(r.parts.size(), 1u);
@@ -410,7 +410,7 @@ TEST(LocalRepair, APatchCrossedByFeaturesGetsEvenCountsFromItsMappedNeighbours) 
     for (const SubregionStats& sr : subs) unmapped += !sr.mapped;
     EXPECT_EQ(unmapped, 1u) << s << ": the patch took in its neighbours";
     const DomainDistance d = domain_distance(r.mesh, r.region);
-    EXPECT_LT(d.feature_max_distance, 0.1 * o.size) << s;
+    EXPECT_LT(d.feature_max_distance, 0.1 * o.size.h) << s;
   }
 }
 
@@ -492,8 +492,8 @@ TEST(LocalRepair, ARepairRoundPatchesItsSubregionsInPlaceWithoutMappingAgain) {
   const Region region = load("fjord_coast");
   auto run = [&](bool in_place) {
     MeshOptions o = fjord_under_a_high_gate();
-    o.keep_map_above_quads = std::numeric_limits<std::size_t>::max();
-    o.repair_in_place = in_place;
+    o.repair.keep_map_above_quads = std::numeric_limits<std::size_t>::max();
+    o.repair.in_place = in_place;
     return mesh_region(region, o);
   };
   const MeshResult in_place = run(true), mapped_again = run(false);

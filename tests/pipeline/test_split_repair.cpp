@@ -77,7 +77,7 @@ TEST(SplitRepair, SubregionsThatFailAloneAreSplitIntoPiecesThatMap) {
   // after a k-way split can, and the mesh holds every invariant.
   const Region region = read_region(std::string(POLYSQUARE_DATA_DIR) + "/cases/estuary.geojson");
   MeshOptions o;
-  o.size = 400.0;  // automatic subregion counts
+  o.size.h = 400.0;  // automatic subregion counts
   const MeshResult r = mesh_region(region, o);
   EXPECT_TRUE(check_invariants(r.mesh).ok()) << check_invariants(r.mesh).first_problem;
   int split = 0, mapped = 0;

@@ -10,6 +10,25 @@
 
 namespace polysquare {
 
+/// Stage 1 as mesh_region runs it: which input vertices are corners, and how far curves finer than the size
+/// are simplified first (the SimplifyOptions below are derived from these and the size). Fractions are of the size.
+struct CurveOptions {
+  double corner_threshold_deg = 30.0;  ///< input vertices turning by more than this are mesh nodes
+  double simplify = 0.5;         ///< simplify curves finer than the size first: remove vertices whose triangle area
+                                 ///< is below (simplify * size)^2, keeping topology and every vertex within size of
+                                 ///< the simplified curve; the mesh follows the simplified curves (MeshResult::region)
+                                 ///< and the report gives the largest distance moved and the area change; 0 = off
+  double smooth_curves = 0.5;    ///< with simplify on: stretches of curve finer than the size are smoothed first,
+                                 ///< each vertex kept within smooth * size of the input, so that digitisation steps
+                                 ///< (a shoreline's 45-degree turns every 120 m) are not corners; 0 = off
+  double min_island_width = 1.0; ///< with simplify on: holes, closed feature loops and faces between feature
+                                 ///< pieces whose largest inscribed disk is narrower than this times size hold no
+                                 ///< quad of that size: the hole or loop is left out, the face opened by removing
+                                 ///< one of its pieces; each is reported (report `dropped_curves`, a CLI warning);
+                                 ///< 0 keeps them all
+  bool drop_small_parts = true;  ///< leave out (and report) polygon parts smaller than size^2
+};
+
 struct SimplifyOptions {
   double min_area = 0.0;  ///< Visvalingam-Whyatt: vertices whose triangle with their neighbours has an area below
                           ///< this are removed, smallest first (region units squared); 0 disables

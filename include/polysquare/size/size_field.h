@@ -29,6 +29,12 @@ struct SizeFieldOptions {
   std::size_t max_cells = 4'000'000;  ///< the grid's cell budget (memory: about 40 bytes a cell while building)
 };
 
+/// The size of the quads: uniform (`h`) today; the field options are what a graded mesh will be made of.
+struct SizeOptions {
+  double h = 0.0;                      ///< target quad edge length, region units (required, > 0)
+  std::size_t max_quads = 50'000'000;  ///< refuse sizes whose estimated quad count exceeds this
+};
+
 /// A size field sampled at the centres of a regular grid, evaluated bilinearly between them.
 class SizeField {
  public:

@@ -1,0 +1,37 @@
+// Stage 3 as mesh_region runs it: into how many subregions each polygon part is partitioned, and which counts
+// (candidates) it tries before keeping the best mesh (src/pipeline/candidates.cpp).
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+namespace polysquare {
+
+struct SubregionOptions {
+  int parts = 0;                 ///< subregions per polygon part. 0 = automatic: a part above search_quads quads
+                                 ///< is meshed one way, with max(its quads / target_quads_per_part, its boundary
+                                 ///< length / (perimeter_per_subregion * size)) subregions (feature curves count
+                                 ///< twice), plus one poly-square (see single_map_quads); smaller
+                                 ///< parts also try one poly-square and the counts of search_subregions, and the
+                                 ///< best mesh is kept. K > 0: K subregions, one poly-square if that fails.
+  std::size_t target_quads_per_part = 20000;  ///< subregion size for large parts in automatic mode
+  double perimeter_per_subregion = 30.0;      ///< boundary length per subregion in automatic mode, in sizes
+  int max_automatic_subregions = 64;          ///< cap on the boundary-length count (each subregion adds columns
+                                              ///< and coupling rows to the part's one mixed-integer quantization)
+  std::size_t single_map_quads = 100'000;     ///< automatic mode: a part above search_quads quads with a
+                                              ///< convoluted boundary is meshed as one poly-square beside its
+                                              ///< partition up to this many quads; a larger one only when its
+                                              ///< partition fails (one map must close every side of the part at
+                                              ///< once, which failed on every coast tried beyond this size)
+  std::size_t search_quads = 5'000;           ///< parts up to this many quads try every count of search_subregions
+  std::vector<int> search_subregions{2, 3, 4, 5, 6, 8};
+  double fine_parameterization_ratio = 0.5;   ///< automatic mode, parts up to search_quads quads: when no
+                                              ///< candidate is fully structured, the straight ones are meshed
+                                              ///< again with background edges of this many sizes on the curves
+                                              ///< (PolysquareMapOptions::parameterization_ratio); 0 = off
+  std::size_t bent_round_quads = 5'000;       ///< automatic mode retries partitions with bendable interfaces only
+                                              ///< for parts up to this many quads (larger parts spent long there
+                                              ///< and rarely gained)
+};
+
+}  // namespace polysquare
