@@ -49,8 +49,22 @@ void curve_flags(CLI::App& t, MeshArgs& m) {
 }
 
 void size_flags(CLI::App& t, MeshArgs& m) {
-  t.add_option("--size", m.options.size.h, "target quad edge length h, in region units (metres for geographic input)")
-      ->required();
+  CLI::Option* size = t.add_option("--size", m.options.size.h,
+                                    "target quad edge length h, in region units (metres for geographic input); or "
+                                    "grade the size with --size-min and --size-max");
+  CLI::Option* size_min = t.add_option("--size-min", m.options.size.field.size_min,
+                                       "graded mesh: the size at the boundary and the feature curves, and the least");
+  CLI::Option* size_max =
+      t.add_option("--size-max", m.options.size.field.size_max, "graded mesh: the largest size, far from the shore");
+  size->excludes(size_min)->excludes(size_max);
+  size_min->needs(size_max);
+  size_max->needs(size_min);
+  t.add_option("--grade", m.options.size.field.grade,
+               "graded mesh: the size grows by at most this times the distance (|h(x) - h(y)| <= G |x - y|)")
+      ->capture_default_str();
+  t.add_option("--across", m.options.size.field.across,
+               "graded mesh: at least N quads across every passage between two shores (h <= width / N; 0 = off)")
+      ->capture_default_str();
   t.add_option("--max-quads", m.options.size.max_quads, "refuse sizes that need more quads than this")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();  // "-5" would otherwise wrap around to 2^64 - 5

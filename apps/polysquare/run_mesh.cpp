@@ -75,6 +75,8 @@ void check_outputs(const MeshArgs& args) {
 
 // What can be refused before minutes of meshing: options, limits, outputs, depths.
 void check_mesh_args(const MeshArgs& args) {
+  if (!(args.options.size.h > 0.0) && !args.options.size.graded())
+    throw InputError("--size is required: the quad edge length (or --size-min and --size-max for a graded mesh)");
   check_mesh_options(args.options);
   if (args.depth_given && !std::isfinite(args.depth))
     throw InputError("--depth must be a finite number, got " + short_number(args.depth));

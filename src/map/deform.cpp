@@ -53,8 +53,10 @@ struct Energy {
         expo_rest(2.0 * c_angle + 2.0 * c_area) {
     double total = 0.0;
     rest.reserve(p.triangles.size());
-    for (const auto& t : p.triangles) {
-      const Vec2 e1 = p.rest[t[1]] - p.rest[t[0]], e2 = p.rest[t[2]] - p.rest[t[0]];
+    for (std::size_t k = 0; k < p.triangles.size(); ++k) {
+      const auto& t = p.triangles[k];
+      const double scale = p.rest_scale.empty() ? 1.0 : p.rest_scale[k];
+      const Vec2 e1 = scale * (p.rest[t[1]] - p.rest[t[0]]), e2 = scale * (p.rest[t[2]] - p.rest[t[0]]);
       const double det = cross(e1, e2);
       rest.push_back({e2.y / det, -e2.x / det, -e1.y / det, e1.x / det, 0.5 * det});
       total += 0.5 * det;
@@ -406,6 +408,7 @@ void digest_problem(Digest& d, const DeformProblem& p, const DeformOptions& o, c
   d.word(o.precondition ? 1u : 0u);
   d.raw(o.eps_schedule);
   d.raw(p.rest);
+  if (!p.rest_scale.empty()) d.raw(p.rest_scale);
   d.raw(p.triangles);
   d.word(p.aligned.size());
   for (const AlignedEdge& e : p.aligned) {  // field by field: the struct has padding

@@ -18,7 +18,7 @@ void layout_fields(IO& io, L& l) {
 
 template <class IO, class M>
 void mapped_fields(IO& io, M& mm, bool with_problem) {
-  if (with_problem) io(mm.problem.rest), io(mm.problem.triangles), io(mm.problem.aligned), io(mm.problem.fixed), io(mm.rotation_deg);
+  if (with_problem) io(mm.problem.rest), io(mm.problem.rest_scale), io(mm.problem.triangles), io(mm.problem.aligned), io(mm.problem.fixed), io(mm.rotation_deg);
   io(mm.x), io(mm.stats);
 }
 

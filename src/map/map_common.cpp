@@ -33,7 +33,35 @@ double preorientation_angle(const std::vector<Vec2>& points, const std::vector<s
   return -std::arg(sum) / 4.0;
 }
 
+double local_size(const TriMesh& tri, const PolysquareMapOptions& options, std::vector<double>* ratios) {
+  if (!options.size_field) return options.size;
+  if (ratios) ratios->resize(tri.triangles.size());
+  double area = 0.0, quads = 0.0;
+  for (std::size_t t = 0; t < tri.triangles.size(); ++t) {
+    const auto& k = tri.triangles[t];
+    const Vec2 a = tri.vertices[k[0]], b = tri.vertices[k[1]], d = tri.vertices[k[2]];
+    const double r = options.size_field->at((1.0 / 3.0) * (a + b + d)) / options.size;
+    if (ratios) (*ratios)[t] = r;
+    const double at = 0.5 * std::abs(orient2(a, b, d));
+    area += at;
+    quads += at / (r * r);
+  }
+  return quads > 0.0 ? options.size * std::sqrt(area / quads) : options.size;
+}
+
 namespace {
+
+// Graded meshes: each triangle's rest shape in lattice units of the size at its centroid, as a scale of the
+// rest positions (problem.rest_scale) laid out in units of the mean size (local_size), so that the start shape
+// is near every scale. Returns that mean over options.size.
+double graded_rest_scales(const TriMesh& tri, const PolysquareMapOptions& options, DeformProblem& problem) {
+  if (!options.size_field) return 1.0;
+  std::vector<double> ratio;
+  const double mean = local_size(tri, options, &ratio) / options.size;
+  problem.rest_scale.resize(ratio.size());
+  for (std::size_t t = 0; t < ratio.size(); ++t) problem.rest_scale[t] = mean / ratio[t];
+  return mean;
+}
 
 // The deformation problem of `tri` (rest shape centred, pre-oriented and in lattice units) and the edges its
 // pre-orientation reads.
@@ -60,7 +88,7 @@ MappedMesh deformation_problem(const TriMesh& tri, const PolysquareMapOptions& o
   const Vec2 centre = 0.5 * (box.lo + box.hi);
   const double theta = options.preorient ? preorientation_angle(tri.vertices, orient_edges) : 0.0;
   mm.rotation_deg = theta * 180.0 / std::numbers::pi;
-  const double c = std::cos(theta), s = std::sin(theta), h = options.size;
+  const double c = std::cos(theta), s = std::sin(theta), h = options.size * graded_rest_scales(tri, options, problem);
   problem.rest.reserve(tri.vertices.size());
   for (Vec2 p : tri.vertices) {
     const Vec2 q = p - centre;

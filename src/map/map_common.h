@@ -8,7 +8,10 @@
 #include <chrono>
 #include <string>
 
+#include <vector>
+
 #include "polysquare/map/layout.h"
+#include "polysquare/map/polysquare_map.h"
 
 namespace polysquare {
 
@@ -17,5 +20,10 @@ double seconds_since(std::chrono::steady_clock::time_point t0);
 
 /// Empty when the quantized `layout` is a valid poly-square (check_layout), else why not, naming `name`.
 std::string invalid_poly_square(const Layout& layout, const std::string& name);
+
+/// The size a mesh of `tri` has on average: options.size, or with a size field the size whose square is the
+/// mean area per quad (area over the integral of 1 / h^2). `ratios` (when given) receives each triangle's size
+/// at its centroid over options.size.
+double local_size(const TriMesh& tri, const PolysquareMapOptions& options, std::vector<double>* ratios = nullptr);
 
 }  // namespace polysquare

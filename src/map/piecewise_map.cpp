@@ -1398,10 +1398,11 @@ void count_interface_sides(PiecewiseMap& m) {
 // Builds the patch of subregion (or union) `sub`, numbered p, on the nodes of its quantized neighbours.
 void build_patch(PiecewiseMap& m, std::size_t p, const Subregion& sub, const std::vector<std::uint8_t>& patch_now,
                  PatchMethod method) {
-  const PatchInput in = patch_input(sub, patch_now, m.side_count, m.chain_ends, m.options.size,
+  const double size = local_size(sub.mesh, m.options);  // graded: the subregion's mean size
+  const PatchInput in = patch_input(sub, patch_now, m.side_count, m.chain_ends, size,
                                     m.options.layout.corner_threshold_deg, m.sub_name(p));
   PatchOptions po;
-  po.size = m.options.size;
+  po.size = size;
   po.method = method;
   try {
     m.meshes[p] = mesh_patch(in, po);

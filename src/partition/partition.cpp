@@ -33,6 +33,17 @@ struct Topology {
   std::vector<double> area;
   double feature_length = 0;
 
+  // Graded meshes weigh each triangle's area by (size_ref / h)^2: every area below is then in quads of size_ref.
+  Topology(const TriMesh& m, const PartitionOptions& o) : Topology(m) {
+    if (!o.size_field) return;
+    for (std::size_t t = 0; t < m.triangles.size(); ++t) {
+      const auto& tri = m.triangles[t];
+      const Vec2 c = (1.0 / 3.0) * (m.vertices[tri[0]] + m.vertices[tri[1]] + m.vertices[tri[2]]);
+      const double r = o.size_ref / o.size_field->at(c);
+      area[t] *= r * r;
+    }
+  }
+
   explicit Topology(const TriMesh& m) {
     std::unordered_map<std::uint64_t, std::int32_t> index;
     tri_edges.resize(m.triangles.size());
@@ -469,11 +480,11 @@ void metropolis_hastings(const TriMesh& mesh, const Topology& topo, const FacePa
 
 PartitionEnergy partition_energy(const TriMesh& mesh, const std::vector<std::int32_t>& triangle_part,
                                  const PartitionOptions& options) {
-  return energy_of(mesh, Topology(mesh), triangle_part, options);
+  return energy_of(mesh, Topology(mesh, options), triangle_part, options);
 }
 
 PartitionResult partition_triangles(const TriMesh& mesh, const PartitionOptions& options) {
-  const Topology topo(mesh);
+  const Topology topo(mesh, options);
   const std::size_t nt = mesh.triangles.size();
   PartitionResult res;
   int k = options.parts > 0 ? options.parts

@@ -42,7 +42,7 @@ struct CandidateSpec {
 // bent_round_quads); a large part is meshed one way (see MeshOptions::parts), the whole-part fallback only when
 // that fails.
 std::vector<std::vector<CandidateSpec>> candidate_rounds(const Region& region, const RegionPart& part,
-                                                         const MeshOptions& options);
+                                                         const MeshOptions& options, const PolysquareMapOptions& map);
 
 // One way of meshing a part: the map, then smoothing, then the checks every output must pass.
 struct Candidate {

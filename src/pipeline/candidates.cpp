@@ -51,21 +51,37 @@ void explicit_rounds(Rounds& rounds, const MeshOptions& options) {
 // The figures automatic mode chooses a part's subregion counts from.
 struct AutomaticCounts {
   double quads = 0.0;        // the part's area in quads of the size
-  double ring_length = 0.0;  // the length of its rings
+  double ring_length = 0.0;  // the length of its rings, in quads
   int by_area = 1;           // subregions of target_quads_per_part quads
   int automatic = 1;         // by area, or by boundary length when that asks for more
   bool convoluted = false;
 };
 
-AutomaticCounts automatic_counts(const Region& region, const RegionPart& part, const MeshOptions& options) {
+// Lengths and areas in quads: of the size, or of the field's local sizes on a graded run.
+struct QuadMeasure {
+  const MeshOptions& options;
+  const SizeField* field;
+
+  double length(Vec2 a, Vec2 b) const {
+    return distance(a, b) / (field ? field->at(0.5 * (a + b)) : options.size.h);
+  }
+  double area(const Region& region, const RegionPart& part) const {
+    return field ? estimate_quads(*field, region, part.rings)
+                 : part_area(region, part) / (options.size.h * options.size.h);
+  }
+};
+
+AutomaticCounts automatic_counts(const Region& region, const RegionPart& part, const MeshOptions& options,
+                                 const PolysquareMapOptions& map) {
   AutomaticCounts n;
-  const double quads = part_area(region, part) / (options.size.h * options.size.h);
+  const QuadMeasure in_quads{options, map.size_field.get()};
+  const double quads = in_quads.area(region, part);
   // Boundary complexity: the length of the rings and, counted twice (a subregion meets them from both sides),
   // of the feature curves. Long, convoluted boundaries (coastlines) need more subregions than their area says.
   double perimeter = 0.0;
   auto add_length = [&](const std::vector<Vec2>& pts, bool closed, double weight) {
     for (std::size_t i = 0; i + (closed ? 0 : 1) < pts.size(); ++i)
-      perimeter += weight * distance(pts[i], pts[(i + 1) % pts.size()]);
+      perimeter += weight * in_quads.length(pts[i], pts[(i + 1) % pts.size()]);
   };
   for (int r : part.rings) add_length(region.rings[static_cast<std::size_t>(r)].points, true, 1.0);
   double ring_length = perimeter;
@@ -75,13 +91,15 @@ AutomaticCounts automatic_counts(const Region& region, const RegionPart& part, c
   }
   const int by_area =
       std::max(1, static_cast<int>(std::lround(quads / static_cast<double>(options.subregions.target_quads_per_part))));
-  const int by_perimeter =
-      static_cast<int>(std::lround(perimeter / (options.subregions.perimeter_per_subregion * options.size.h)));
+  const int by_perimeter = static_cast<int>(std::lround(perimeter / options.subregions.perimeter_per_subregion));
   n.automatic = std::max(by_area, std::min(by_perimeter, options.subregions.max_automatic_subregions));
+  if (map.size_field)
+    n.automatic = std::max(n.automatic,
+                           static_cast<int>(std::lround(quads / options.subregions.graded_quads_per_subregion)));
   // A boundary much longer than a square's of the same area (twice over), or features longer than the rings.
-  n.convoluted = ring_length > 8.0 * std::sqrt(quads) * options.size.h || perimeter > 2.0 * ring_length;
+  n.convoluted = ring_length > 8.0 * std::sqrt(quads) || perimeter > 2.0 * ring_length;
   n.quads = quads;
-  n.ring_length = ring_length;
+  n.ring_length = ring_length;  // in quads
   n.by_area = by_area;
   return n;
 }
@@ -96,19 +114,22 @@ void large_part_rounds(Rounds& rounds, const AutomaticCounts& n, const MeshOptio
   const int automatic = n.automatic;
   const bool convoluted = n.convoluted;
   const bool partitioned = automatic > 1 && quads / automatic >= 16.0;
-  if (partitioned && convoluted) rounds.add({automatic});
+  // A graded part that asks for subregions has no one-poly-square mesh: the map has no singular node to let
+  // the size change (on delta_water at 50-1000 m each such try failed after 76-90 s).
+  const bool graded = options.size.graded() && partitioned;
+  if (partitioned && (convoluted || graded)) rounds.add({automatic});
   const bool single_beside =
-      !(partitioned && convoluted) || quads <= static_cast<double>(options.subregions.single_map_quads);
+      !graded && (!(partitioned && convoluted) || quads <= static_cast<double>(options.subregions.single_map_quads));
   if (single_beside) rounds.add({1});
   // A retry round, meshed only when every candidate before it failed: the same subregions without splitting
   // (a split can leave a piece whose repair folds, where the unsplit subregion's patch holds), and the one
   // poly-square of a part too large to try it beside the partition.
-  if (partitioned && convoluted && (options.map.split_rounds > 0 || !single_beside)) {
+  if (partitioned && (convoluted || graded) && (options.map.split_rounds > 0 || !single_beside)) {
     rounds.list.emplace_back();
     if (options.map.split_rounds > 0) rounds.add({automatic, false, false});
-    if (!single_beside) rounds.add({1, false, false});
+    if (!single_beside && !graded) rounds.add({1, false, false});
   }
-  if (partitioned && !convoluted) {
+  if (partitioned && !convoluted && !graded) {
     rounds.list.emplace_back();
     rounds.add({automatic});
   }
@@ -120,8 +141,8 @@ void small_part_rounds(Rounds& rounds, const AutomaticCounts& n, const MeshOptio
   const double quads = n.quads;
   if (n.convoluted && quads / n.automatic >= 16.0) rounds.add({n.automatic});
   rounds.add({n.by_area});
-  const int by_rings = static_cast<int>(
-      std::lround(n.ring_length / (2.0 * options.subregions.perimeter_per_subregion * options.size.h)));
+  const int by_rings =
+      static_cast<int>(std::lround(n.ring_length / (2.0 * options.subregions.perimeter_per_subregion)));
   if (by_rings > 1 && quads / by_rings >= 16.0) rounds.add({by_rings});
   for (int k : options.subregions.search_subregions)
     if (quads / k >= 16.0) rounds.add({k});  // at least a 4 x 4 block per subregion
@@ -140,13 +161,13 @@ void small_part_rounds(Rounds& rounds, const AutomaticCounts& n, const MeshOptio
 }  // namespace
 
 std::vector<std::vector<CandidateSpec>> candidate_rounds(const Region& region, const RegionPart& part,
-                                                         const MeshOptions& options) {
+                                                         const MeshOptions& options, const PolysquareMapOptions& map) {
   Rounds rounds;
   if (options.subregions.parts > 0) {
     explicit_rounds(rounds, options);
     return rounds.list;
   }
-  const AutomaticCounts n = automatic_counts(region, part, options);
+  const AutomaticCounts n = automatic_counts(region, part, options, map);
   if (n.quads > static_cast<double>(options.subregions.search_quads))
     large_part_rounds(rounds, n, options);
   else small_part_rounds(rounds, n, options);

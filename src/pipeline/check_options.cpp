@@ -27,7 +27,18 @@ bool within(double v, double lo, double hi) { return v >= lo && v <= hi; }
 
 }  // namespace
 
-void check_mesh_options(const MeshOptions& o) {
+MeshOptions resolve_sizes(const MeshOptions& options) {
+  MeshOptions o = options;
+  if (!o.size.graded()) return o;
+  if (o.size.h != 0.0 && o.size.h != o.size.field.size_min)
+    throw InputError("--size and --size-min exclude each other: a graded mesh takes its least size from --size-min");
+  o.size.h = o.size.field.size_min;
+  return o;
+}
+
+void check_mesh_options(const MeshOptions& options) {
+  if (options.size.graded()) check_size_field_options(options.size.field);
+  const MeshOptions o = resolve_sizes(options);
   require(std::isfinite(o.size.h) && o.size.h > 0, "--size", "size", o.size.h, "a positive finite number");
   require(within(o.gates.min_scaled_jacobian, 0.0, 1.0), "--min-sj", "min_scaled_jacobian", o.gates.min_scaled_jacobian,
           "in [0, 1]");
@@ -61,8 +72,9 @@ void check_mesh_options(const MeshOptions& o) {
   require(o.subregions.parts >= 0, "--parts", "parts", o.subregions.parts, ">= 0 (0 = automatic)");
 }
 
-void check_mesh_size(const Region& region, const MeshOptions& o) {
-  check_mesh_options(o);
+void check_mesh_size(const Region& region, const MeshOptions& options) {
+  check_mesh_options(options);
+  const MeshOptions o = resolve_sizes(options);
   const std::string src = region.source.empty() ? std::string("region") : region.source;
   const Box2 box = region.bounding_box();
   const double w = box.hi.x - box.lo.x, h = box.hi.y - box.lo.y;
@@ -86,7 +98,8 @@ void check_mesh_size(const Region& region, const MeshOptions& o) {
   if (o.size.h > 0.5 * std::min(w, h))
     throw InputError(src + ": size " + short_number(o.size.h) + " is larger than half the region's extent (" +
                      short_number(w) + " x " + short_number(h) + ")");
-  const double estimate = area / (o.size.h * o.size.h);
+  // A graded run's estimate comes from its field (the size stage of mesh_region refuses it there).
+  const double estimate = o.size.graded() ? 0.0 : area / (o.size.h * o.size.h);
   if (!(estimate <= static_cast<double>(o.size.max_quads)))
     throw InputError(src + ": size " + short_number(o.size.h) + " would need about " + short_number(estimate) +
                      " quads (area " + short_number(area) + " / size^2), more than the limit of " +

@@ -97,7 +97,7 @@ PartOutcome mesh_part(const Region& work, const RegionPart& part, const Polysqua
                       const MeshOptions& options) {
   PartOutcome out;
   CandidateSearch search;
-  for (const std::vector<CandidateSpec>& round : candidate_rounds(work, part, options)) {
+  for (const std::vector<CandidateSpec>& round : candidate_rounds(work, part, options, map)) {
     const bool retry = std::none_of(round.begin(), round.end(), [](const CandidateSpec& c) { return c.split; });
     if (retry && search.best >= 0) continue;
     mesh_round(search, round, work, part, map, options, out.tried);

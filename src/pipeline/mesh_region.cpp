@@ -52,9 +52,27 @@ SimplifiedRegion simplify_curves(const Region& region, const MeshOptions& option
   return out;
 }
 
-// The map options of this run: its size, corner threshold, seed, and memos its repair rounds share.
-PolysquareMapOptions run_map_options(const MeshOptions& options) {
+// A graded run's size field, built on the simplified curves; refused before meshing when it needs more quads
+// than the limit.
+SizedRegion size_region(const Region& simplified, const MeshOptions& options, const std::string& src) {
+  SizedRegion out;
+  if (!options.size.graded()) return out;
+  SizeFieldResult made = make_size_field(simplified, options.size.field);
+  out.stats = made.stats;
+  if (!(made.stats.estimated_quads <= static_cast<double>(options.size.max_quads)))
+    throw InputError(src + ": the size field would need about " + short_number(made.stats.estimated_quads) +
+                     " quads, more than the limit of " + std::to_string(options.size.max_quads) +
+                     " (raise --max-quads or --size-min)");
+  out.field = std::make_shared<const SizeField>(std::move(made.field));
+  return out;
+}
+
+// The map options of this run: its size (and field), corner threshold, seed, and memos its repair rounds share.
+PolysquareMapOptions run_map_options(const MeshOptions& options, const SizedRegion& sized) {
   PolysquareMapOptions map = options.map;
+  map.size_field = sized.field;
+  map.partition.size_field = sized.field;
+  map.partition.size_ref = options.size.h;
   map.deform.memo = std::make_shared<DeformMemo>();  // this run's solved deformations (repair rounds repeat them)
   map.quantize.memo = std::make_shared<QuantizeMemo>();  // and its layouts quantized alone
   map.size = options.size.h;
@@ -98,11 +116,12 @@ void check_assembled(const QuadMesh& mesh, const std::string& src) {
 }  // namespace
 }  // namespace pipeline
 
-MeshResult mesh_region(const Region& region, const MeshOptions& options) {
+MeshResult mesh_region(const Region& region, const MeshOptions& given) {
   using namespace pipeline;
   const std::string src = region.source.empty() ? std::string("region") : region.source;
-  check_mesh_options(options);      // NaN gates and out-of-range values, named by their flag
-  check_mesh_size(region, options);  // size against the region's extent and the quad budget
+  check_mesh_options(given);      // NaN gates and out-of-range values, named by their flag
+  check_mesh_size(region, given);  // size against the region's extent and the quad budget
+  const MeshOptions options = resolve_sizes(given);  // graded: size.h is the least size
   RegionTimes times;
   ProgressReporter progress(options.run.progress);
 
@@ -110,7 +129,11 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
   SimplifiedRegion simplified = simplify_curves(region, options);
   progress.finish("simplify");
 
-  const PolysquareMapOptions map = run_map_options(options);
+  if (options.size.graded()) progress.start("size field");
+  const SizedRegion sized = size_region(simplified.region, options, src);
+  if (options.size.graded()) progress.finish("size field");
+
+  const PolysquareMapOptions map = run_map_options(options, sized);
   const RegionParts parts = split_parts(simplified.region, options, src);
 
   // One thread limit for every parallel stage (parts, candidates, subregions, colours in smoothing).
@@ -126,7 +149,7 @@ MeshResult mesh_region(const Region& region, const MeshOptions& options) {
   progress.start("assemble");
   MeshResult out = assemble_parts(meshed, region, options.run.keep_partition);
   check_assembled(out.mesh, src);
-  out.report = region_report({region, options, map, simplified, parts, meshed, out, times});
+  out.report = region_report({region, options, map, simplified, sized, parts, meshed, out, times});
   out.region = std::move(simplified.region);
   progress.finish("assemble");
   return out;

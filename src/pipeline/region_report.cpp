@@ -7,6 +7,7 @@
 #include "pipeline/region_stages.h"
 #include "polysquare/core/version.h"
 #include "polysquare/quality/quality.h"
+#include "polysquare/size/size_conformity.h"
 
 namespace polysquare::pipeline {
 namespace {
@@ -201,6 +202,21 @@ nlohmann::json simplify_json(const ReportInput& in) {
 }
 
 // The parts' smoothing figures together: the most sweeps, the sums of the rest.
+// A graded run's field and how the mesh follows it.
+nlohmann::json size_field_json(const ReportInput& in) {
+  const SizeFieldOptions& o = in.options.size.field;
+  const SizeFieldStats& s = in.sized.stats;
+  const SizeConformity c = size_conformity(in.result.mesh, *in.sized.field);
+  nlohmann::json j = {{"size_min", o.size_min}, {"size_max", o.size_max}, {"grade", o.grade},
+                      {"across", o.across}, {"min", s.min}, {"max", s.max},
+                      {"estimated_quads", s.estimated_quads}, {"quads", in.result.mesh.quads.size()},
+                      {"cell", s.cell}, {"cells", s.cells}, {"limited_cells", s.limited_cells},
+                      {"size_ratio", {{"median", c.median}, {"p05", c.p05}, {"p95", c.p95}}},
+                      {"neighbour_ratio", {{"p99", c.neighbour_p99}, {"max", c.neighbour_max}}}};
+  if (o.across > 0) j["narrowest_passage"] = s.narrowest_passage;
+  return j;
+}
+
 nlohmann::json smooth_json(const ReportInput& in) {
   SmoothStats smooth;
   for (const PartOutcome& p : in.outcomes) {
@@ -235,7 +251,7 @@ nlohmann::json region_report(const ReportInput& in) {
   for (const PartOutcome& p : in.outcomes) tried.push_back(p.tried);
   Structure structure = structure_of(in);
   const nlohmann::json summary = summary_json(in, structure);
-  return {
+  nlohmann::json report = {
       {"summary", summary},
       {"unstructured", std::move(structure.unstructured)},
       {"input", input_json(in.region)},
@@ -251,6 +267,8 @@ nlohmann::json region_report(const ReportInput& in) {
       {"smooth", smooth_json(in)},
       {"seconds", {{"parts", in.times.parts}}},
   };
+  if (in.sized.field) report["size_field"] = size_field_json(in);
+  return report;
 }
 
 }  // namespace polysquare::pipeline

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <chrono>
+#include <memory>
 #include <cstddef>
 #include <optional>
 #include <string>
@@ -31,6 +32,12 @@ struct SimplifiedRegion {
   SimplifyStats stats;
   SnapStats end_snaps;
   std::vector<DroppedCurve> dropped_curves;
+};
+
+// Stage "size": a graded run's size field over the simplified region (none on a uniform run).
+struct SizedRegion {
+  std::shared_ptr<const SizeField> field;
+  SizeFieldStats stats;
 };
 
 // Stage "split into parts": the polygon parts to mesh, and those left out as smaller than one element.
@@ -68,6 +75,7 @@ struct ReportInput {
   const MeshOptions& options;
   const PolysquareMapOptions& map;
   const SimplifiedRegion& simplified;
+  const SizedRegion& sized;
   const RegionParts& parts;
   const std::vector<PartOutcome>& outcomes;
   const MeshResult& result;  // assembled (mesh and parts)

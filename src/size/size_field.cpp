@@ -82,9 +82,10 @@ Grid make_grid(const Region& region, const SizeFieldOptions& o) {
 }
 
 // Per cell: whether its centre lies inside the domain (even-odd over every ring, scanline by scanline).
-std::vector<std::uint8_t> inside_cells(const Grid& g, const Region& region) {
+std::vector<std::uint8_t> inside_cells(const Grid& g, const std::vector<const Ring*>& rings) {
   std::vector<std::vector<double>> crossings(static_cast<std::size_t>(g.ny));
-  for (const Ring& ring : region.rings) {
+  for (const Ring* r : rings) {
+    const Ring& ring = *r;
     const std::size_t n = ring.points.size();
     for (std::size_t k = 0; k < n; ++k) {
       const Vec2 a = ring.points[k], b = ring.points[(k + 1) % n];
@@ -278,7 +279,9 @@ SizeFieldResult make_size_field(const Region& region, const SizeFieldOptions& o)
   check_size_field_options(o);
   const Grid g = make_grid(region, o);
   SizeFieldResult out;
-  out.inside = inside_cells(g, region);
+  std::vector<const Ring*> rings;
+  for (const Ring& r : region.rings) rings.push_back(&r);
+  out.inside = inside_cells(g, rings);
   std::vector<double> h(g.size(), o.size_max);
   const std::vector<Segment> shores = ring_segments(region);
   std::vector<Segment> curves = feature_segments(region);
@@ -316,6 +319,18 @@ SizeFieldResult make_size_field(const Region& region, const SizeFieldOptions& o)
   }
   out.field = SizeField(g.origin, g.cell, g.nx, g.ny, std::move(h));
   return out;
+}
+
+double estimate_quads(const SizeField& field, const Region& region, const std::vector<int>& rings) {
+  if (field.empty()) return 0.0;
+  const Grid g{field.origin(), field.cell(), field.nx(), field.ny()};
+  std::vector<const Ring*> chosen;
+  for (int r : rings) chosen.push_back(&region.rings[static_cast<std::size_t>(r)]);
+  const std::vector<std::uint8_t> inside = inside_cells(g, chosen);
+  double quads = 0.0;
+  for (std::size_t c = 0; c < inside.size(); ++c)
+    if (inside[c]) quads += g.cell * g.cell / (field.values()[c] * field.values()[c]);
+  return quads;
 }
 
 }  // namespace polysquare

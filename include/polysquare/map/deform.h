@@ -52,6 +52,9 @@ struct AlignedEdge {
 /// The deformation problem: rest shape, triangles (counter-clockwise in the rest shape) and aligned edges.
 struct DeformProblem {
   std::vector<Vec2> rest;                              ///< #V rest positions
+  std::vector<double> rest_scale;  ///< #T or empty (= 1): triangle t's rest shape is its rest positions scaled by
+                                   ///< this (graded meshes: lattice units of the local size, so the rest shapes
+                                   ///< need not fit together in the plane)
   std::vector<std::array<std::int32_t, 3>> triangles;  ///< #T
   std::vector<AlignedEdge> aligned;                    ///< E^B and E^F edges
   std::vector<std::uint8_t> fixed;                     ///< #V, 1 = vertex does not move (may be empty)

@@ -17,6 +17,7 @@
 #include "polysquare/map/multipass.h"
 #include "polysquare/map/quantize.h"
 #include "polysquare/partition/partition.h"
+#include "polysquare/size/size_field.h"
 #include "polysquare/triangulate/background_triangulation.h"
 
 namespace polysquare {
@@ -29,6 +30,9 @@ enum class MapComposition : std::uint8_t {
 
 struct PolysquareMapOptions {
   double size = 1.0;               ///< target quad edge length h (region units); must be set by the caller
+  std::shared_ptr<const SizeField> size_field;  ///< graded meshes: the size at each point (null = `size`
+                                                ///< everywhere); deformations then work in lattice units of the
+                                                ///< local size, so the integer sides are local-size quads
   double parameterization_ratio = 1.0;  ///< background triangle edge length on rings and features / h
   double interior_ratio = 4.0;          ///< interior background triangles grow to max(interior_ratio * h,
   double interior_divisions = 40.0;     ///< part diagonal / interior_divisions): the map is smooth inside, and

@@ -3,8 +3,10 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <vector>
 
+#include "polysquare/size/size_field.h"
 #include "polysquare/triangulate/background_triangulation.h"
 
 namespace polysquare {
@@ -23,6 +25,10 @@ struct PartitionOptions {
   /// area merge into the neighbouring face they share the most feature length with; 0 keeps every face that is
   /// not enclosed by a single other face. map_part sets 16 h^2 when it is 0 (a subregion of 4 x 4 quads).
   double min_face_area = 0;
+  /// Graded meshes: triangles weigh their area times (size_ref / h)^2, h the field at their centroid, so that
+  /// parts hold similar numbers of quads; every area above (balance, min_face_area) is then such a weight.
+  std::shared_ptr<const SizeField> size_field;
+  double size_ref = 1.0;
 };
 
 /// The terms of E (eqs. 2, 4, 6), with lengths in hundredths of the mean triangle edge length, so that the

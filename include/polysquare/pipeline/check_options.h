@@ -18,6 +18,10 @@ constexpr int kMaxThreads = 4096;
 /// threads outside [0, kMaxThreads]; parts below 0. A NaN gate would otherwise compare false and pass every mesh.
 void check_mesh_options(const MeshOptions& options);
 
+/// `options` with the sizes the stages read: a graded run (size.graded()) gets size.h = size.field.size_min, the
+/// least size, which scales every stage's tolerances. Throws InputError when --size and --size-min disagree.
+MeshOptions resolve_sizes(const MeshOptions& options);
+
 /// Smallest size, in steps of double precision (ulp) at the region's largest coordinate, that a mesh keeps when
 /// written back in the input's coordinates (an edge rounded by half a step each end turns by under 1e-3 rad).
 constexpr double kMinSizeInSteps = 1024.0;

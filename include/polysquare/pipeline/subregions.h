@@ -29,6 +29,12 @@ struct SubregionOptions {
                                               ///< candidate is fully structured, the straight ones are meshed
                                               ///< again with background edges of this many sizes on the curves
                                               ///< (PolysquareMapOptions::parameterization_ratio); 0 = off
+  double graded_quads_per_subregion = 150.0;  ///< graded meshes: at least one subregion per this many quads of
+                                             ///< the field. A map has no singular node inside, so it absorbs
+                                             ///< the size's change across it by stretching its quads; the
+                                             ///< subregions' corners, where the singular nodes go, must come
+                                             ///< about as often as the grading needs them (one per ~70 quads
+                                             ///< at a gradient of 0.15, 2 G^2 / pi of the quads)
   std::size_t bent_round_quads = 5'000;       ///< automatic mode retries partitions with bendable interfaces only
                                               ///< for parts up to this many quads (larger parts spent long there
                                               ///< and rarely gained)

@@ -29,10 +29,13 @@ struct SizeFieldOptions {
   std::size_t max_cells = 4'000'000;  ///< the grid's cell budget (memory: about 40 bytes a cell while building)
 };
 
-/// The size of the quads: uniform (`h`) today; the field options are what a graded mesh will be made of.
+/// The size of the quads: uniform (`h`), or graded by a field when `field.size_min` is set.
 struct SizeOptions {
-  double h = 0.0;                      ///< target quad edge length, region units (required, > 0)
+  double h = 0.0;                      ///< target quad edge length, region units (> 0). Graded: the least size,
+                                       ///< which scales the stages' tolerances (set from field.size_min)
   std::size_t max_quads = 50'000'000;  ///< refuse sizes whose estimated quad count exceeds this
+  SizeFieldOptions field;              ///< graded meshes: the field's terms (size_min > 0 turns grading on)
+  bool graded() const { return field.size_min > 0.0; }
 };
 
 /// A size field sampled at the centres of a regular grid, evaluated bilinearly between them.
@@ -83,6 +86,10 @@ void check_size_field_options(const SizeFieldOptions& options);
 
 /// Builds the field of `options` over `region` (validated: closed rings, holes inside their parts).
 SizeFieldResult make_size_field(const Region& region, const SizeFieldOptions& options);
+
+/// Quads of the field's sizes in the polygon of `rings` (indices into region.rings: a part's outer ring and
+/// holes): the integral of 1 / h^2 over the grid cells whose centres lie inside.
+double estimate_quads(const SizeField& field, const Region& region, const std::vector<int>& rings);
 
 /// Lowers `h` (nx * ny values on a grid of spacing `cell`) to the largest field below it whose values at any two
 /// 8-neighbour cells differ by at most grade times their distance: h(x) = min over y of h(y) + grade |x - y|,
