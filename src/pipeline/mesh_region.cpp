@@ -72,7 +72,7 @@ RegionParts split_parts(const Region& work, const MeshOptions& options, const st
     const double a = part_area(work, p);
     if (options.drop_small_parts && a < options.size * options.size) {
       const Vec2 at = work.rings[static_cast<std::size_t>(p.rings.front())].points.front();
-      out.dropped.push_back({{"part", p.part}, {"area", a}, {"at", {at.x, at.y}}});
+      out.dropped.push_back({p.part, a, at});
       continue;
     }
     out.parts.push_back(std::move(p));

@@ -4,11 +4,10 @@
 #include <cstdint>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
 #include "polysquare/core/quad_mesh.h"
 #include "polysquare/core/region.h"
 #include "polysquare/map/polysquare_map.h"
+#include "polysquare/pipeline/mesh_report.h"
 #include "polysquare/pipeline/progress.h"
 #include "polysquare/refine/local_patch.h"
 #include "polysquare/refine/relax_valences.h"
@@ -106,7 +105,7 @@ struct MeshResult {
   TriMesh background;               ///< all parts' background triangulations, when keep_partition is set
   std::vector<std::int32_t> background_part;  ///< #background triangles, global subregion index
   std::vector<PartMapStats> parts;  ///< per polygon part, in part order
-  nlohmann::json report;            ///< options, timings, counts (quality is added by the caller's choice)
+  MeshReport report;                ///< options, timings, counts (quality is added by the caller's choice)
   Region region;                    ///< the region the mesh conforms to: the input with curves simplified
                                     ///< (MeshOptions::simplify); the design invariants hold against it
 };
