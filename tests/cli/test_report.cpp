@@ -152,7 +152,8 @@ TEST_F(Report, SchemaRequiresOnlyKeysTheTypedReportWrites) {
         if (!j.is_object()) return;
         for (const auto& key : schema.value("required", nlohmann::json::array()))
           if (!j.contains(key.get<std::string>())) missing.push_back(path + "/" + key.get<std::string>());
-        for (const auto& [key, sub] : schema.value("properties", nlohmann::json::object()).items())
+        const nlohmann::json properties = schema.value("properties", nlohmann::json::object());
+        for (const auto& [key, sub] : properties.items())
           if (j.contains(key)) check(sub, j[key], path + "/" + key);
       };
   check(schema_, report, "");
