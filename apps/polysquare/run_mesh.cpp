@@ -18,6 +18,7 @@
 #include "polysquare/io/svg.h"
 #include "polysquare/partition/partition.h"
 #include "polysquare/pipeline/check_options.h"
+#include "polysquare/size/size_field.h"
 #include "polysquare/pipeline/invariants.h"
 #include "polysquare/pipeline/local_frame.h"
 #include "polysquare/pipeline/report.h"
@@ -150,8 +151,23 @@ Region read_noted_input(const MeshArgs& args, ProgressReporter& progress, InputN
   return region;
 }
 
+// A graded run's estimate, from its field on the input curves (mesh_region builds it again on the simplified
+// ones): refused past --max-quads before any meshing.
+void say_field_estimate(std::ostream& info, const Region& region, const MeshOptions& options) {
+  const SizeFieldResult made = make_size_field(region, options.size.field);
+  check_field_estimate(made.stats.estimated_quads, options, region.source.empty() ? "region" : region.source);
+  const double area = domain_area(region), h = options.size.field.size_min;
+  info << "size field " << short_number(made.stats.min) << " .. " << short_number(made.stats.max) << ", grade "
+       << short_number(options.size.field.grade) << ": about "
+       << static_cast<long long>(std::llround(made.stats.estimated_quads))
+       << " quads (integral of 1 / h^2; uniform at --size-min: " << static_cast<long long>(std::llround(area / (h * h)))
+       << ")\n";
+}
+
 // The figure to choose --size from, before minutes of meshing: quads of size h cover about area / h^2.
-void say_size_estimate(std::ostream& info, const Region& region, double size) {
+void say_size_estimate(std::ostream& info, const Region& region, const MeshOptions& options) {
+  if (options.size.graded()) return say_field_estimate(info, region, options);
+  const double size = options.size.h;
   const Box2 box = region.bounding_box();
   const double area = domain_area(region);
   info << "region " << short_number(box.hi.x - box.lo.x) << " x " << short_number(box.hi.y - box.lo.y)
@@ -168,9 +184,7 @@ struct LocalFrame {
   Region region;  ///< the input region in the frame
 
   /// A place of the report (local frame) in the input's coordinates.
-  std::string place(const nlohmann::json& at) const {
-    return "(" + short_number(at[0].get<double>() + origin.x) + ", " + short_number(at[1].get<double>() + origin.y) + ")";
-  }
+  std::string place(Vec2 at) const { return "(" + short_number(at.x + origin.x) + ", " + short_number(at.y + origin.y) + ")"; }
 };
 
 LocalFrame local_frame(const Region& region) {
@@ -212,7 +226,7 @@ MeshResult mesh_in_frame(const LocalFrame& frame, const MeshOptions& options) {
     throw MeshingError(std::string(e.what()) + " (places relative to (" + short_number(frame.origin.x) + ", " +
                        short_number(frame.origin.y) + "))");
   }
-  if (frame.moved) result.report["input"]["local_origin"] = {frame.origin.x, frame.origin.y};
+  if (frame.moved) result.report.input.local_origin = frame.origin;
   return result;
 }
 
@@ -269,7 +283,7 @@ MeshMeasures measure_mesh(const MeshResult& result, const LocalFrame& frame, con
   m.quality.schism.angle_ratio_worst_at = m.quality.schism.angle_ratio_worst_at + origin;
   m.quality.schism.aspect_ratio_worst_at = m.quality.schism.aspect_ratio_worst_at + origin;
   DomainDistanceOptions measure{args.options.curves.corner_threshold_deg, {}};
-  for (const auto& d : result.report["dropped_parts"]) measure.skip_parts.push_back(d["part"].get<int>());
+  for (const DroppedPartReport& d : result.report.dropped_parts) measure.skip_parts.push_back(d.part);
   // The mesh covers the (simplified) domain it conforms to, less the parts left out as too small, up to the
   // chords along curves: a larger change is said, never silent.
   if (const double change = area_relative_mismatch(result.mesh, result.region, measure.skip_parts);
@@ -287,9 +301,8 @@ MeshMeasures measure_mesh(const MeshResult& result, const LocalFrame& frame, con
   m.fv.orthogonality_worst_at = m.fv.orthogonality_worst_at + origin;
   m.fv.smoothness_worst_at = m.fv.smoothness_worst_at + origin;
   // Against the simplified curves too, which the mesh conforms to (the input distance includes the simplification).
-  if (result.report["simplify"]["vertices_after"] != result.report["simplify"]["vertices_before"] ||
-      !result.report["dropped_curves"].empty())
-  {
+  if (result.report.simplify.vertices_after != result.report.simplify.vertices_before ||
+      !result.report.dropped_curves.empty()) {
     m.simplified = domain_distance(result.mesh, result.region, measure);
     to_input_frame(*m.simplified);
   }
@@ -301,13 +314,10 @@ MeshMeasures measure_mesh(const MeshResult& result, const LocalFrame& frame, con
 MeshGroups complete_report(MeshResult& result, const MeshMeasures& m, const InputNotes& notes, const Region& region,
                            double size) {
   add_quality_to_report(result.report, m.quality, m.fv, m.domain, size, m.simplified ? &*m.simplified : nullptr);
-  result.report["input"]["repairs"] = notes.repairs;
-  result.report["input"]["snapped"] = notes.snaps;
-  result.report["input"]["warnings"] = notes.warnings;
-  result.report["input"]["input_crs"] = notes.input_crs;
+  result.report.input.notes =
+      InputNotesReport{notes.repairs, notes.snaps, notes.warnings, notes.input_crs, region.boundary_segments.size()};
   MeshGroups groups = mesh_groups(result.mesh, &result.region);
-  result.report["groups"] = to_json(groups);
-  result.report["input"]["boundary_segments"] = region.boundary_segments.size();
+  result.report.groups = group_reports(groups);
   for (const std::string& w : groups.warnings) std::cerr << "warning: " << w << "\n";
   return groups;
 }
@@ -362,92 +372,95 @@ void write_outputs(const MeshArgs& args, const MeshResult& result, const Region&
   batch.commit();
 }
 
+// A figure printed as the report writes it (the shortest text that reads back the same), so that a message and
+// the report agree to the digit.
+std::string figure(double x) { return nlohmann::json(x).dump(); }
+
 // Parts left out as smaller than one element: the first few by place, then one line for the rest; curves
 // around regions narrower than the size, by kind.
-void warn_left_out(const nlohmann::json& report, const LocalFrame& frame) {
-  const auto& dropped = report["dropped_parts"];
+void warn_left_out(const MeshReport& report, const LocalFrame& frame) {
+  const std::vector<DroppedPartReport>& dropped = report.dropped_parts;
   for (std::size_t i = 0; i < dropped.size() && i < 3; ++i)
-    std::cerr << "warning: part " << dropped[i]["part"] << " left out: its area " << dropped[i]["area"]
-              << " is less than one element, at " << frame.place(dropped[i]["at"]) << "\n";
+    std::cerr << "warning: part " << dropped[i].part << " left out: its area " << figure(dropped[i].area)
+              << " is less than one element, at " << frame.place(dropped[i].at) << "\n";
   if (dropped.size() > 3) {
     double area = 0;
-    for (const auto& d : dropped) area += d["area"].get<double>();
+    for (const DroppedPartReport& d : dropped) area += d.area;
     std::cerr << "warning: " << dropped.size() << " parts smaller than one element left out in all (total area "
               << short_number(area) << "); the report's dropped_parts lists each\n";
   }
-  if (const auto& curves = report["dropped_curves"]; !curves.empty()) {
+  if (const std::vector<DroppedCurveReport>& curves = report.dropped_curves; !curves.empty()) {
     std::map<std::string, std::size_t> kinds;
-    const nlohmann::json* widest = &curves.front();
-    for (const auto& d : curves) {
-      kinds[d["kind"].get<std::string>()]++;
-      if (d["width"].get<double>() > (*widest)["width"].get<double>()) widest = &d;
+    const DroppedCurveReport* widest = &curves.front();
+    for (const DroppedCurveReport& d : curves) {
+      kinds[d.kind]++;
+      if (d.width > widest->width) widest = &d;
     }
     std::cerr << "warning: " << curves.size() << " curves around regions narrower than the size left out (";
     for (const auto& [kind, n] : kinds) std::cerr << (kind == kinds.begin()->first ? "" : ", ") << n << " " << kind;
-    std::cerr << "; the widest " << (*widest)["width"] << " at " << frame.place((*widest)["at"])
+    std::cerr << "; the widest " << figure(widest->width) << " at " << frame.place(widest->at)
               << "; the report's dropped_curves lists them; --min-island-width 0 keeps them)\n";
   }
 }
 
 // Unstructured patches: the first few by place, then one line for the rest; then the simplification and the
 // structured fraction.
-void say_patches_and_simplification(const nlohmann::json& report, const LocalFrame& frame, std::ostream& info) {
+void say_patches_and_simplification(const MeshReport& report, const LocalFrame& frame, std::ostream& info) {
   std::size_t patches = 0, patch_quads = 0;
-  for (const auto& u : report["unstructured"])
-    if (u["meshed_by"] == "patch" && ++patches <= 5)
-      std::cerr << "warning: part " << u["part"] << ": subregion " << u["subregion"] << " at " << frame.place(u["at"])
-                << " is an unstructured patch of " << u["quads"] << " quads: "
-                << u["reason"].get<std::string>() << "\n";
-    else if (u["meshed_by"] == "patch")
-      patch_quads += u["quads"].get<std::size_t>();
+  for (const UnstructuredReport& u : report.unstructured)
+    if (u.meshed_by == "patch" && ++patches <= 5)
+      std::cerr << "warning: part " << u.part << ": subregion " << u.subregion << " at " << frame.place(u.at)
+                << " is an unstructured patch of " << u.quads << " quads: " << u.reason.value_or("") << "\n";
+    else if (u.meshed_by == "patch")
+      patch_quads += u.quads;
   if (patches > 5)
     std::cerr << "warning: ... and " << patches - 5 << " more unstructured patches (" << patch_quads
               << " quads; the report's unstructured lists each)\n";
-  if (const auto& simp = report["simplify"]; simp["vertices_after"] != simp["vertices_before"])
-    info << "simplified curves finer than the size: " << simp["vertices_before"] << " -> " << simp["vertices_after"]
-              << " vertices, largest distance moved " << simp["max_distance"] << " (" << simp["max_distance_over_size"]
-              << " of the size), area change " << simp["area_change"] << " (--simplify 0 keeps them)\n";
-  info << "structured fraction " << report["summary"]["structured_fraction"] << " ("
-            << report["summary"]["unstructured_subregions"] << " of " << report["summary"]["subregions"]
-            << " subregions unstructured)\n";
+  if (const SimplifyReport& simp = report.simplify; simp.vertices_after != simp.vertices_before)
+    info << "simplified curves finer than the size: " << simp.vertices_before << " -> " << simp.vertices_after
+         << " vertices, largest distance moved " << figure(simp.max_distance) << " ("
+         << figure(simp.max_distance_over_size) << " of the size), area change " << figure(simp.area_change)
+         << " (--simplify 0 keeps them)\n";
+  info << "structured fraction " << figure(report.summary.structured_fraction) << " ("
+       << report.summary.unstructured_subregions << " of " << report.summary.subregions << " subregions unstructured)\n";
 }
 
 // The warnings about one part's chosen candidate: quads pinned by sharp input corners, poor quads accepted, or
 // the unstructured fallback.
-void warn_chosen_candidate(const nlohmann::json& c, std::size_t candidates, const LocalFrame& frame) {
-  if (c.contains("quads_pinned_by_sharp_input"))
-    std::cerr << "warning: part " << c["part"] << ": " << c["quads_pinned_by_sharp_input"]
+void warn_chosen_candidate(const CandidateReport& c, std::size_t candidates, const LocalFrame& frame) {
+  if (const std::optional<PinnedReport>& p = c.pinned)
+    std::cerr << "warning: part " << c.part << ": " << p->quads_pinned_by_sharp_input
               << " quads lie in input corners sharper than the --min-sj gate and are left out of it (scaled "
                  "Jacobian min "
-              << c["pinned_min_scaled_jacobian"] << " at " << frame.place(c["pinned_worst_at"])
-              << "; the others' min is " << c["unpinned_min_scaled_jacobian"] << ")\n";
-  if (c.contains("poor_quads")) {
-    const auto& first = c["poor_quads"]["first"][0];
-    std::cerr << "warning: part " << c["part"] << ": " << c["poor_quads"]["count"]
+              << figure(p->pinned_min_scaled_jacobian) << " at " << frame.place(p->pinned_worst_at)
+              << "; the others' min is " << figure(p->unpinned_min_scaled_jacobian) << ")\n";
+  if (c.poor_quads) {
+    const PoorQuadReport& first = c.poor_quads->first.at(0);
+    std::cerr << "warning: part " << c.part << ": " << c.poor_quads->count
               << " quads stay outside --min-sj or --max-edge-ratio after local repair (within --max-poor-fraction); "
                  "the first at "
-              << frame.place(first["at"]) << " (scaled Jacobian " << first["scaled_jacobian"] << ", edge ratio "
-              << first["edge_ratio"] << "); the report's candidates list them\n";
+              << frame.place(first.at) << " (scaled Jacobian " << figure(first.scaled_jacobian) << ", edge ratio "
+              << figure(first.edge_ratio) << "); the report's candidates list them\n";
   }
-  if (c.contains("fallback"))
-    std::cerr << "warning: part " << c["part"] << ": none of " << candidates - 1
+  if (c.fallback)  // a chosen candidate is measured
+    std::cerr << "warning: part " << c.part << ": none of " << candidates - 1
               << " poly-square candidates meshed it; meshed unstructured by splitting triangles into quads ("
-              << c["interior_singularities"] << " interior singularities, scaled Jacobian min "
-              << c["min_scaled_jacobian"] << "); the report's candidates say why each failed\n";
+              << c.measures.value().interior_singularities << " interior singularities, scaled Jacobian min "
+              << figure(c.measures.value().min_scaled_jacobian) << "); the report's candidates say why each failed\n";
 }
 
 // Which candidate each part kept, and why the explicitly requested one was not kept.
-void say_candidates(const nlohmann::json& report, int requested_parts, const LocalFrame& frame, std::ostream& info) {
-  for (const auto& part : report["candidates"]) {
+void say_candidates(const MeshReport& report, int requested_parts, const LocalFrame& frame, std::ostream& info) {
+  for (const std::vector<CandidateReport>& part : report.candidates) {
     const bool explicit_parts = requested_parts > 0;
-    for (const auto& c : part) {
-      if (c.contains("chosen")) {
+    for (const CandidateReport& c : part) {
+      if (c.chosen) {
         warn_chosen_candidate(c, part.size(), frame);
-        if (!c.contains("fallback") && part.size() > 1 && !explicit_parts)
-          info << "part " << c["part"] << ": " << c["subregions"] << " subregion(s) kept of " << part.size()
-               << " candidates (scaled Jacobian min " << c["min_scaled_jacobian"] << ")\n";
-      } else if (explicit_parts && c.contains("error") && c["subregions"].get<int>() == requested_parts) {
-        std::cerr << "warning: part " << c["part"] << " meshed as one poly-square: " << c["error"].get<std::string>() << "\n";
+        if (!c.fallback && part.size() > 1 && !explicit_parts)
+          info << "part " << c.part << ": " << c.subregions << " subregion(s) kept of " << part.size()
+               << " candidates (scaled Jacobian min " << figure(c.measures.value().min_scaled_jacobian) << ")\n";
+      } else if (explicit_parts && c.error && c.subregions == requested_parts) {
+        std::cerr << "warning: part " << c.part << " meshed as one poly-square: " << *c.error << "\n";
       }
     }
   }
@@ -465,10 +478,10 @@ void print_summary(const MeshResult& result, const MeshMeasures& m, const std::s
                                    short_number(m.simplified->feature_node_max_distance) + "\n"
                              : std::string())
             << format_finite_volume_text(m.fv) << format_schism_text(m.quality.schism)
-            << (result.report["summary"].value("sj_below_0_3_pinned", std::size_t{0}) > 0
-                    ? "  of the quads below scaled Jacobian 0.3, " + result.report["summary"]["sj_below_0_3_pinned"].dump() +
+            << (result.report.summary.sj_below_0_3_pinned > 0
+                    ? "  of the quads below scaled Jacobian 0.3, " + std::to_string(result.report.summary.sj_below_0_3_pinned) +
                           " lie in input corners or wedges sharper than 17.5 degrees; the others are a fraction " +
-                          short_number(result.report["summary"]["sj_below_0_3_unpinned_fraction"].get<double>()) + "\n"
+                          short_number(result.report.summary.sj_below_0_3_unpinned_fraction) + "\n"
                     : std::string());
 }
 
@@ -484,26 +497,26 @@ int run_mesh(const MeshArgs& args) {
   std::ostream& info = args.quiet ? discarded : std::cerr;
   InputNotes notes;
   const Region region = read_noted_input(args, progress, notes, info);
-  MeshOptions options = args.options;
+  MeshOptions options = resolve_sizes(args.options);  // graded: size.h is the least size
   check_mesh_size(region, options);
-  say_size_estimate(info, region, options.size.h);
+  say_size_estimate(info, region, options);
   const LocalFrame frame = local_frame(region);
   set_derived_options(options, args, limit.callback());
   MeshResult result = mesh_in_frame(frame, options);
   const PieceSplit split = piece_split(args, result.mesh);
   PieceAgreement agreement(split.by_process ? args.mpi->sharing().get() : nullptr);
   if (args.mpi && args.mpi->rank() != 0) return write_share_of_pieces(args, result, frame.origin, split, agreement);
-  if (args.mpi && args.mpi->active()) result.report["summary"]["processes"] = args.mpi->processes();
+  if (args.mpi && args.mpi->active()) result.report.summary.processes = args.mpi->processes();
 
   progress.start("quality");
   const MeshMeasures measures = measure_mesh(result, frame, args);
-  MeshGroups groups = complete_report(result, measures, notes, region, args.options.size.h);
+  MeshGroups groups = complete_report(result, measures, notes, region, options.size.h);
   const std::string group_summary = format_groups_text(groups);
   progress.finish("quality");
 
   limit.stop();  // the outputs are committed whole or not at all, never cut off between two renames
   progress.start("write");
-  move_back(result.mesh, frame, args.options.size.h);
+  move_back(result.mesh, frame, options.size.h);
   write_outputs(args, result, region, write_options(args, result.mesh, notes.input_crs, std::move(groups), split),
                 agreement);
   progress.finish("write");

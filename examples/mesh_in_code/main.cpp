@@ -39,7 +39,7 @@ int main(int argc, char** argv) {
     const DomainDistance distance = domain_distance(result.mesh, result.region);
     std::cout << "polysquare " << library_version() << ": " << quality.quads << " quads, " << quality.triangles
               << " triangles, scaled Jacobian min " << quality.sj.min << ", " << quality.interior_singularities
-              << " interior singularities, structured fraction " << result.report["summary"]["structured_fraction"]
+              << " interior singularities, structured fraction " << result.report.summary.structured_fraction
               << ", feature max distance " << distance.feature_max_distance << "\n";
     if (argc > 1) write_mesh(argv[1], result.mesh);
     if (!invariants.ok()) {

@@ -283,25 +283,4 @@ std::string format_groups_text(const MeshGroups& g) {
   return out;
 }
 
-nlohmann::json to_json(const MeshGroups& groups) {
-  nlohmann::json out = nlohmann::json::array();
-  for (const SurfaceGroup& s : groups.surfaces)
-    out.push_back({{"name", s.name}, {"tag", s.tag}, {"dimension", 2}, {"role", "domain"}, {"quads", s.quads.size()}});
-  auto curve = [&](const CurveGroup& c, const char* role) {
-    nlohmann::json j{{"name", c.name}, {"tag", c.tag}, {"dimension", 1}, {"role", role}, {"edges", c.edges.size()}};
-    if (!c.kind.empty()) j["kind"] = c.kind;
-    if (c.ring >= 0) j["ring"] = c.ring;
-    if (c.island) j["island"] = true;
-    if (!c.chains.empty()) j["pieces"] = c.chains.size();
-    out.push_back(std::move(j));
-  };
-  for (const CurveGroup& c : groups.rings) curve(c, "boundary");
-  for (const CurveGroup& c : groups.features) curve(c, "feature");
-  for (const CurveGroup& c : groups.segments) curve(c, "boundary_segment");
-  std::stable_sort(out.begin(), out.end(), [](const nlohmann::json& a, const nlohmann::json& b) {
-    return a["tag"].get<int>() < b["tag"].get<int>();
-  });
-  return out;
-}
-
 }  // namespace polysquare

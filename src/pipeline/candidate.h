@@ -10,8 +10,6 @@
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
 #include "polysquare/core/region.h"
 #include "polysquare/core/work_sharing.h"
 #include "polysquare/map/polysquare_map.h"
@@ -23,7 +21,7 @@ namespace polysquare::pipeline {
 std::string name_of(const Region& region, const RegionPart& part);
 
 // A map's split rounds, as the report and the candidates' summaries give them (region_report.cpp).
-nlohmann::json split_json(const PartMapStats& s);
+SplitReport split_report(const PartMapStats& s);
 
 // One way to map a part: the number of subregions and whether PPM interfaces may bend.
 struct CandidateSpec {
@@ -52,7 +50,7 @@ struct Candidate {
   double gated_sj = -2.0;  // SJ min without the quads pinned by sharp input corners: what the mesher controls
   std::size_t interior_singularities = 0;
   std::string error;
-  nlohmann::json summary;
+  CandidateReport summary;
 
   double size_deviation = 0.0;  // |log(mean quad area / h^2)|: how far the element size is from the request
   double structured = 0.0;      // fraction of its quads in poly-square-mapped subregions (0 for the fallback)
@@ -90,7 +88,7 @@ using MakeMesh = std::function<PartMapResult(const Repairs&)>;
 
 // Meshes a part with `make_mesh` (a map candidate or the fallback), then smooths, checks and measures it.
 Candidate finish_candidate(const Region& region, const RegionPart& part, const MeshOptions& options,
-                           nlohmann::json summary, const MakeMesh& make_mesh);
+                           CandidateReport summary, const MakeMesh& make_mesh);
 
 // The candidate of `map` (its partition.parts subregions), finished.
 Candidate try_candidate(const Region& region, const RegionPart& part, const PolysquareMapOptions& map,

@@ -43,8 +43,7 @@ void measure_structure(FinishWork& w, const std::vector<std::uint8_t>& singular_
   std::array<std::size_t, 3> singular{0, 0, 0};
   for (std::size_t v = 0; v < r.mesh.nodes.size(); ++v)
     if (singular_node[v]) singular[origin[v]]++;
-  w.c.summary["interior_singularities_at"] = {{"maps", singular[0]}, {"subregion_patches", singular[1]},
-                                              {"local_patches", singular[2]}};
+  w.c.summary.interior_singularities_at = SingularitiesAtReport{singular[0], singular[1], singular[2]};
 }
 
 // The candidate's quality for the search: SJ, edge ratio, singular nodes, element size, structured fraction.
@@ -59,17 +58,13 @@ void measure_quality(FinishWork& w) {
   const double mean_area =
       mesh_area(r.mesh) / static_cast<double>(r.mesh.quads.size()) / (w.options.size.h * w.options.size.h);
   c.size_deviation = std::abs(std::log(mean_area));
-  c.summary["quads"] = r.mesh.quads.size();
   const LocalPatchStats& local_stats = w.local_stats;
   if (local_stats.clusters > 0)
-    c.summary["local_patches"] = {{"clusters", local_stats.clusters}, {"patched", local_stats.patched},
-                                  {"quads_removed", local_stats.quads_removed}, {"quads_added", local_stats.quads_added}};
-  if (!c.summary.contains("fallback")) measure_structure(w, singular_node);
-  c.summary["structured_fraction"] = c.structured;
-  c.summary["min_scaled_jacobian"] = c.min_sj;
-  c.summary["max_edge_ratio"] = c.max_edge_ratio;
-  c.summary["interior_singularities"] = c.interior_singularities;
-  c.summary["mean_area_over_size_squared"] = mean_area;
+    c.summary.local_patches = LocalPatchesReport{local_stats.clusters, local_stats.patched, local_stats.quads_removed,
+                                                 local_stats.quads_added};
+  if (!c.summary.fallback) measure_structure(w, singular_node);
+  c.summary.measures = CandidateMeasures{r.mesh.quads.size(), c.structured, c.min_sj, c.max_edge_ratio,
+                                         c.interior_singularities, mean_area};
 }
 
 // The worst quads the mesher controls, and the quads pinned by sharp input corners apart.
@@ -89,12 +84,8 @@ Gated measure_pinned(FinishWork& w) {
   }
   w.c.gated_sj = gated_sj;
   if (pinned_count > 0) {
-    nlohmann::json& summary = w.c.summary;
-    summary["quads_pinned_by_sharp_input"] = pinned_count;
-    summary["pinned_min_scaled_jacobian"] = pinned_sj;
     const Vec2 p = w.r.mesh.nodes[w.r.mesh.quads[pinned_worst][0]];
-    summary["pinned_worst_at"] = {p.x, p.y};
-    summary["unpinned_min_scaled_jacobian"] = gated_sj;
+    w.c.summary.pinned = PinnedReport{pinned_count, pinned_sj, p, gated_sj};
   }
   return {gated_sj, gated_edge_ratio};
 }
@@ -131,17 +122,15 @@ void accept_poor_quads(FinishWork& w, const Gated& gated) {
                        at(metrics.sj, false) + ", below the minimum " +
                        std::to_string(options.gates.min_scaled_jacobian) + " (--min-sj)" + how_many);
   if (outside.empty()) return;
-  nlohmann::json places = nlohmann::json::array();
+  PoorQuadsReport poor{outside.size(), static_cast<double>(outside.size()) / static_cast<double>(r.mesh.quads.size()),
+                       {}};
   for (std::size_t q : outside) {
-    if (places.size() == 20) break;
-    const Vec2 p = r.mesh.nodes[r.mesh.quads[q][0]];
-    nlohmann::json j = {{"at", {p.x, p.y}}, {"scaled_jacobian", metrics.sj[q]}, {"edge_ratio", metrics.edge_ratio[q]}};
-    if (subregion_of(w, q) >= 0) j["subregion"] = subregion_of(w, q);
-    places.push_back(std::move(j));
+    if (poor.first.size() == 20) break;
+    PoorQuadReport place{r.mesh.nodes[r.mesh.quads[q][0]], metrics.sj[q], metrics.edge_ratio[q], {}};
+    if (subregion_of(w, q) >= 0) place.subregion = subregion_of(w, q);
+    poor.first.push_back(place);
   }
-  w.c.summary["poor_quads"] = {{"count", outside.size()},
-                               {"fraction", static_cast<double>(outside.size()) / static_cast<double>(r.mesh.quads.size())},
-                               {"first", places}};
+  w.c.summary.poor_quads = std::move(poor);
 }
 
 }  // namespace

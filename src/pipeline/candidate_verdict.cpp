@@ -75,7 +75,7 @@ void spend_poor_budget(const FinishWork& w, PoorIn& poor_in, RoundVerdict& v) {
 }
 
 // How far a refused candidate got: its mapped and patched subregions, and why the patched ones are.
-nlohmann::json refused_mesh_json(const FinishWork& w) {
+RefusedMeshReport refused_mesh_report(const FinishWork& w) {
   std::size_t mapped = 0, mapped_quads = 0, all_quads = 0;
   std::map<std::string, int> reasons;
   for (const SubregionStats& sr : w.r.stats.subregions) {
@@ -87,9 +87,8 @@ nlohmann::json refused_mesh_json(const FinishWork& w) {
         why += std::isdigit(static_cast<unsigned char>(ch)) ? '#' : ch;
     reasons[why.substr(0, 140)]++;
   }
-  return {{"subregions", w.r.stats.subregions.size()}, {"mapped", mapped},
-          {"structured_fraction", all_quads ? double(mapped_quads) / double(all_quads) : 0.0},
-          {"patch_reasons", reasons}};
+  return {w.r.stats.subregions.size(), mapped, all_quads ? double(mapped_quads) / double(all_quads) : 0.0,
+          std::move(reasons)};
 }
 
 }  // namespace
@@ -109,12 +108,10 @@ RoundVerdict judge_round(FinishWork& w) {
   spend_poor_budget(w, poor_in, v);
   std::size_t folded = 0;
   for (double s : w.metrics.sj) folded += s <= 0.0;
-  w.c.summary["repair_rounds"].push_back({{"folded", folded}, {"beside_cracks", v.cracks}, {"poor_kept", v.poor_valid},
-                                          {"remeshed", [&] {
-                                             std::vector<int> remeshed;
-                                             for (const auto& b : v.bad) remeshed.push_back(b.first);
-                                             return remeshed;
-                                           }()}});
+  RepairRoundReport round{folded, v.cracks, v.poor_valid, {}};
+  for (const auto& b : v.bad) round.remeshed.push_back(b.first);
+  if (!w.c.summary.repair_rounds) w.c.summary.repair_rounds.emplace();
+  w.c.summary.repair_rounds->push_back(std::move(round));
   return v;
 }
 
@@ -132,7 +129,7 @@ void check_final_invariants(FinishWork& w, std::size_t first_folded) {
     for (std::size_t q = 0; q < metrics.sj.size() && first_folded == metrics.sj.size(); ++q)
       if (metrics.sj[q] <= 0.0) first_folded = q;
   }
-  if (!inv.ok() && !w.r.stats.subregions.empty()) w.c.summary["refused_mesh"] = refused_mesh_json(w);
+  if (!inv.ok() && !w.r.stats.subregions.empty()) w.c.summary.refused_mesh = refused_mesh_report(w);
   if (!inv.ok())
     throw MeshingError(w.name + ": the mesh breaks an invariant (" + inv.first_problem +
                        (first_folded < metrics.sj.size() ? "; first folded quad" + in_subregion(w, first_folded) : "") +

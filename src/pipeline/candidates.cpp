@@ -178,7 +178,7 @@ void put_bytes(ByteWriter& w, const Candidate& c) {
   w.put(static_cast<std::uint8_t>(c.result.has_value()));
   if (c.result) put_bytes(w, *c.result);
   w.put(c.smooth), w.put(c.min_sj), w.put(c.max_edge_ratio), w.put(c.gated_sj), w.put(c.interior_singularities);
-  w.put(c.error), w.put(c.summary.dump()), w.put(c.size_deviation), w.put(c.structured), w.put(c.poor_quads);
+  w.put(c.error), w.put(nlohmann::json(c.summary).dump()), w.put(c.size_deviation), w.put(c.structured), w.put(c.poor_quads);
 }
 
 void get_bytes(ByteReader& r, Candidate& c) {
@@ -189,7 +189,7 @@ void get_bytes(ByteReader& r, Candidate& c) {
   std::string summary;
   r.get(c.smooth), r.get(c.min_sj), r.get(c.max_edge_ratio), r.get(c.gated_sj), r.get(c.interior_singularities);
   r.get(c.error), r.get(summary), r.get(c.size_deviation), r.get(c.structured), r.get(c.poor_quads);
-  c.summary = nlohmann::json::parse(summary);
+  c.summary = nlohmann::json::parse(summary).get<CandidateReport>();
 }
 
 namespace {
@@ -273,10 +273,13 @@ class RepairedMaps {
 Candidate try_candidate(const Region& region, const RegionPart& part, const PolysquareMapOptions& map,
                         const MeshOptions& options) {
   const int k = map.partition.parts;
-  nlohmann::json summary = {{"part", part.part}, {"subregions", k}, {"parameterization_ratio", map.parameterization_ratio}};
+  CandidateReport summary;
+  summary.part = part.part;
+  summary.subregions = k;
+  summary.parameterization_ratio = map.parameterization_ratio;
   if (k > 1 && map.composition == MapComposition::ppm) {
-    summary["bent_interfaces"] = !map.layout.straight_interfaces;
-    summary["split_rounds"] = map.split_rounds;
+    summary.bent_interfaces = !map.layout.straight_interfaces;
+    summary.split_rounds = map.split_rounds;
   }
   RepairedMaps maps(region, part, map);
   return finish_candidate(region, part, options, std::move(summary), std::ref(maps));
@@ -284,7 +287,9 @@ Candidate try_candidate(const Region& region, const RegionPart& part, const Poly
 
 // The last resort for a part no poly-square candidate meshes: triangles split into quads (unstructured).
 Candidate try_split_fallback(const Region& region, const RegionPart& part, const MeshOptions& options) {
-  nlohmann::json summary = {{"part", part.part}, {"subregions", 0}, {"fallback", "split_triangles"}};
+  CandidateReport summary;
+  summary.part = part.part;
+  summary.fallback = "split_triangles";
   return finish_candidate(region, part, options, std::move(summary), [&](const Repairs&) {
     SplitOptions so;
     so.size = options.size.h;

@@ -119,4 +119,11 @@ void check_mesh_size(const Region& region, const MeshOptions& options) {
                      " steps, at most 2.3e-13 times the largest coordinate), or move the input nearer the origin");
 }
 
+void check_field_estimate(double estimated_quads, const MeshOptions& options, const std::string& source) {
+  if (!(estimated_quads <= static_cast<double>(options.size.max_quads)))
+    throw InputError(source + ": the size field would need about " + short_number(estimated_quads) +
+                     " quads, more than the limit of " + std::to_string(options.size.max_quads) +
+                     " (raise --max-quads or --size-min)");
+}
+
 }  // namespace polysquare

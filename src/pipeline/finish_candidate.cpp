@@ -63,23 +63,23 @@ Scope patch_in_place(FinishWork& w, std::map<int, std::string>& in_place) {
 // The part mapped (with the repairs so far), its flat corners and feature loops refined, smoothed.
 void map_and_smooth(FinishWork& w, const MakeMesh& make_mesh, int round) {
   PartMapResult& r = w.r;
-  nlohmann::json& summary = w.c.summary;
+  CandidateReport& summary = w.c.summary;
   timed(w.times.map, [&] { r = make_mesh(w.repairs); });
   if (round == 0) {
     w.times.first_map = w.times.map;
-    w.times.first_map_of = {{"partition", r.stats.seconds_partition}, {"split_rounds", r.stats.split.seconds},
-                            {"joint_maps", r.stats.joint_maps}, {"joint_maps_seconds", r.stats.seconds_joint_maps}};
+    w.times.first_map_of = {r.stats.seconds_partition, r.stats.split.seconds, r.stats.joint_maps,
+                            r.stats.seconds_joint_maps};
   }
   RefineStats refined;
   timed(w.times.refine, [&] { refined = refine_flat_corners(r.mesh, w.options.refine); });
-  if (r.stats.split.tested > 0 || r.stats.joint_splits > 0) summary["split"] = split_json(r.stats);
-  summary["flat_corners"] = refined.flat_corners;
-  summary["flat_corners_collapsed"] = refined.collapsed;
+  if (r.stats.split.tested > 0 || r.stats.joint_splits > 0) summary.split = split_report(r.stats);
+  summary.flat_corners = refined.flat_corners;
+  summary.flat_corners_collapsed = refined.collapsed;
   RefineStats loops;
   timed(w.times.refine, [&] { loops = pillow_feature_loops(r.mesh, w.options.refine); });
   if (loops.feature_loops > 0) {
-    summary["feature_loops_flat"] = loops.feature_loops;
-    summary["feature_loops_pillowed"] = loops.pillowed;
+    summary.feature_loops_flat = loops.feature_loops;
+    summary.feature_loops_pillowed = loops.pillowed;
   }
   timed(w.times.smooth, [&] { w.c.smooth = smooth_quads(r.mesh, w.smooth, &w.region); });
   w.local_patched.clear();
@@ -110,13 +110,14 @@ void mend_poor_quads(FinishWork& w, const Scope& scope) {
 }
 
 // A round in place adds its scope's figures to the round before's (a mapped round's cover the part).
-void add_relax_summary(nlohmann::json& rv, const RelaxValencesStats& relaxed, const Scope& scope) {
-  if (scope.everywhere() || !rv.is_object()) rv = {{"quads", 0}, {"flips", 0}, {"collapses", 0}, {"energy_before", 0.0}, {"energy_after", 0.0}};
-  rv["quads"] = rv["quads"].get<std::size_t>() + relaxed.region_quads;
-  rv["flips"] = rv["flips"].get<std::size_t>() + relaxed.flips;
-  rv["collapses"] = rv["collapses"].get<std::size_t>() + relaxed.collapses;
-  rv["energy_before"] = rv["energy_before"].get<double>() + relaxed.energy_before;
-  rv["energy_after"] = rv["energy_after"].get<double>() + relaxed.energy_after;
+void add_relax_summary(std::optional<RelaxReport>& summary, const RelaxValencesStats& relaxed, const Scope& scope) {
+  if (scope.everywhere() || !summary) summary.emplace();
+  RelaxReport& rv = *summary;
+  rv.quads += relaxed.region_quads;
+  rv.flips += relaxed.flips;
+  rv.collapses += relaxed.collapses;
+  rv.energy_before += relaxed.energy_before;
+  rv.energy_after += relaxed.energy_after;
 }
 
 // The unstructured quads (patched subregions, local patches) cleaned up across their seams, where each
@@ -134,7 +135,7 @@ void relax_unstructured_valences(FinishWork& w, const Scope& scope) {
   RelaxValencesOptions ro = w.options.relax_valences;
   ro.poor_sj = w.options.gates.min_scaled_jacobian;
   timed(w.times.relax, [&] { relaxed = relax_region_valences(r.mesh, unstructured_quads, ro, w.smooth, origin); });
-  if (relaxed.region_quads > 0) add_relax_summary(w.c.summary["relax_valences"], relaxed, scope);
+  if (relaxed.region_quads > 0) add_relax_summary(w.c.summary.relax_valences, relaxed, scope);
   if (relaxed.kept) {
     if (!w.local_patched.empty()) {
       std::vector<std::uint8_t> moved(origin.size(), 0);
@@ -253,7 +254,7 @@ bool in_large_map(const FinishWork& w, std::size_t q) {
 }
 
 Candidate finish_candidate(const Region& region, const RegionPart& part, const MeshOptions& options,
-                           nlohmann::json summary, const MakeMesh& make_mesh) {
+                           CandidateReport summary, const MakeMesh& make_mesh) {
   Candidate c;
   c.summary = std::move(summary);
   // Wall time of the candidate, map to gates, so the report shows where a part's search spent its time.
@@ -261,14 +262,14 @@ Candidate finish_candidate(const Region& region, const RegionPart& part, const M
   try {
     FinishWork w(region, part, options, c);
     run_rounds(w, make_mesh);
-    c.summary["stage_seconds"] = w.times.json();
+    c.summary.stage_seconds = w.times.report();
     measure_finished(w);
     c.result = std::move(w.r);
   } catch (const MeshingError& e) {
     c.error = e.what();
-    c.summary["error"] = c.error;
+    c.summary.error = c.error;
   }
-  c.summary["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+  c.summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   return c;
 }
 

@@ -10,8 +10,6 @@
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
 #include "pipeline/candidate.h"
 #include "polysquare/quality/quality.h"
 
@@ -21,14 +19,10 @@ namespace polysquare::pipeline {
 struct CandidateTimes {
   double map = 0.0, first_map = 0.0, refine = 0.0, smooth = 0.0, local = 0.0, relax = 0.0, measure = 0.0,
          repair_patches = 0.0;
-  nlohmann::json first_map_of;  // the first round's map: partition, split rounds, joint maps
+  FirstMapReport first_map_of;  // the first round's map: partition, split rounds, joint maps
 
-  nlohmann::json json() const {
-    return {{"map", first_map}, {"map_of", first_map_of}, {"repair_maps", map - first_map},
-            {"repair_patches", repair_patches},
-            {"refine", refine}, {"smooth", smooth}, {"local_patches", local},
-            {"relax_valences", relax},
-            {"measure", measure}};
+  CandidateSecondsReport report() const {
+    return {first_map, first_map_of, map - first_map, repair_patches, refine, smooth, local, relax, measure};
   }
 };
 

@@ -38,7 +38,7 @@ struct CandidateSearch {
 // Meshes every candidate of a round (in parallel, or shared among processes) and keeps the best valid one so far.
 void mesh_round(CandidateSearch& search, const std::vector<CandidateSpec>& round, const Region& work,
                 const RegionPart& part, const PolysquareMapOptions& map, const MeshOptions& options,
-                nlohmann::json& tried) {
+                std::vector<CandidateReport>& tried) {
   std::vector<CandidateSpec>& ks = search.ks;
   std::vector<Candidate>& cands = search.cands;
   const std::size_t first = cands.size();
@@ -118,7 +118,7 @@ PartOutcome mesh_part(const Region& work, const RegionPart& part, const Polysqua
     return out;
   }
   Candidate& best = search.cands[static_cast<std::size_t>(search.best)];
-  out.tried[static_cast<std::size_t>(search.best)]["chosen"] = true;
+  out.tried[static_cast<std::size_t>(search.best)].chosen = true;
   out.smoothed = best.smooth;
   out.structured = best.structured;
   out.poor_quads = best.poor_quads;
@@ -130,7 +130,7 @@ PartOutcome mesh_part(const Region& work, const RegionPart& part, const Polysqua
 void put_bytes(ByteWriter& w, const PartOutcome& p) {
   w.put(static_cast<std::uint8_t>(p.result.has_value()));
   if (p.result) put_bytes(w, *p.result);
-  w.put(p.error), w.put(p.tried.dump()), w.put(p.smoothed), w.put(p.structured), w.put(p.poor_quads);
+  w.put(p.error), w.put(nlohmann::json(p.tried).dump()), w.put(p.smoothed), w.put(p.structured), w.put(p.poor_quads);
 }
 
 void get_bytes(ByteReader& r, PartOutcome& p) {
@@ -139,7 +139,7 @@ void get_bytes(ByteReader& r, PartOutcome& p) {
   if (has) get_bytes(r, p.result.emplace());
   std::string text;
   r.get(p.error), r.get(text), r.get(p.smoothed), r.get(p.structured), r.get(p.poor_quads);
-  p.tried = nlohmann::json::parse(text);
+  p.tried = nlohmann::json::parse(text).get<std::vector<CandidateReport>>();
 }
 
 }  // namespace

@@ -59,10 +59,7 @@ SizedRegion size_region(const Region& simplified, const MeshOptions& options, co
   if (!options.size.graded()) return out;
   SizeFieldResult made = make_size_field(simplified, options.size.field);
   out.stats = made.stats;
-  if (!(made.stats.estimated_quads <= static_cast<double>(options.size.max_quads)))
-    throw InputError(src + ": the size field would need about " + short_number(made.stats.estimated_quads) +
-                     " quads, more than the limit of " + std::to_string(options.size.max_quads) +
-                     " (raise --max-quads or --size-min)");
+  check_field_estimate(made.stats.estimated_quads, options, src);
   out.field = std::make_shared<const SizeField>(std::move(made.field));
   return out;
 }
@@ -90,7 +87,7 @@ RegionParts split_parts(const Region& work, const MeshOptions& options, const st
     const double a = part_area(work, p);
     if (options.curves.drop_small_parts && a < options.size.h * options.size.h) {
       const Vec2 at = work.rings[static_cast<std::size_t>(p.rings.front())].points.front();
-      out.dropped.push_back({{"part", p.part}, {"area", a}, {"at", {at.x, at.y}}});
+      out.dropped.push_back({p.part, a, at});
       continue;
     }
     out.parts.push_back(std::move(p));

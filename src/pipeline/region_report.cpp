@@ -18,73 +18,60 @@ double region_area(const Region& region) {
   return a;
 }
 
-nlohmann::json part_json(const PartMapStats& s) {
-  nlohmann::json subregions = nlohmann::json::array();
-  for (const SubregionStats& r : s.subregions) {
-    nlohmann::json j = {{"subregion", r.subregion}, {"quads", r.quads}, {"meshed_by", r.mapped ? "map" : "patch"},
-                        {"at", {r.at.x, r.at.y}}};
-    if (r.local_patch_quads > 0) j["local_patch_quads"] = r.local_patch_quads;
-    if (r.untangled) j["untangled"] = true;
-    if (!r.mapped) j["reason"] = r.reason;
-    subregions.push_back(std::move(j));
-  }
-  return {{"subregions", subregions},
-          {"part", s.part},
-          {"triangles", s.triangles},
-          {"rotation_deg", s.rotation_deg},
-          {"deform", {{"iterations", s.deform.iterations},
-                      {"energy_before", s.deform.energy_before},
-                      {"energy_after", s.deform.energy_after},
-                      {"alignment_before", s.deform.alignment_before},
-                      {"alignment_after", s.deform.alignment_after}}},
-          {"split", split_json(s)},
-          {"break_points", s.break_points},
-          {"segments", s.segments},
-          {"quantization_max_relative_deviation", s.quantize.max_relative_deviation},
-          {"quads", s.quads},
-          {"seconds", {{"triangulate", s.seconds_triangulate},
-                       {"deform", s.seconds_deform},
-                       {"quantize", s.seconds_quantize},
-                       {"snap", s.seconds_snap},
-                       {"extract", s.seconds_extract},
-                       {"joint_maps", s.seconds_joint_maps}}},
-          {"joint_maps", s.joint_maps},
-          {"agreed_turns", s.agreed_turns},
-          {"multipass", {{"passes", s.multipass.passes}, {"colours", s.multipass.colours},
-                         {"last_move", s.multipass.last_move}, {"seconds", s.multipass.seconds}}}};
+SubregionReport subregion_report(const SubregionStats& r) {
+  SubregionReport out{r.subregion, r.quads, r.mapped ? "map" : "patch", r.at, r.local_patch_quads, r.untangled, {}};
+  if (!r.mapped) out.reason = r.reason;
+  return out;
 }
 
-nlohmann::json dropped_json(const std::vector<DroppedCurve>& curves) {
-  nlohmann::json out = nlohmann::json::array();
+PartReport part_report(const PartMapStats& s) {
+  PartReport out;
+  out.part = s.part;
+  out.triangles = s.triangles;
+  out.rotation_deg = s.rotation_deg;
+  out.deform = {s.deform.iterations, s.deform.energy_before, s.deform.energy_after, s.deform.alignment_before,
+                s.deform.alignment_after};
+  out.split = split_report(s);
+  out.break_points = s.break_points;
+  out.segments = s.segments;
+  out.quantization_max_relative_deviation = s.quantize.max_relative_deviation;
+  out.quads = s.quads;
+  out.seconds = {s.seconds_triangulate, s.seconds_deform, s.seconds_quantize, s.seconds_snap, s.seconds_extract,
+                 s.seconds_joint_maps};
+  out.joint_maps = s.joint_maps;
+  out.agreed_turns = s.agreed_turns;
+  out.multipass = {s.multipass.passes, s.multipass.colours, s.multipass.last_move, s.multipass.seconds};
+  for (const SubregionStats& r : s.subregions) out.subregions.push_back(subregion_report(r));
+  return out;
+}
+
+std::vector<DroppedCurveReport> dropped_curves_report(const std::vector<DroppedCurve>& curves) {
+  std::vector<DroppedCurveReport> out;
   for (const DroppedCurve& d : curves) {
     const char* kind = d.kind == DroppedCurve::Kind::hole           ? "hole"
                        : d.kind == DroppedCurve::Kind::feature_loop  ? "feature_loop"
                        : d.kind == DroppedCurve::Kind::feature_piece ? "feature_piece"
                                                                      : "wedge_stretch";
-    out.push_back({{"kind", kind}, {"input_feature", d.source_feature}, {"width", d.width}, {"area", d.area},
-                   {"distance", d.distance}, {"at", {d.at.x, d.at.y}}});
+    out.push_back({kind, d.source_feature, d.width, d.area, d.distance, d.at});
   }
   return out;
 }
 
+PartitionEnergyReport energy_report(const PartitionEnergy& e) {
+  return {e.separator_length, e.angle_deviation, e.feature_on_separators, e.energy};
+}
+
 // The partitions of the parts that have one, in part order.
-nlohmann::json partition_json(const std::vector<PartOutcome>& outcomes) {
-  nlohmann::json out = nlohmann::json::array();
-  auto energy = [](const PartitionEnergy& e) {
-    return nlohmann::json{{"separator_length", e.separator_length}, {"angle_deviation", e.angle_deviation},
-                          {"feature_on_separators", e.feature_on_separators}, {"energy", e.energy}};
-  };
+std::vector<PartitionReport> partition_report(const std::vector<PartOutcome>& outcomes) {
+  std::vector<PartitionReport> out;
   for (const PartOutcome& p : outcomes) {
     const PartMapResult& r = *p.result;
     if (!r.partition) continue;
     const PartitionResult& pr = *r.partition;
-    out.push_back({{"part", r.stats.part}, {"subregions", pr.parts}, {"faces", pr.faces}, {"separators", r.stats.separators},
-                   {"metis", energy(pr.metis)}, {"final", energy(pr.final)},
-                   {"feature_fraction_metis", pr.feature_fraction_metis},
-                   {"feature_fraction_final", pr.feature_fraction_final},
-                   {"balance_max_over_avg", pr.balance_max_over_avg},
-                   {"mh_accepted", pr.mh_accepted}, {"mh_proposed", pr.mh_proposed},
-                   {"repaired_triangles", pr.repaired_triangles}, {"seconds", r.stats.seconds_partition}});
+    out.push_back({r.stats.part, pr.parts, pr.faces, r.stats.separators, energy_report(pr.metis),
+                   energy_report(pr.final), pr.feature_fraction_metis, pr.feature_fraction_final,
+                   pr.balance_max_over_avg, pr.mh_accepted, pr.mh_proposed, pr.repaired_triangles,
+                   r.stats.seconds_partition});
   }
   return out;
 }
@@ -93,7 +80,7 @@ nlohmann::json partition_json(const std::vector<PartOutcome>& outcomes) {
 struct Structure {
   double structured_quads = 0.0;
   std::size_t subregion_count = 0, local_patch_quads = 0;
-  nlohmann::json unstructured = nlohmann::json::array();
+  std::vector<UnstructuredReport> unstructured;
 };
 
 Structure structure_of(const ReportInput& in) {
@@ -112,22 +99,20 @@ Structure structure_of(const ReportInput& in) {
             std::llround((1.0 - structured) * static_cast<double>(result.mesh.quads.size())));
       if (structured == 0.0) {
         const Vec2 at = in.simplified.region.rings[static_cast<std::size_t>(parts[k].rings.front())].points.front();
-        out.unstructured.push_back({{"part", st.part}, {"subregion", -1}, {"quads", result.mesh.quads.size()},
-                                    {"meshed_by", "split_triangles"}, {"at", {at.x, at.y}}});
+        out.unstructured.push_back({st.part, -1, result.mesh.quads.size(), "split_triangles", at, {}});
       }
     }
     for (const SubregionStats& sr : st.subregions) {
       ++out.subregion_count;
       out.local_patch_quads += sr.mapped ? sr.local_patch_quads : 0;
       if (!sr.mapped)
-        out.unstructured.push_back({{"part", st.part}, {"subregion", sr.subregion}, {"quads", sr.quads},
-                                    {"meshed_by", "patch"}, {"at", {sr.at.x, sr.at.y}}, {"reason", sr.reason}});
+        out.unstructured.push_back({st.part, sr.subregion, sr.quads, "patch", sr.at, sr.reason});
     }
   }
   return out;
 }
 
-nlohmann::json summary_json(const ReportInput& in, const Structure& structure) {
+ReportSummary summary_report(const ReportInput& in, const Structure& structure) {
   const QuadMesh& mesh = in.result.mesh;
   // Quads below SJ 0.3 that no conforming mesh avoids: at an input corner, or inside a wedge between two curves,
   // sharper than asin(0.3) (17.5 degrees) and within a size of it. Reported apart from the rest below 0.3.
@@ -142,24 +127,31 @@ nlohmann::json summary_json(const ReportInput& in, const Structure& structure) {
   }
   std::size_t poor_quads = 0;
   for (const PartOutcome& p : in.outcomes) poor_quads += p.poor_quads;
-  return {
-      {"quads", mesh.quads.size()},
-      {"sj_below_0_3_pinned", pinned_below_0_3},
-      {"sj_below_0_3_unpinned_fraction",
-       mesh.quads.empty() ? 0.0 : static_cast<double>(below_0_3 - pinned_below_0_3) / static_cast<double>(mesh.quads.size())},
-      {"structured_fraction", mesh.quads.empty() ? 0.0 : structure.structured_quads / static_cast<double>(mesh.quads.size())},
-      {"subregions", structure.subregion_count},
-      {"unstructured_subregions", structure.unstructured.size()},
-      {"local_patch_quads", structure.local_patch_quads},
-      {"poor_quads", poor_quads},
-      {"seconds", in.times.elapsed()},
-      {"version", library_version()}};
+  ReportSummary out;
+  const double quads = static_cast<double>(mesh.quads.size());
+  out.quads = mesh.quads.size();
+  out.sj_below_0_3_pinned = pinned_below_0_3;
+  out.sj_below_0_3_unpinned_fraction = mesh.quads.empty() ? 0.0 : static_cast<double>(below_0_3 - pinned_below_0_3) / quads;
+  out.structured_fraction = mesh.quads.empty() ? 0.0 : structure.structured_quads / quads;
+  out.subregions = structure.subregion_count;
+  out.unstructured_subregions = structure.unstructured.size();
+  out.local_patch_quads = structure.local_patch_quads;
+  out.poor_quads = poor_quads;
+  out.seconds = in.times.elapsed();
+  out.version = library_version();
+  return out;
 }
 
-nlohmann::json input_json(const Region& region) {
-  return {{"source", region.source}, {"crs", region.crs}, {"units", region.units},
-          {"parts", region.num_parts}, {"rings", region.rings.size()}, {"feature_curves", region.features.size()},
-          {"area", region_area(region)}};
+InputReport input_report(const Region& region) {
+  InputReport out;
+  out.source = region.source;
+  out.crs = region.crs;
+  out.units = region.units;
+  out.parts = region.num_parts;
+  out.rings = region.rings.size();
+  out.feature_curves = region.features.size();
+  out.area = region_area(region);
+  return out;
 }
 
 nlohmann::json options_json(const MeshOptions& options, const PolysquareMapOptions& map) {
@@ -183,92 +175,67 @@ nlohmann::json options_json(const MeshOptions& options, const PolysquareMapOptio
           {"loop_corner_deg", options.refine.enabled ? options.refine.loop_corner_deg : 180.0}};
 }
 
-nlohmann::json simplify_json(const ReportInput& in) {
+SimplifyReport simplify_report(const ReportInput& in) {
   const MeshOptions& options = in.options;
-  const SimplifyStats& simplify_stats = in.simplified.stats;
+  const SimplifyStats& st = in.simplified.stats;
   const SnapStats& end_snaps = in.simplified.end_snaps;
   const double area = region_area(in.region);
-  return {{"fraction_of_size", options.curves.simplify},
-          {"smooth_curves_fraction_of_size", options.curves.smooth_curves},
-          {"vertices_before", simplify_stats.vertices_before},
-          {"vertices_after", simplify_stats.vertices_after},
-          {"refused", simplify_stats.refused},
-          {"max_distance", simplify_stats.max_distance},
-          {"max_distance_over_size", simplify_stats.max_distance / options.size.h},
-          {"chord_pins", simplify_stats.chord_pins},
-          {"end_points_snapped", end_snaps.to_vertex + end_snaps.to_segment},
-          {"largest_snap", end_snaps.largest_move},
-          {"area_change", area != 0.0 ? region_area(in.simplified.region) / area - 1.0 : 0.0}};
+  return {options.curves.simplify, options.curves.smooth_curves, st.vertices_before, st.vertices_after, st.refused,
+          st.max_distance, st.max_distance / options.size.h, st.chord_pins, end_snaps.to_vertex + end_snaps.to_segment,
+          end_snaps.largest_move, area != 0.0 ? region_area(in.simplified.region) / area - 1.0 : 0.0};
 }
 
-// The parts' smoothing figures together: the most sweeps, the sums of the rest.
 // A graded run's field and how the mesh follows it.
-nlohmann::json size_field_json(const ReportInput& in) {
+SizeFieldReport size_field_report(const ReportInput& in) {
   const SizeFieldOptions& o = in.options.size.field;
   const SizeFieldStats& s = in.sized.stats;
   const SizeConformity c = size_conformity(in.result.mesh, *in.sized.field);
-  nlohmann::json j = {{"size_min", o.size_min}, {"size_max", o.size_max}, {"grade", o.grade},
-                      {"across", o.across}, {"min", s.min}, {"max", s.max},
-                      {"estimated_quads", s.estimated_quads}, {"quads", in.result.mesh.quads.size()},
-                      {"cell", s.cell}, {"cells", s.cells}, {"limited_cells", s.limited_cells},
-                      {"size_ratio", {{"median", c.median}, {"p05", c.p05}, {"p95", c.p95}}},
-                      {"neighbour_ratio", {{"p99", c.neighbour_p99}, {"max", c.neighbour_max}}}};
-  if (o.across > 0) j["narrowest_passage"] = s.narrowest_passage;
-  return j;
+  return {o.size_min, o.size_max, o.grade, o.across, s.min, s.max, s.estimated_quads, in.result.mesh.quads.size(),
+          s.cell, s.cells, s.limited_cells, s.narrowest_passage, c.median, c.p05, c.p95, c.neighbour_p99,
+          c.neighbour_max};
 }
 
-nlohmann::json smooth_json(const ReportInput& in) {
-  SmoothStats smooth;
+// The parts' smoothing figures together: the most sweeps, the sums of the rest.
+SmoothReport smooth_report(const ReportInput& in) {
+  SmoothReport out;
+  out.untangle.target_sj = in.options.smooth.untangle.target_sj;
   for (const PartOutcome& p : in.outcomes) {
     const SmoothStats& st = p.smoothed;
-    smooth.sweeps = std::max(smooth.sweeps, st.sweeps);
-    smooth.moves += st.moves;
-    smooth.curve_moves += st.curve_moves;
-    smooth.untangle.folded_before += st.untangle.folded_before;
-    smooth.untangle.folded_after += st.untangle.folded_after;
-    smooth.untangle.moves += st.untangle.moves;
+    out.sweeps = std::max(out.sweeps, st.sweeps);
+    out.moves += st.moves;
+    out.curve_moves += st.curve_moves;
+    out.untangle.below_target_before += st.untangle.folded_before;
+    out.untangle.below_target_after += st.untangle.folded_after;
+    out.untangle.moves += st.untangle.moves;
   }
-  return {{"sweeps", smooth.sweeps}, {"moves", smooth.moves}, {"curve_moves", smooth.curve_moves},
-          {"untangle", {{"target_sj", in.options.smooth.untangle.target_sj},
-                        {"below_target_before", smooth.untangle.folded_before},
-                        {"below_target_after", smooth.untangle.folded_after},
-                        {"moves", smooth.untangle.moves}}}};
+  return out;
 }
 
 }  // namespace
 
-nlohmann::json split_json(const PartMapStats& s) {
-  return {{"rounds", s.split.rounds}, {"subregions_split", s.split.split},
-          {"maps_tried", s.split.tested}, {"pieces_mapped", s.split.pieces_mapped},
-          {"seconds", s.split.seconds}, {"after_joint_map", s.joint_splits}};
+SplitReport split_report(const PartMapStats& s) {
+  return {s.split.rounds, s.split.split, s.split.tested, s.split.pieces_mapped, s.split.seconds, s.joint_splits};
 }
 
-nlohmann::json region_report(const ReportInput& in) {
+MeshReport region_report(const ReportInput& in) {
   const QuadMesh& mesh = in.result.mesh;
-  nlohmann::json parts_json = nlohmann::json::array();
-  for (const auto& s : in.result.parts) parts_json.push_back(part_json(s));
-  nlohmann::json tried = nlohmann::json::array();
-  for (const PartOutcome& p : in.outcomes) tried.push_back(p.tried);
+  MeshReport out;
   Structure structure = structure_of(in);
-  const nlohmann::json summary = summary_json(in, structure);
-  nlohmann::json report = {
-      {"summary", summary},
-      {"unstructured", std::move(structure.unstructured)},
-      {"input", input_json(in.region)},
-      {"options", options_json(in.options, in.map)},
-      {"counts", {{"nodes", mesh.nodes.size()}, {"quads", mesh.quads.size()},
-                  {"boundary_edges", mesh.boundary_edges.size()}, {"feature_edges", mesh.feature_edges.size()}}},
-      {"parts", parts_json},
-      {"partition", partition_json(in.outcomes)},
-      {"candidates", tried},
-      {"dropped_parts", in.parts.dropped},
-      {"dropped_curves", dropped_json(in.simplified.dropped_curves)},
-      {"simplify", simplify_json(in)},
-      {"smooth", smooth_json(in)},
-      {"seconds", {{"parts", in.times.parts}}},
-  };
-  if (in.sized.field) report["size_field"] = size_field_json(in);
-  return report;
+  out.summary = summary_report(in, structure);
+  out.unstructured = std::move(structure.unstructured);
+  out.input = input_report(in.region);
+  out.options = options_json(in.options, in.map);
+  out.counts = {mesh.nodes.size(), mesh.quads.size(), mesh.boundary_edges.size(), mesh.feature_edges.size()};
+  for (const PartMapStats& s : in.result.parts) out.parts.push_back(part_report(s));
+  out.partition = partition_report(in.outcomes);
+  for (const PartOutcome& p : in.outcomes) out.candidates.push_back(p.tried);
+  out.dropped_parts = in.parts.dropped;
+  out.dropped_curves = dropped_curves_report(in.simplified.dropped_curves);
+  out.simplify = simplify_report(in);
+  out.smooth = smooth_report(in);
+  out.seconds = {in.times.parts};
+  if (in.sized.field) out.size_field = size_field_report(in);
+  return out;
 }
 
 }  // namespace polysquare::pipeline

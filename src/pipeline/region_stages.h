@@ -10,11 +10,10 @@
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
 #include "polysquare/input/simplify.h"
 #include "polysquare/input/snap_points.h"
 #include "polysquare/pipeline/mesh_region.h"
+#include "polysquare/pipeline/mesh_report.h"
 
 namespace polysquare::pipeline {
 
@@ -43,14 +42,14 @@ struct SizedRegion {
 // Stage "split into parts": the polygon parts to mesh, and those left out as smaller than one element.
 struct RegionParts {
   std::vector<RegionPart> parts;
-  nlohmann::json dropped = nlohmann::json::array();
+  std::vector<DroppedPartReport> dropped;
 };
 
 // Stage "mesh parts": one polygon part's outcome of the candidate search.
 struct PartOutcome {
   std::optional<PartMapResult> result;  // the best candidate's mesh
   std::string error;                    // why no candidate meshed the part (then result is empty)
-  nlohmann::json tried;                 // every candidate's summary, the chosen one marked
+  std::vector<CandidateReport> tried;  // every candidate's summary, the chosen one marked
   SmoothStats smoothed;
   double structured = 0.0;     // fraction of the part's quads from poly-square maps
   std::size_t poor_quads = 0;  // quads accepted outside the gates (max_poor_fraction)
@@ -83,6 +82,6 @@ struct ReportInput {
 };
 
 // Stage "report": MeshResult::report (region_report.cpp).
-nlohmann::json region_report(const ReportInput& in);
+MeshReport region_report(const ReportInput& in);
 
 }  // namespace polysquare::pipeline

@@ -1,29 +1,50 @@
 #include "polysquare/pipeline/report.h"
 
+#include <algorithm>
 #include <array>
 #include <string_view>
 
 namespace polysquare {
 
-void add_quality_to_report(nlohmann::json& report, const QualityReport& quality, const FiniteVolumeQuality& fv,
+namespace {
+
+// A distance with its feature distances over the size (0 without a size).
+DomainFigures over_size(const DomainDistance& d, double size) {
+  return {d, size > 0.0 ? d.feature_max_distance / size : 0.0, size > 0.0 ? d.feature_node_max_distance / size : 0.0};
+}
+
+}  // namespace
+
+void add_quality_to_report(MeshReport& report, const QualityReport& quality, const FiniteVolumeQuality& fv,
                            const DomainDistance& domain, double size, const DomainDistance* simplified) {
-  report["quality"] = to_json(quality);
-  report["quality"]["finite_volume"] = to_json(fv);
-  report["domain"] = to_json(domain);
-  report["domain"]["feature_max_distance_over_size"] = size > 0.0 ? domain.feature_max_distance / size : 0.0;
-  report["domain"]["feature_node_max_distance_over_size"] = size > 0.0 ? domain.feature_node_max_distance / size : 0.0;
-  if (simplified) {
-    nlohmann::json& j = report["domain"]["simplified"] = to_json(*simplified);
-    j["feature_max_distance_over_size"] = size > 0.0 ? simplified->feature_max_distance / size : 0.0;
-    j["feature_node_max_distance_over_size"] = size > 0.0 ? simplified->feature_node_max_distance / size : 0.0;
+  report.quality = QualitySection{quality, fv};
+  DomainSection& d = report.domain.emplace();
+  static_cast<DomainFigures&>(d) = over_size(domain, size);
+  if (simplified) d.simplified = over_size(*simplified, size);
+  report.summary.quality = SummaryQuality{quality.sj.min,         quality.singularities,
+                                          quality.interior_singularities, quality.boundary_singularities,
+                                          quality.regular_quad_fraction,  quality.sj_below_0_3_fraction};
+}
+
+std::vector<GroupReport> group_reports(const MeshGroups& groups) {
+  std::vector<GroupReport> out;
+  for (const SurfaceGroup& s : groups.surfaces) {
+    GroupReport& g = out.emplace_back(GroupReport{s.name, s.tag, 2, "domain"});
+    g.quads = s.quads.size();
   }
-  nlohmann::json& summary = report["summary"];
-  summary["sj_min"] = quality.sj.min;
-  summary["singularities"] = quality.singularities;
-  summary["interior_singularities"] = quality.interior_singularities;
-  summary["boundary_singularities"] = quality.boundary_singularities;
-  summary["regular_quad_fraction"] = quality.regular_quad_fraction;
-  summary["sj_below_0_3_fraction"] = quality.sj_below_0_3_fraction;
+  auto curve = [&](const CurveGroup& c, const char* role) {
+    GroupReport& g = out.emplace_back(GroupReport{c.name, c.tag, 1, role});
+    g.edges = c.edges.size();
+    if (!c.kind.empty()) g.kind = c.kind;
+    if (c.ring >= 0) g.ring = c.ring;
+    g.island = c.island;
+    if (!c.chains.empty()) g.pieces = c.chains.size();
+  };
+  for (const CurveGroup& c : groups.rings) curve(c, "boundary");
+  for (const CurveGroup& c : groups.features) curve(c, "feature");
+  for (const CurveGroup& c : groups.segments) curve(c, "boundary_segment");
+  std::stable_sort(out.begin(), out.end(), [](const GroupReport& a, const GroupReport& b) { return a.tag < b.tag; });
+  return out;
 }
 
 std::string report_text(const nlohmann::json& report) {
@@ -48,5 +69,7 @@ std::string report_text(const nlohmann::json& report) {
   }
   return out.dump(2) + "\n";
 }
+
+std::string report_text(const MeshReport& report) { return report_text(nlohmann::json(report)); }
 
 }  // namespace polysquare

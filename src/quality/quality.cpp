@@ -682,6 +682,65 @@ nlohmann::json to_json(const DomainDistance& d) {
           {"sharp_vertices_missing", d.sharp_vertices_missing}};
 }
 
+namespace {
+
+void read_stats(const nlohmann::json& j, Stats& s) {
+  j.at("min").get_to(s.min), j.at("avg").get_to(s.avg), j.at("max").get_to(s.max), j.at("std").get_to(s.std);
+}
+
+void read_point(const nlohmann::json& j, Vec2& p) { p = {j.at(0).get<double>(), j.at(1).get<double>()}; }
+
+}  // namespace
+
+void from_json(const nlohmann::json& j, SchismQuadQuality& q) {
+  read_stats(j.at("angle_ratio"), q.angle_ratio);
+  j.at("angle_ratio_limit").get_to(q.angle_ratio_limit);
+  j.at("angle_ratio_below_limit").get_to(q.angle_ratio_below);
+  read_point(j.at("angle_ratio_worst_at"), q.angle_ratio_worst_at);
+  read_stats(j.at("aspect_ratio"), q.aspect_ratio);
+  j.at("aspect_ratio_limit").get_to(q.aspect_ratio_limit);
+  j.at("aspect_ratio_above_limit").get_to(q.aspect_ratio_above);
+  read_point(j.at("aspect_ratio_worst_at"), q.aspect_ratio_worst_at);
+  j.at("non_convex").get_to(q.non_convex);
+  j.at("failing").get_to(q.failing);
+}
+
+void from_json(const nlohmann::json& j, FiniteVolumeQuality& q) {
+  j.at("interior_edges").get_to(q.interior_edges);
+  read_stats(j.at("orthogonality"), q.orthogonality);
+  j.at("orthogonality_limit").get_to(q.orthogonality_limit);
+  j.at("orthogonality_above_limit").get_to(q.orthogonality_above);
+  read_point(j.at("orthogonality_worst_at"), q.orthogonality_worst_at);
+  read_stats(j.at("smoothness"), q.smoothness);
+  read_point(j.at("smoothness_worst_at"), q.smoothness_worst_at);
+}
+
+void from_json(const nlohmann::json& j, QualityReport& q) {
+  j.at("nodes").get_to(q.nodes), j.at("quads").get_to(q.quads), j.at("triangles").get_to(q.triangles);
+  j.at("inverted").get_to(q.inverted), j.at("non_manifold_edges").get_to(q.non_manifold_edges);
+  j.at("boundary_edges").get_to(q.boundary_edges);
+  read_stats(j.at("sj"), q.sj), read_stats(j.at("eta"), q.eta), read_stats(j.at("skew"), q.skew);
+  read_stats(j.at("edge_ratio"), q.edge_ratio);
+  j.at("singularities").get_to(q.singularities);
+  j.at("interior_singularities").get_to(q.interior_singularities);
+  j.at("boundary_singularities").get_to(q.boundary_singularities);
+  j.at("regular_quad_fraction").get_to(q.regular_quad_fraction);
+  j.at("sj_below_0_3_fraction").get_to(q.sj_below_0_3_fraction);
+  from_json(j.at("schism"), q.schism);
+}
+
+void from_json(const nlohmann::json& j, DomainDistance& d) {
+  j.at("boundary_max_distance").get_to(d.boundary_max_distance);
+  j.at("boundary_max_relative").get_to(d.boundary_max_relative);
+  j.at("feature_max_distance").get_to(d.feature_max_distance);
+  j.at("feature_node_max_distance").get_to(d.feature_node_max_distance);
+  read_point(j.at("feature_max_at"), d.feature_max_at);
+  read_point(j.at("feature_node_max_at"), d.feature_node_max_at);
+  j.at("area_relative_change").get_to(d.area_relative_change);
+  j.at("sharp_vertices_total").get_to(d.sharp_vertices_total);
+  j.at("sharp_vertices_missing").get_to(d.sharp_vertices_missing);
+}
+
 std::string format_quality_text(const QualityReport& q, const DomainDistance* d) {
   std::ostringstream os;
   os.precision(4);

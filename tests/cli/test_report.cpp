@@ -2,9 +2,11 @@
 // and its figures agree with the rest of the report.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <string>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -12,6 +14,9 @@
 #include <nlohmann/json.hpp>
 
 #include "cli/json_schema.h"
+#include "polysquare/input/read_region.h"
+#include "polysquare/pipeline/mesh_region.h"
+#include "polysquare/pipeline/report.h"
 
 namespace fs = std::filesystem;
 using polysquare::test::validate_json;
@@ -101,6 +106,58 @@ TEST_F(Report, SchemaRejectsBrokenReports) {
                }).empty());
   // A new key is allowed (later versions may add some).
   EXPECT_TRUE(errors_after([](nlohmann::json& r) { r["summary"]["something_new"] = 1; }).empty());
+}
+
+// Every key of the CLI's report has a field of MeshReport: read into the struct and written again, the report is
+// the same text (keys, values, order), so no key is dropped, renamed or retyped (an integer read as a number
+// would come back as 3.0).
+TEST_F(Report, CliReportRoundTripsThroughTheTypedReport) {
+  ASSERT_EQ(WEXITSTATUS(status_), 0);
+  const polysquare::MeshReport typed = nlohmann::json::parse(text_).get<polysquare::MeshReport>();
+  EXPECT_EQ(polysquare::report_text(typed), text_);
+  EXPECT_TRUE(typed.quality && typed.domain && typed.groups && typed.summary.quality && typed.input.notes);
+  EXPECT_EQ(typed.summary.quads, typed.counts.quads);
+}
+
+// The same for mesh_region's report (no quality yet), with a chosen candidate and a partition in it.
+TEST(TypedReport, LibraryReportRoundTrips) {
+  const polysquare::Region region =
+      polysquare::read_region(std::string(POLYSQUARE_DATA_DIR) + "/cases/square_feature.geojson");
+  polysquare::MeshOptions options;
+  options.size.h = 3.0;
+  const polysquare::MeshResult result = polysquare::mesh_region(region, options);
+  const nlohmann::json j = result.report;
+  EXPECT_EQ(nlohmann::json(j.get<polysquare::MeshReport>()).dump(), j.dump());
+  EXPECT_FALSE(j.contains("quality"));
+  ASSERT_FALSE(result.report.candidates.empty());
+  EXPECT_EQ(std::count_if(result.report.candidates[0].begin(), result.report.candidates[0].end(),
+                          [](const polysquare::CandidateReport& c) { return c.chosen; }),
+            1);
+}
+
+// Every key the schema requires, at the top and in every object section (summary, quality, domain, input, ...),
+// is written from a field of MeshReport: a report with every optional section set holds them all.
+TEST_F(Report, SchemaRequiresOnlyKeysTheTypedReportWrites) {
+  polysquare::MeshReport full;
+  full.summary.quality.emplace();
+  full.input.notes.emplace();
+  full.quality.emplace();
+  full.domain.emplace();
+  full.groups.emplace();
+  full.options = nlohmann::json::parse(text_)["options"];  // kept as JSON (see mesh_report.h)
+  const nlohmann::json report = full;
+  std::vector<std::string> missing;
+  std::function<void(const nlohmann::json&, const nlohmann::json&, const std::string&)> check =
+      [&](const nlohmann::json& schema, const nlohmann::json& j, const std::string& path) {
+        if (!j.is_object()) return;
+        for (const auto& key : schema.value("required", nlohmann::json::array()))
+          if (!j.contains(key.get<std::string>())) missing.push_back(path + "/" + key.get<std::string>());
+        const nlohmann::json properties = schema.value("properties", nlohmann::json::object());
+        for (const auto& [key, sub] : properties.items())
+          if (j.contains(key)) check(sub, j[key], path + "/" + key);
+      };
+  check(schema_, report, "");
+  EXPECT_TRUE(missing.empty()) << joined(missing);
 }
 
 TEST(JsonSchemaValidator, ChecksEachKeywordAndRefusesUnknownOnes) {

@@ -168,7 +168,7 @@ TEST(GdalInput, LonLatDeltaBoxMeshesAt200Metres) {
   const MeshResult result = mesh_region(region, options);
   EXPECT_GT(result.mesh.quads.size(), 30000u);  // about 1.7e9 m^2 / 200^2 = 42,000 elements of h^2
   EXPECT_EQ(result.mesh.crs, "EPSG:32616");
-  EXPECT_EQ(result.report["input"]["crs"], "EPSG:32616");
+  EXPECT_EQ(result.report.input.crs, "EPSG:32616");
   fs::remove_all(dir);
 }
 

@@ -161,14 +161,14 @@ TEST(Pipeline, PartsSmallerThanOneElementAreLeftOutAndReported) {
   MeshOptions o;
   o.size.h = 2.0;
   const MeshResult res = mesh_region(r, o);
-  ASSERT_EQ(res.report["dropped_parts"].size(), 1u);
-  EXPECT_NEAR(res.report["dropped_parts"][0]["area"].get<double>(), 1.0, 1e-12);
+  ASSERT_EQ(res.report.dropped_parts.size(), 1u);
+  EXPECT_NEAR(res.report.dropped_parts[0].area, 1.0, 1e-12);
   EXPECT_EQ(res.mesh.quads.size(), 200u);  // 20 x 10 on the rectangle
   // Measured without the islet, the mesh covers the rest exactly and misses no sharp vertex; with it, the
   // islet's four corners are missing and its area is lost.
   const DomainDistance with_islet = domain_distance(res.mesh, r);
   EXPECT_EQ(with_islet.sharp_vertices_missing, 4u);
-  const DomainDistance without = domain_distance(res.mesh, r, {30.0, {res.report["dropped_parts"][0]["part"].get<int>()}});
+  const DomainDistance without = domain_distance(res.mesh, r, {30.0, {res.report.dropped_parts[0].part}});
   EXPECT_EQ(without.sharp_vertices_missing, 0u);
   EXPECT_LT(std::abs(without.area_relative_change), 1e-12);
   o.curves.drop_small_parts = false;
@@ -209,7 +209,7 @@ TEST(Pipeline, PillowingAFeatureLoopSplitsItsFlatCorners) {
   // Through the pipeline (smoothing included) the worst quad, at those corners, improves.
   o.refine.enabled = true;
   const MeshResult refined = mesh_region(region, o);
-  EXPECT_EQ(refined.report["candidates"][0][0]["feature_loops_pillowed"].get<int>(), 1);
+  EXPECT_EQ(refined.report.candidates[0][0].feature_loops_pillowed, std::optional<std::size_t>(1));
   EXPECT_LT(compute_quality(raw.mesh).sj.min, 0.45);
   EXPECT_GT(compute_quality(refined.mesh).sj.min, 0.75);
 }
@@ -223,7 +223,7 @@ TEST(Pipeline, FlatCornerTemplateRaisesTheWorstQuadOnDiscs) {
   o.refine.enabled = true;
   const MeshResult refined = mesh_region(region, o);
   const QualityReport a = compute_quality(raw.mesh), b = compute_quality(refined.mesh);
-  EXPECT_EQ(refined.report["candidates"][0][0]["flat_corners_collapsed"].get<int>(), 4);
+  EXPECT_EQ(refined.report.candidates[0][0].flat_corners_collapsed, std::optional<std::size_t>(4));
   EXPECT_EQ(a.interior_singularities, 0u);
   EXPECT_EQ(b.interior_singularities, 4u);
   EXPECT_EQ(raw.mesh.quads.size() - refined.mesh.quads.size(), 4u);

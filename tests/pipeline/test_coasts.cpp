@@ -39,10 +39,10 @@ TEST(Coasts, DeltaWaterAt200MetresIsSemiStructured) {
   o.size.h = 200.0;
   QualityReport q;
   const MeshResult r = mesh_checked(region, o, q);
-  const auto& summary = r.report["summary"];
+  const auto& summary = r.report.summary;
   // The floors: 95 % of the quads from poly-square maps and touching no interior singular node, at most
   // 20 singular nodes per 1000 quads (Gmsh: 212).
-  EXPECT_GE(summary["structured_fraction"].get<double>(), 0.95);
+  EXPECT_GE(summary.structured_fraction, 0.95);
   EXPECT_GE(q.regular_quad_fraction, 0.95);
   EXPECT_LE(1000.0 * static_cast<double>(q.interior_singularities) / static_cast<double>(r.mesh.quads.size()), 20.0);
   // Quads under the SJ gate that no repair mended are few, kept in their mapped subregions, and each reported.
@@ -54,22 +54,21 @@ TEST(Coasts, DeltaWaterAt200MetresIsSemiStructured) {
   }
   // The floor: at most 0.1 % below 0.3 (valid quads there are mended by local patches that do better).
   EXPECT_LE(static_cast<double>(below), 0.001 * static_cast<double>(r.mesh.quads.size()));
-  EXPECT_LE(summary["sj_below_0_3_pinned"].get<std::size_t>(), below);
+  EXPECT_LE(summary.sj_below_0_3_pinned, below);
   EXPECT_NEAR(q.sj_below_0_3_fraction, static_cast<double>(below) / static_cast<double>(r.mesh.quads.size()), 1e-12);
-  EXPECT_LE(static_cast<double>(summary["poor_quads"].get<std::size_t>()),
-            o.gates.max_poor_fraction * static_cast<double>(r.mesh.quads.size()));
-  EXPECT_LE(gated, summary["poor_quads"].get<std::size_t>());
+  EXPECT_LE(static_cast<double>(summary.poor_quads), o.gates.max_poor_fraction * static_cast<double>(r.mesh.quads.size()));
+  EXPECT_LE(gated, summary.poor_quads);
   // No whole part fell back to split triangles.
-  for (const auto& u : r.report["unstructured"]) EXPECT_NE(u["meshed_by"], "split_triangles") << u.dump();
+  for (const auto& u : r.report.unstructured) EXPECT_NE(u.meshed_by, "split_triangles") << "part " << u.part << " subregion " << u.subregion;
   // Islands narrower than the size are left out, each reported narrower than h; the mesh boundary stays within h
   // of the input and lies on the region it was meshed against.
-  EXPECT_GT(r.report["dropped_curves"].size(), 0u);
-  for (const auto& d : r.report["dropped_curves"]) {
-    EXPECT_EQ(d["kind"], "hole");
-    EXPECT_LT(d["width"].get<double>(), o.size.h);
+  EXPECT_GT(r.report.dropped_curves.size(), 0u);
+  for (const auto& d : r.report.dropped_curves) {
+    EXPECT_EQ(d.kind, "hole");
+    EXPECT_LT(d.width, o.size.h);
   }
   DomainDistanceOptions measure;
-  for (const auto& d : r.report["dropped_parts"]) measure.skip_parts.push_back(d["part"].get<int>());
+  for (const auto& d : r.report.dropped_parts) measure.skip_parts.push_back(d.part);
   EXPECT_LT(domain_distance(r.mesh, r.region, measure).boundary_max_relative, 1e-9);
   EXPECT_LE(domain_distance(r.mesh, region, measure).boundary_max_distance, o.size.h);
   EXPECT_LT(std::abs(domain_distance(r.mesh, region, measure).area_relative_change), 0.03);
@@ -83,26 +82,26 @@ TEST(Coasts, FjordCoastAt400MetresIsSemiStructured) {
   o.size.h = 400.0;
   QualityReport q;
   const MeshResult r = mesh_checked(region, o, q);
-  EXPECT_GE(r.report["summary"]["structured_fraction"].get<double>(), 0.95);
+  EXPECT_GE(r.report.summary.structured_fraction, 0.95);
   EXPECT_GE(q.regular_quad_fraction, 0.95);
   EXPECT_LE(1000.0 * static_cast<double>(q.interior_singularities) / static_cast<double>(r.mesh.quads.size()), 20.0);
   // The fine round runs exactly for the parts that no candidate of the default background meshes fully
   // structured, and this coast has such a part.
   int parts_fine = 0;
-  for (const auto& part : r.report["candidates"]) {
+  for (const auto& part : r.report.candidates) {
     bool full = false, fine = false;
     for (const auto& c : part) {
-      const bool on_fine = c.value("parameterization_ratio", 0.0) == o.subregions.fine_parameterization_ratio;
+      const bool on_fine = c.parameterization_ratio.value_or(0.0) == o.subregions.fine_parameterization_ratio;
       fine = fine || on_fine;
-      full = full || (!on_fine && c.value("structured_fraction", 0.0) == 1.0);
+      full = full || (!on_fine && (c.measures ? c.measures->structured_fraction : 0.0) == 1.0);
     }
-    EXPECT_EQ(fine, !full) << part.dump();
+    EXPECT_EQ(fine, !full) << nlohmann::json(part).dump();
     parts_fine += fine;
   }
   EXPECT_GT(parts_fine, 0);
-  for (const auto& u : r.report["unstructured"]) EXPECT_NE(u["meshed_by"], "split_triangles") << u.dump();
+  for (const auto& u : r.report.unstructured) EXPECT_NE(u.meshed_by, "split_triangles") << "part " << u.part << " subregion " << u.subregion;
   DomainDistanceOptions measure;
-  for (const auto& d : r.report["dropped_parts"]) measure.skip_parts.push_back(d["part"].get<int>());
+  for (const auto& d : r.report.dropped_parts) measure.skip_parts.push_back(d.part);
   EXPECT_LT(domain_distance(r.mesh, r.region, measure).boundary_max_relative, 1e-9);
   EXPECT_LE(domain_distance(r.mesh, region, measure).boundary_max_distance, o.size.h);
 }
@@ -115,7 +114,7 @@ TEST(Coasts, FjordCoastAt200MetresIsSemiStructured) {
   o.size.h = 200.0;
   QualityReport q;
   const MeshResult r = mesh_checked(region, o, q);
-  EXPECT_GE(r.report["summary"]["structured_fraction"].get<double>(), 0.95);
+  EXPECT_GE(r.report.summary.structured_fraction, 0.95);
   EXPECT_GE(q.regular_quad_fraction, 0.95);
   EXPECT_LE(1000.0 * static_cast<double>(q.interior_singularities) / static_cast<double>(r.mesh.quads.size()), 20.0);
   // The floor of 0.1 % below SJ 0.3 (5 quads of 4,701 before local patches mended valid quads too).
@@ -123,7 +122,7 @@ TEST(Coasts, FjordCoastAt200MetresIsSemiStructured) {
   EXPECT_LE(static_cast<double>(std::count_if(m.sj.begin(), m.sj.end(), [](double sj) { return sj < 0.3; })),
             0.001 * static_cast<double>(r.mesh.quads.size()));
   // The chosen mesh had folded or near-folded quads before its last smoothing, and fewer after untangling.
-  const auto& untangle = r.report["smooth"]["untangle"];
-  EXPECT_GT(untangle["below_target_before"].get<std::size_t>(), 0u);
-  EXPECT_LT(untangle["below_target_after"].get<std::size_t>(), untangle["below_target_before"].get<std::size_t>());
+  const auto& untangle = r.report.smooth.untangle;
+  EXPECT_GT(untangle.below_target_before, 0u);
+  EXPECT_LT(untangle.below_target_after, untangle.below_target_before);
 }

@@ -63,16 +63,16 @@ TEST(Pipeline, CoastlinePartsThatNoMapMeshesFallBackAndAreReported) {
   const MeshResult r = mesh_region(region, o);
   EXPECT_TRUE(check_invariants(r.mesh).ok()) << check_invariants(r.mesh).first_problem;
   std::size_t fallbacks = 0, kept = 0;
-  for (const auto& part : r.report["candidates"])
+  for (const auto& part : r.report.candidates)
     for (const auto& c : part) {
-      if (!c.contains("chosen")) {
-        EXPECT_TRUE(c.contains("error"));  // every candidate not kept says why
+      if (!c.chosen) {
+        EXPECT_TRUE(c.error.has_value());  // every candidate not kept says why
         continue;
       }
       ++kept;
-      if (c.contains("fallback")) ++fallbacks;
+      if (c.fallback.has_value()) ++fallbacks;
     }
-  EXPECT_EQ(kept + r.report["dropped_parts"].size(), static_cast<std::size_t>(region.num_parts));
+  EXPECT_EQ(kept + r.report.dropped_parts.size(), static_cast<std::size_t>(region.num_parts));
   EXPECT_GT(fallbacks, 0u);
   const DomainDistance d = domain_distance(r.mesh, r.region);
   EXPECT_LT(d.boundary_max_relative, 1e-9);
@@ -82,11 +82,11 @@ TEST(Pipeline, CoastlinePartsThatNoMapMeshesFallBackAndAreReported) {
   const auto below = static_cast<std::size_t>(
       std::count_if(m.sj.begin(), m.sj.end(), [&](double s) { return s < o.gates.min_scaled_jacobian; }));
   std::size_t pinned = 0;
-  for (const auto& part : r.report["candidates"])
+  for (const auto& part : r.report.candidates)
     for (const auto& c : part)
-      if (c.contains("chosen") && c.contains("quads_pinned_by_sharp_input"))
-        pinned += c["quads_pinned_by_sharp_input"].get<std::size_t>();
-  EXPECT_LE(below, r.report["summary"]["poor_quads"].get<std::size_t>() + pinned);
+      if (c.chosen && c.pinned.has_value())
+        pinned += c.pinned->quads_pinned_by_sharp_input;
+  EXPECT_LE(below, r.report.summary.poor_quads + pinned);
 }
 
 // The coastline sizes: both delta cases at h = 200 m hold every invariant, with features within 0.1 h.
@@ -104,22 +104,22 @@ TEST(Pipeline, DeltaCasesMeshAt200Metres) {
     const QualityReport q = compute_quality(r.mesh);
     EXPECT_EQ(q.inverted, 0u) << name;
     EXPECT_GE(q.sj.min, o.gates.min_scaled_jacobian) << name;
-    for (const auto& part : r.report["candidates"])
+    for (const auto& part : r.report.candidates)
       for (const auto& c : part)
-        if (c.contains("chosen")) EXPECT_FALSE(c.contains("quads_pinned_by_sharp_input")) << name;
+        if (c.chosen) EXPECT_FALSE(c.pinned.has_value()) << name;
     if (std::string(name) == "delta_box") {
       bool near_crossing = false;
-      for (const auto& d : r.report["dropped_curves"]) {
-        EXPECT_NE(d["kind"], "hole");  // island loops narrower than h, and pieces of slivers
-        EXPECT_LT(d["width"].get<double>(), o.size.h);
-        if (d["kind"] != "feature_piece") continue;
-        EXPECT_LE(d["distance"].get<double>(), o.size.h);
-        near_crossing = near_crossing || std::hypot(d["at"][0].get<double>() - 276780.0, d["at"][1].get<double>() - 3219350.0) < 700.0;
+      for (const auto& d : r.report.dropped_curves) {
+        EXPECT_NE(d.kind, "hole");  // island loops narrower than h, and pieces of slivers
+        EXPECT_LT(d.width, o.size.h);
+        if (d.kind != "feature_piece") continue;
+        EXPECT_LE(d.distance, o.size.h);
+        near_crossing = near_crossing || std::hypot(d.at.x - 276780.0, d.at.y - 3219350.0) < 700.0;
       }
       EXPECT_TRUE(near_crossing);
     }
     DomainDistanceOptions measure;
-    for (const auto& d : r.report["dropped_parts"]) measure.skip_parts.push_back(d["part"].get<int>());
+    for (const auto& d : r.report.dropped_parts) measure.skip_parts.push_back(d.part);
     const DomainDistance d = domain_distance(r.mesh, r.region, measure);
     EXPECT_LT(d.boundary_max_relative, 1e-9) << name;
     // The shorelines were simplified to the size: the mesh boundary stays within h of the input.

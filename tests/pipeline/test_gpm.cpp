@@ -41,7 +41,7 @@ TEST_P(GpmCase, SubregionsAreStitchedConformingly) {
   const Region region = read_region(std::string(POLYSQUARE_DATA_DIR) + "/cases/" + name + ".geojson");
   EXPECT_LT(domain_distance(r.mesh, r.region).feature_node_max_distance, 1e-9 * region.bounding_box().diagonal());
   ASSERT_EQ(r.background_part.size(), r.background.triangles.size());
-  EXPECT_EQ(r.report["partition"].size(), 1u);
+  EXPECT_EQ(r.report.partition.size(), 1u);
 }
 
 INSTANTIATE_TEST_SUITE_P(Cases, GpmCase,
@@ -60,11 +60,11 @@ TEST(Gpm, FailedPartitionFallsBackToOnePolySquareAndSaysSo) {
   const MeshResult r = gpm("key", 2.0, 2);
   EXPECT_TRUE(check_invariants(r.mesh).ok());
   // The report lists both candidates of part 0: the failed 2-way GPM with its error, then the kept fallback.
-  const auto& tried = r.report["candidates"][0];
+  const auto& tried = r.report.candidates[0];
   ASSERT_EQ(tried.size(), 2u);
-  EXPECT_EQ(tried[0]["subregions"], 2);
-  EXPECT_NE(tried[0]["error"].get<std::string>().find("key"), std::string::npos);
-  EXPECT_EQ(tried[1]["subregions"], 1);
-  EXPECT_TRUE(tried[1]["chosen"].get<bool>());
+  EXPECT_EQ(tried[0].subregions, 2);
+  EXPECT_NE(tried[0].error.value_or("").find("key"), std::string::npos);
+  EXPECT_EQ(tried[1].subregions, 1);
+  EXPECT_TRUE(tried[1].chosen);
   EXPECT_EQ(std::set<std::int32_t>(r.mesh.quad_part.begin(), r.mesh.quad_part.end()).size(), 1u);
 }

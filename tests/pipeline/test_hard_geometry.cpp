@@ -70,10 +70,9 @@ TEST_P(HardGeometry, ValidMeshOrPreciseRefusal) {
     // Quads outside the gates that no repair mended are accepted only within max_poor_fraction, and reported.
     std::size_t outside = 0;
     for (std::size_t k = 0; k < metrics.sj.size(); ++k)
-      outside += !pinned[k] && (metrics.sj[k] < options.gates.min_scaled_jacobian ||
-                                metrics.edge_ratio[k] > options.gates.max_edge_ratio);
+      outside += !pinned[k] && (metrics.sj[k] < options.gates.min_scaled_jacobian || metrics.edge_ratio[k] > options.gates.max_edge_ratio);
     EXPECT_LE(static_cast<double>(outside), options.gates.max_poor_fraction * static_cast<double>(metrics.sj.size()));
-    EXPECT_LE(result.report["summary"]["poor_quads"].get<double>(),
+    EXPECT_LE(result.report.summary.poor_quads,
               options.gates.max_poor_fraction * static_cast<double>(metrics.sj.size()));
     EXPECT_EQ(compute_quality(result.mesh).inverted, 0u);
     EXPECT_LT(domain_distance(result.mesh, result.region).boundary_max_relative, 1e-9);
@@ -120,12 +119,12 @@ TEST(HardGeometry, ALargeConvolutedPartTriesOnePolySquareBesideItsPartitionOnlyU
     singles = 0;
     single_chosen = false;
     std::size_t all = 0;
-    for (const auto& part : r.report["candidates"])
+    for (const auto& part : r.report.candidates)
       for (const auto& c : part) {
         ++all;
-        if (c.value("subregions", 0) != 1) continue;
+        if (c.subregions != 1) continue;
         ++singles;
-        single_chosen = single_chosen || c.value("chosen", false);
+        single_chosen = single_chosen || c.chosen;
       }
     return all;
   };
@@ -148,13 +147,13 @@ TEST(HardGeometry, APartFinerThanTheSizeThroughoutIsMeshedByTheFallbackWithoutMa
   const MeshResult r = mesh_region(region, options);
   EXPECT_TRUE(check_invariants(r.mesh).ok());
   EXPECT_EQ(compute_quality(r.mesh).inverted, 0u);
-  EXPECT_EQ(r.report["summary"]["structured_fraction"].get<double>(), 0.0);
+  EXPECT_EQ(r.report.summary.structured_fraction, 0.0);
   std::size_t maps = 0;
-  for (const auto& part : r.report["candidates"])
+  for (const auto& part : r.report.candidates)
     for (const auto& c : part) {
-      if (c.value("chosen", false)) continue;  // the fallback
+      if (c.chosen) continue;  // the fallback
       ++maps;
-      EXPECT_NE(c.value("error", std::string()).find("per quad"), std::string::npos) << c.dump();
+      EXPECT_NE(c.error.value_or("").find("per quad"), std::string::npos) << nlohmann::json(c).dump();
     }
   EXPECT_GT(maps, 0u);
 }

@@ -111,7 +111,7 @@ TEST(LocalPatch, MendPoorCornersOfACoastInPlace) {
   o.subregions.parts = 3;
   const MeshResult with = mesh_region(region, o);
   EXPECT_TRUE(check_invariants(with.mesh).ok());
-  EXPECT_GT(with.report["summary"]["local_patch_quads"].get<std::size_t>(), 0u);
+  EXPECT_GT(with.report.summary.local_patch_quads, 0u);
   MeshOptions off = o;
   off.local_patch.enabled = false;
   const MeshResult without = mesh_region(region, off);
@@ -122,9 +122,9 @@ TEST(LocalPatch, MendPoorCornersOfACoastInPlace) {
   EXPECT_EQ(below(with.mesh), 0);
   EXPECT_GT(below(without.mesh), 0);
   EXPECT_GT(compute_quality(with.mesh).sj.min, compute_quality(without.mesh).sj.min);
-  EXPECT_GE(with.report["summary"]["structured_fraction"].get<double>(),
-            without.report["summary"]["structured_fraction"].get<double>() - 0.01);
-  EXPECT_EQ(with.report["summary"]["unstructured_subregions"].get<int>(), 0);
+  EXPECT_GE(with.report.summary.structured_fraction,
+            without.report.summary.structured_fraction - 0.01);
+  EXPECT_EQ(with.report.summary.unstructured_subregions, 0u);
 }
 
 TEST(LocalPatch, ValidQuadsFlaggedToMendGiveWayOnlyToABetterPatch) {

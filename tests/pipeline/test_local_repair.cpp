@@ -200,10 +200,10 @@ TEST(LocalRepair, ASubregionMadeToFailIsPatchedAndOnlyIt) {
     if (!s.mapped) patch_quads += s.quads;
   }
   EXPECT_GT(patch_quads, 0u);
-  const double fraction = r.report["summary"]["structured_fraction"].get<double>();
+  const double fraction = r.report.summary.structured_fraction;
   EXPECT_GT(fraction, 0.3);
   EXPECT_LT(fraction, 1.0);
-  EXPECT_EQ(r.report["summary"]["unstructured_subregions"].get<int>(), 1);
+  EXPECT_EQ(r.report.summary.unstructured_subregions, 1u);
   const QualityReport q = compute_quality(r.mesh);
   EXPECT_EQ(q.inverted, 0u);
   EXPECT_GT(q.sj.min, 0.2);
@@ -272,8 +272,8 @@ TEST(LocalRepair, AnUnrepairedMeshIsFullyStructured) {
   o.size.h = 2.0;
   o.subregions.parts = 4;
   const MeshResult r = mesh_region(region, o);
-  EXPECT_DOUBLE_EQ(r.report["summary"]["structured_fraction"].get<double>(), 1.0);
-  EXPECT_EQ(r.report["summary"]["unstructured_subregions"].get<int>(), 0);
+  EXPECT_DOUBLE_EQ(r.report.summary.structured_fraction, 1.0);
+  EXPECT_EQ(r.report.summary.unstructured_subregions, 0u);
 }
 
 TEST(LocalRepair, TheReportSaysWhereACandidatesTimeWent) {
@@ -287,26 +287,26 @@ TEST(LocalRepair, TheReportSaysWhereACandidatesTimeWent) {
   o.map.patch_subregions = {1};
   const MeshResult r = mesh_region(region, o);
   bool found = false;
-  for (const auto& c : r.report["candidates"][0]) {
-    if (!c.contains("chosen")) continue;
+  for (const auto& c : r.report.candidates[0]) {
+    if (!c.chosen) continue;
     found = true;
-    const auto& st = c["stage_seconds"];
+    ASSERT_TRUE(c.stage_seconds.has_value());
+    const CandidateSecondsReport& st = *c.stage_seconds;
     double sum = 0.0;
-    for (const char* k : {"map", "repair_maps", "refine", "smooth", "local_patches", "relax_valences", "measure"}) {
-      ASSERT_TRUE(st.contains(k)) << k;
-      EXPECT_GE(st[k].get<double>(), 0.0) << k;
-      sum += st[k].get<double>();
+    for (double s : {st.map, st.repair_maps, st.refine, st.smooth, st.local_patches, st.relax_valences, st.measure}) {
+      EXPECT_GE(s, 0.0);
+      sum += s;
     }
-    EXPECT_LE(sum, c["seconds"].get<double>() + 1e-6);
-    EXPECT_GE(st["map_of"]["joint_maps"].get<int>(), 1);
-    EXPECT_LE(st["map_of"]["joint_maps_seconds"].get<double>(), st["map"].get<double>() + 1e-6);
+    EXPECT_LE(sum, c.seconds + 1e-6);
+    EXPECT_GE(st.map_of.joint_maps, 1);
+    EXPECT_LE(st.map_of.joint_maps_seconds, st.map + 1e-6);
     // Every interior singular node is counted once, by where it is.
-    const auto& at = c["interior_singularities_at"];
-    EXPECT_EQ(at["maps"].get<std::size_t>() + at["subregion_patches"].get<std::size_t>() + at["local_patches"].get<std::size_t>(),
-              c["interior_singularities"].get<std::size_t>());
+    ASSERT_TRUE(c.interior_singularities_at.has_value());
+    const SingularitiesAtReport& at = *c.interior_singularities_at;
+    EXPECT_EQ(at.maps + at.subregion_patches + at.local_patches, c.measures.value().interior_singularities);
   }
   EXPECT_TRUE(found);
-  EXPECT_GE(r.report["parts"][0]["joint_maps"].get<int>(), 1);
+  EXPECT_GE(r.report.parts[0].joint_maps, 1);
 }
 
 TEST(LocalRepair, NewCoastsHoldTheInvariantsAndTheSummaryAccountsForEveryQuad) {
@@ -322,22 +322,22 @@ TEST(LocalRepair, NewCoastsHoldTheInvariantsAndTheSummaryAccountsForEveryQuad) {
     EXPECT_TRUE(check_invariants(r.mesh).ok()) << name << ": " << check_invariants(r.mesh).first_problem;
     EXPECT_EQ(compute_quality(r.mesh).inverted, 0u) << name;
     DomainDistanceOptions measure;
-    for (const auto& d : r.report["dropped_parts"]) measure.skip_parts.push_back(d["part"].get<int>());
+    for (const auto& d : r.report.dropped_parts) measure.skip_parts.push_back(d.part);
     const DomainDistance d = domain_distance(r.mesh, r.region, measure);
     EXPECT_LT(d.boundary_max_relative, 1e-9) << name;
     EXPECT_EQ(d.sharp_vertices_missing, 0u) << name;
-    const auto& summary = r.report["summary"];
-    EXPECT_EQ(summary["quads"].get<std::size_t>(), r.mesh.quads.size()) << name;
+    const auto& summary = r.report.summary;
+    EXPECT_EQ(summary.quads, r.mesh.quads.size()) << name;
     double unstructured = 0;
-    for (const auto& u : r.report["unstructured"]) {
-      unstructured += u["quads"].get<double>();
-      EXPECT_EQ(u["at"].size(), 2u);
+    for (const auto& u : r.report.unstructured) {
+      unstructured += u.quads;
+      EXPECT_TRUE(std::isfinite(u.at.x) && std::isfinite(u.at.y));
     }
     // Quads that local patches made inside mapped subregions count as unstructured too.
-    unstructured += summary["local_patch_quads"].get<double>();
-    EXPECT_NEAR(summary["structured_fraction"].get<double>(), 1.0 - unstructured / static_cast<double>(r.mesh.quads.size()),
+    unstructured += summary.local_patch_quads;
+    EXPECT_NEAR(summary.structured_fraction, 1.0 - unstructured / static_cast<double>(r.mesh.quads.size()),
                 0.02) << name;
-    EXPECT_EQ(summary["unstructured_subregions"].get<std::size_t>(), r.report["unstructured"].size()) << name;
+    EXPECT_EQ(summary.unstructured_subregions, r.report.unstructured.size()) << name;
   }
 }
 
@@ -366,16 +366,16 @@ TEST(LocalRepair, ALargeMapKeepsItsMapForValidQuadsFarOutsideTheGates) {
   };
   auto demoted_for_quads = [](const MeshResult& r) {
     std::size_t n = 0;
-    for (const auto& u : r.report["unstructured"])
-      n += u["reason"].get<std::string>().find("near-degenerate") != std::string::npos;
+    for (const auto& u : r.report.unstructured)
+      n += u.reason.value_or("").find("near-degenerate") != std::string::npos;
     return n;
   };
   const MeshResult keep = run(0), demote = run(std::numeric_limits<std::size_t>::max());
   EXPECT_GT(demoted_for_quads(demote), 0u);
   EXPECT_EQ(demoted_for_quads(keep), 0u);
-  EXPECT_GT(keep.report["summary"]["structured_fraction"].get<double>(),
-            demote.report["summary"]["structured_fraction"].get<double>());
-  EXPECT_GT(keep.report["summary"]["poor_quads"].get<std::size_t>(), 0u);
+  EXPECT_GT(keep.report.summary.structured_fraction,
+            demote.report.summary.structured_fraction);
+  EXPECT_GT(keep.report.summary.poor_quads, 0u);
   EXPECT_TRUE(check_invariants(keep.mesh).ok()) << check_invariants(keep.mesh).first_problem;
 }
 
@@ -403,7 +403,7 @@ TEST(LocalRepair, APatchCrossedByFeaturesGetsEvenCountsFromItsMappedNeighbours) 
     ASSERT_EQ(r.parts.size(), 1u);
     const InvariantReport inv = check_invariants(r.mesh);
     EXPECT_TRUE(inv.ok()) << s << ": " << inv.first_problem;
-    EXPECT_GT(r.report["summary"]["structured_fraction"].get<double>(), 0.5) << s;
+    EXPECT_GT(r.report.summary.structured_fraction, 0.5) << s;
     const auto& subs = r.parts[0].subregions;
     ASSERT_FALSE(subs.empty()) << s << ": the part fell back as a whole";
     std::size_t unmapped = 0;
@@ -498,9 +498,9 @@ TEST(LocalRepair, ARepairRoundPatchesItsSubregionsInPlaceWithoutMappingAgain) {
   };
   const MeshResult in_place = run(true), mapped_again = run(false);
   auto chosen = [](const MeshResult& r) {
-    for (const auto& c : r.report["candidates"][0])
-      if (c.contains("chosen")) return c;
-    return nlohmann::json();
+    for (const auto& c : r.report.candidates[0])
+      if (c.chosen) return c;
+    return CandidateReport();
   };
   auto patched = [](const MeshResult& r) {
     std::set<int> s;
@@ -511,26 +511,26 @@ TEST(LocalRepair, ARepairRoundPatchesItsSubregionsInPlaceWithoutMappingAgain) {
       }
     return s;
   };
-  const nlohmann::json a = chosen(in_place), b = chosen(mapped_again);
-  ASSERT_TRUE(a.is_object());
-  ASSERT_TRUE(b.is_object());
-  ASSERT_GE(a["repair_rounds"].size(), 2u);
-  EXPECT_FALSE(a["repair_rounds"][0]["remeshed"].empty());
-  EXPECT_EQ(a["stage_seconds"]["repair_maps"].get<double>(), 0.0);
-  EXPECT_GT(a["stage_seconds"]["repair_patches"].get<double>(), 0.0);
-  EXPECT_GT(b["stage_seconds"]["repair_maps"].get<double>(), 0.0);
-  EXPECT_EQ(b["stage_seconds"]["repair_patches"].get<double>(), 0.0);
+  const CandidateReport a = chosen(in_place), b = chosen(mapped_again);
+  ASSERT_TRUE(a.chosen && a.repair_rounds && a.stage_seconds);
+  ASSERT_TRUE(b.chosen && b.stage_seconds);
+  ASSERT_GE(a.repair_rounds->size(), 2u);
+  EXPECT_FALSE(a.repair_rounds->at(0).remeshed.empty());
+  EXPECT_EQ(a.stage_seconds->repair_maps, 0.0);
+  EXPECT_GT(a.stage_seconds->repair_patches, 0.0);
+  EXPECT_GT(b.stage_seconds->repair_maps, 0.0);
+  EXPECT_EQ(b.stage_seconds->repair_patches, 0.0);
   EXPECT_EQ(patched(in_place), patched(mapped_again));
-  for (const int s : a["repair_rounds"][0]["remeshed"]) EXPECT_TRUE(patched(in_place).count(s)) << s;
+  for (const int s : a.repair_rounds->at(0).remeshed) EXPECT_TRUE(patched(in_place).count(s)) << s;
   for (const MeshResult* r : {&in_place, &mapped_again}) {
     EXPECT_TRUE(check_invariants(r->mesh).ok()) << check_invariants(r->mesh).first_problem;
     EXPECT_EQ(compute_quality(r->mesh).inverted, 0u);
     DomainDistanceOptions measure;
-    for (const auto& d : r->report["dropped_parts"]) measure.skip_parts.push_back(d["part"].get<int>());
+    for (const auto& d : r->report.dropped_parts) measure.skip_parts.push_back(d.part);
     const DomainDistance d = domain_distance(r->mesh, r->region, measure);
     EXPECT_LT(d.boundary_max_relative, 1e-9);
     EXPECT_EQ(d.sharp_vertices_missing, 0u);
   }
   // The quads the summary counts are the mesh's, patches included.
-  EXPECT_EQ(in_place.report["summary"]["quads"].get<std::size_t>(), in_place.mesh.quads.size());
+  EXPECT_EQ(in_place.report.summary.quads, in_place.mesh.quads.size());
 }

@@ -81,11 +81,11 @@ TEST(SplitRepair, SubregionsThatFailAloneAreSplitIntoPiecesThatMap) {
   const MeshResult r = mesh_region(region, o);
   EXPECT_TRUE(check_invariants(r.mesh).ok()) << check_invariants(r.mesh).first_problem;
   int split = 0, mapped = 0;
-  for (const auto& part : r.report["candidates"])
+  for (const auto& part : r.report.candidates)
     for (const auto& c : part)
-      if (c.contains("split")) {
-        split += c["split"]["subregions_split"].get<int>();
-        mapped += c["split"]["pieces_mapped"].get<int>();
+      if (c.split.has_value()) {
+        split += c.split->subregions_split;
+        mapped += c.split->pieces_mapped;
       }
   EXPECT_GT(split, 0);
   EXPECT_GT(mapped, 0);
@@ -95,17 +95,17 @@ TEST(SplitRepair, SubregionsThatFailAloneAreSplitIntoPiecesThatMap) {
   no_split.map.split_rounds = 0;
   no_split.map.joint_split_rounds = 0;
   const MeshResult u = mesh_region(region, no_split);
-  const double unsplit = u.report["summary"]["structured_fraction"].get<double>();
-  EXPECT_GE(r.report["summary"]["structured_fraction"].get<double>(), unsplit - 0.01);
+  const double unsplit = u.report.summary.structured_fraction;
+  EXPECT_GE(r.report.summary.structured_fraction, unsplit - 0.01);
   // Splitting only what fails in the joint map (counts a snap cannot reach) runs, and never loses structure
   // (since local patches repair poor quads in place, the unsplit mesh of this case is already 0.99 structured).
   MeshOptions joint_only = no_split;
   joint_only.map.joint_split_rounds = 2;
   const MeshResult j = mesh_region(region, joint_only);
-  EXPECT_GE(j.report["summary"]["structured_fraction"].get<double>(), unsplit - 0.01);
+  EXPECT_GE(j.report.summary.structured_fraction, unsplit - 0.01);
   int joint = 0;
-  for (const auto& part : j.report["candidates"])
+  for (const auto& part : j.report.candidates)
     for (const auto& c : part)
-      if (c.contains("split")) joint += c["split"]["after_joint_map"].get<int>();
+      if (c.split.has_value()) joint += c.split->after_joint_map;
   EXPECT_GT(joint, 0);
 }

@@ -60,7 +60,4 @@ MeshGroups mesh_groups(const QuadMesh& mesh, const Region* region = nullptr);
 /// domains, named features and segments with their tags, the rings (hundreds on a coast) as a tag range.
 std::string format_groups_text(const MeshGroups& groups);
 
-/// For the report: per group name, tag, kind, dimension and counts (edges, nodes or quads).
-nlohmann::json to_json(const MeshGroups& groups);
-
 }  // namespace polysquare

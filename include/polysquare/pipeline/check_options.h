@@ -33,6 +33,10 @@ constexpr double kMinSizeInSteps = 1024.0;
 /// is refused as such. The message starts with region.source.
 void check_mesh_size(const Region& region, const MeshOptions& options);
 
+/// Throws InputError (naming --max-quads, starting with `source`) when a graded run's field needs more quads
+/// than options.size.max_quads by its estimate (SizeFieldStats::estimated_quads).
+void check_field_estimate(double estimated_quads, const MeshOptions& options, const std::string& source);
+
 /// `v` with 6 significant digits ("1e+300", "0.25", "nan"): numbers in messages.
 std::string short_number(double v);
 

@@ -4,12 +4,11 @@
 #include <cstdint>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
 #include "polysquare/core/quad_mesh.h"
 #include "polysquare/core/region.h"
 #include "polysquare/map/polysquare_map.h"
 #include "polysquare/input/simplify.h"
+#include "polysquare/pipeline/mesh_report.h"
 #include "polysquare/pipeline/progress.h"
 #include "polysquare/pipeline/repair.h"
 #include "polysquare/pipeline/subregions.h"
@@ -55,7 +54,7 @@ struct MeshResult {
   TriMesh background;               ///< all parts' background triangulations, when run.keep_partition is set
   std::vector<std::int32_t> background_part;  ///< #background triangles, global subregion index
   std::vector<PartMapStats> parts;  ///< per polygon part, in part order
-  nlohmann::json report;            ///< options, timings, counts (quality is added by the caller's choice)
+  MeshReport report;                ///< options, timings, counts (quality is added by the caller's choice)
   Region region;                    ///< the region the mesh conforms to: the input with curves simplified
                                     ///< (MeshOptions::curves); the design invariants hold against it
 };

@@ -6,6 +6,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "polysquare/io/mesh_groups.h"
+#include "polysquare/pipeline/mesh_report.h"
 #include "polysquare/quality/quality.h"
 
 namespace polysquare {
@@ -16,13 +18,18 @@ namespace polysquare {
 /// summary's `sj_min`, `singularities`, `interior_singularities` and `boundary_singularities`. `domain` measures
 /// the mesh against the input; `simplified`, when the curves were simplified, against the curves the mesh
 /// conforms to (MeshResult::region; design invariant 4), as `domain.simplified`.
-void add_quality_to_report(nlohmann::json& report, const QualityReport& quality, const FiniteVolumeQuality& fv,
+void add_quality_to_report(MeshReport& report, const QualityReport& quality, const FiniteVolumeQuality& fv,
                            const DomainDistance& domain, double size,
                            const DomainDistance* simplified = nullptr);
+
+/// The report's `groups`: per group its name, tag, dimension, role and counts (quads or edges), by tag.
+std::vector<GroupReport> group_reports(const MeshGroups& groups);
 
 /// The report as indented JSON text (2 spaces, ending in a newline) with `summary` first and, inside it,
 /// quads, structured_fraction, sj_min, singularities, seconds and version in that order; the other blocks and
 /// keys follow in alphabetical order.
 std::string report_text(const nlohmann::json& report);
+/// The typed report's text: report_text(nlohmann::json(report)).
+std::string report_text(const MeshReport& report);
 
 }  // namespace polysquare

@@ -166,6 +166,11 @@ std::string format_finite_volume_text(const FiniteVolumeQuality& q);
 /// figures relative to the size).
 nlohmann::json to_json(const QualityReport& q);
 nlohmann::json to_json(const DomainDistance& d);
+/// The blocks above read back (MeshReport's from_json; a Stats' count is not in the JSON and stays 0).
+void from_json(const nlohmann::json& j, SchismQuadQuality& q);
+void from_json(const nlohmann::json& j, FiniteVolumeQuality& q);
+void from_json(const nlohmann::json& j, QualityReport& q);
+void from_json(const nlohmann::json& j, DomainDistance& d);
 /// Human-readable table, one figure per line.
 std::string format_quality_text(const QualityReport& q, const DomainDistance* domain = nullptr);
 
