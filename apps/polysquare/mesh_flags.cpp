@@ -71,6 +71,11 @@ void size_flags(CLI::App& t, MeshArgs& m) {
 }
 
 void partition_flags(CLI::App& t, MeshArgs& m) {
+  t.add_option("--graded-subregion-quads", m.options.subregions.graded_quads_per_subregion,
+               "graded mesh: at least one subregion per this many quads (their corners take the singular nodes the "
+               "grading needs; fewer quads per subregion: less stretched quads, more singular nodes)")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
   t.add_option(
        "--parts", m.options.subregions.parts,
        "subregions per polygon part (1 = one poly-square per part, 0 = try several counts and keep the best mesh)")
