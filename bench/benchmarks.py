@@ -353,7 +353,7 @@ def graded_table(a, pg, cases):
     for case, hmin, hmax, across in cases:
         out = os.path.join(a.work_rel, "graded_%s" % case)
         cmd = ["/usr/bin/python3", "bench/graded.py", "--case", "data/cases/%s.geojson" % case, "--size-min", hmin,
-               "--size-max", hmax, "--out", out, "--cli", a.cli_rel] + (["--across", across] if across else [])
+               "--size-max", hmax, "--out", out, "--cli", a.cli_rel, "--timeout", "600"] + (["--across", across] if across else [])
         run_output(sec, cmd)
         with open(os.path.join(ROOT, out, "graded.json")) as f:
             g = json.load(f)
