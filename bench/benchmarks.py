@@ -39,7 +39,9 @@ SMALL = [("letter_I", "2"), ("letter_M", "2"), ("letter_R", "2"), ("pentagon", "
          ("mechanical_part", "3"), ("dam_channel", "2"), ("key", "2")]
 COASTS = [("estuary", "200"), ("fjord_coast", "200"), ("delta_water", "200"), ("delta_box", "200")]
 # Graded runs (bench/graded.py: polysquare and Gmsh 4.8 on the same distance field): case, HMIN, HMAX, --across.
-GRADED = [("channel_estuary", "13.33", "500", "3"), ("estuary", "100", "800", None), ("delta_water", "50", "1000", None)]
+# delta_box: polysquare only (Gmsh 4.8's Frontal-Delaunay stops on this field, see issue 51).
+GRADED = [("channel_estuary", "13.33", "500", "3", []), ("estuary", "100", "800", None, []),
+          ("delta_water", "50", "1000", None, []), ("delta_box", "50", "1000", None, ["--skip-gmsh"])]
 PROCESS_CASES = ["estuary:200"]
 PROCESS_CASES_LARGE = ["fjord_coast:200", "delta_water:200", "delta_box:200"]
 SCALE_SIZES = "40,20,10"
@@ -350,10 +352,10 @@ def graded_table(a, pg, cases):
     sec.lines = table_head("case", "HMIN-HMAX, G 0.15", "tool", "quads (uniform at HMIN)", "wall s", "regular_quad_frac",
                            "interior singular per 1000", "SJ min", "size ratio median / p05 / p95",
                            "neighbour ratio p99 / max", "edge ratio avg", "fewest quads across a channel")
-    for case, hmin, hmax, across in cases:
+    for case, hmin, hmax, across, extra in cases:
         out = os.path.join(a.work_rel, "graded_%s" % case)
         cmd = ["/usr/bin/python3", "bench/graded.py", "--case", "data/cases/%s.geojson" % case, "--size-min", hmin,
-               "--size-max", hmax, "--out", out, "--cli", a.cli_rel, "--timeout", "600"] + (["--across", across] if across else [])
+               "--size-max", hmax, "--out", out, "--cli", a.cli_rel, "--timeout", "600"] + (["--across", across] if across else []) + extra
         run_output(sec, cmd)
         with open(os.path.join(ROOT, out, "graded.json")) as f:
             g = json.load(f)

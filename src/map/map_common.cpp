@@ -1,6 +1,7 @@
 #include "map/map_common.h"
 
 #include <cmath>
+#include <limits>
 #include <complex>
 #include <numbers>
 
@@ -47,6 +48,14 @@ double local_size(const TriMesh& tri, const PolysquareMapOptions& options, std::
     quads += at / (r * r);
   }
   return quads > 0.0 ? options.size * std::sqrt(area / quads) : options.size;
+}
+
+double least_size(const TriMesh& tri, const PolysquareMapOptions& options) {
+  if (!options.size_field) return options.size;
+  double least = std::numeric_limits<double>::infinity();
+  for (const auto& k : tri.triangles)
+    least = std::min(least, options.size_field->at((1.0 / 3.0) * (tri.vertices[k[0]] + tri.vertices[k[1]] + tri.vertices[k[2]])));
+  return std::isfinite(least) ? least : options.size;
 }
 
 namespace {

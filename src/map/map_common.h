@@ -26,4 +26,8 @@ std::string invalid_poly_square(const Layout& layout, const std::string& name);
 /// at its centroid over options.size.
 double local_size(const TriMesh& tri, const PolysquareMapOptions& options, std::vector<double>* ratios = nullptr);
 
+/// The least size over `tri` (the field at its triangles' centroids; options.size without a field): the size of
+/// an unstructured patch, whose boundary nodes come at its neighbours' finest spacing.
+double least_size(const TriMesh& tri, const PolysquareMapOptions& options);
+
 }  // namespace polysquare

@@ -1398,7 +1398,7 @@ void count_interface_sides(PiecewiseMap& m) {
 // Builds the patch of subregion (or union) `sub`, numbered p, on the nodes of its quantized neighbours.
 void build_patch(PiecewiseMap& m, std::size_t p, const Subregion& sub, const std::vector<std::uint8_t>& patch_now,
                  PatchMethod method) {
-  const double size = local_size(sub.mesh, m.options);  // graded: the subregion's mean size
+  const double size = least_size(sub.mesh, m.options);  // graded: the finest of the subregion
   const PatchInput in = patch_input(sub, patch_now, m.side_count, m.chain_ends, size,
                                     m.options.layout.corner_threshold_deg, m.sub_name(p));
   PatchOptions po;
