@@ -21,6 +21,8 @@ struct MeshArgs {
   double depth = 0.0;  ///< constant water depth (positive down) for solver files, when depth_given
   bool depth_given = false;
   std::string bathymetry, bathymetry_positive = "up";  ///< raster of elevations (up) or depths (down)
+  std::string size_raster;        ///< --size-field: a raster of sizes (graded runs)
+  double per_wavelength = 0.0;    ///< --per-wavelength N: quads per M2 tidal wavelength, with --bathymetry
   std::string msh_version = "2.2", msh_features = "nodes";
   std::size_t pieces = 0;  ///< --pieces: .vtu pieces of a .pvtu output (0 = one per million quads)
   InputOptions input_options;

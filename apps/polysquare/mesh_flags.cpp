@@ -65,6 +65,12 @@ void size_flags(CLI::App& t, MeshArgs& m) {
   t.add_option("--across", m.options.size.field.across,
                "graded mesh: at least N quads across every passage between two shores (h <= width / N; 0 = off)")
       ->capture_default_str();
+  t.add_option("--size-field", m.size_raster,
+               "graded mesh: a raster of sizes (any GDAL raster, in its own CRS): h <= its value (bilinear)");
+  t.add_option("--per-wavelength", m.per_wavelength,
+               "graded mesh, with --bathymetry: at least N quads per M2 tidal wavelength, 44712 s * sqrt(9.81 m/s2 * "
+               "depth) (0 = off)")
+      ->capture_default_str();
   t.add_option("--max-quads", m.options.size.max_quads, "refuse sizes that need more quads than this")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();  // "-5" would otherwise wrap around to 2^64 - 5

@@ -2,6 +2,7 @@
 // measures the mesh, writes every output at once, then says what was left out, patched or refused.
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <filesystem>
 #include <iostream>
 #include <map>
@@ -95,6 +96,15 @@ void check_mesh_args(const MeshArgs& args) {
   if (args.depth_given && !args.bathymetry.empty()) throw InputError("--depth and --bathymetry exclude each other");
   if (!args.bathymetry.empty() && !fs::is_regular_file(args.bathymetry))
     throw InputError(args.bathymetry + ": the bathymetry raster does not exist");
+  if ((!args.size_raster.empty() || args.per_wavelength != 0.0) && !args.options.size.graded())
+    throw InputError("--size-field and --per-wavelength grade the mesh: give --size-min and --size-max too");
+  if (!args.size_raster.empty() && !fs::is_regular_file(args.size_raster))
+    throw InputError(args.size_raster + ": the --size-field raster does not exist");
+  if (!(std::isfinite(args.per_wavelength) && args.per_wavelength >= 0))
+    throw InputError("--per-wavelength must be a finite number of quads >= 0 (0 = off), got " +
+                     short_number(args.per_wavelength));
+  if (args.per_wavelength > 0 && args.bathymetry.empty())
+    throw InputError("--per-wavelength needs the depths: give --bathymetry RASTER");
 }
 
 // A .pvtu meshed by several processes: each writes its own pieces (write_pvtu's piece_rank), and all commit
@@ -149,6 +159,31 @@ Region read_noted_input(const MeshArgs& args, ProgressReporter& progress, InputN
   summarise(notes.snaps, "", "snapped points");
   if (notes.reprojected) info << "input in " << notes.input_crs << ", meshed in " << region.crs << " (--size in metres)\n";
   return region;
+}
+
+// The sampled terms of a graded run's field, for points of a frame whose origin is `origin` in the input's
+// coordinates (crs): --size-field's sizes, and --per-wavelength's N quads per M2 wavelength where the water is
+// deeper than zero (44,712 s is the M2 period; lambda = T sqrt(g depth), OceanMesh2D's `wl` term).
+std::vector<SizeTerm> raster_terms(const MeshArgs& args, const std::string& crs, Vec2 origin) {
+  std::vector<SizeTerm> terms;
+  auto in_input = [origin](std::vector<Vec2> p) {
+    for (Vec2& q : p) q = q + origin;
+    return p;
+  };
+  if (!args.size_raster.empty())
+    terms.push_back({"--size-field " + args.size_raster, [=, &args](const std::vector<Vec2>& p) {
+                       return sample_bathymetry(args.size_raster, in_input(p), crs, {true});  // values as they are
+                     }});
+  if (args.per_wavelength > 0)
+    terms.push_back({"--per-wavelength with " + args.bathymetry, [=, &args](const std::vector<Vec2>& p) {
+                       std::vector<double> h = sample_bathymetry(args.bathymetry, in_input(p), crs,
+                                                                 {args.bathymetry_positive == "down"});
+                       for (double& d : h)
+                         d = d > 0.0 ? 44712.0 * std::sqrt(9.81 * d) / args.per_wavelength
+                                     : std::numeric_limits<double>::infinity();
+                       return h;
+                     }});
+  return terms;
 }
 
 // A graded run's estimate, from its field on the input curves (mesh_region builds it again on the simplified
@@ -499,8 +534,10 @@ int run_mesh(const MeshArgs& args) {
   const Region region = read_noted_input(args, progress, notes, info);
   MeshOptions options = resolve_sizes(args.options);  // graded: size.h is the least size
   check_mesh_size(region, options);
+  options.size.field.terms = raster_terms(args, region.crs, {0.0, 0.0});
   say_size_estimate(info, region, options);
   const LocalFrame frame = local_frame(region);
+  options.size.field.terms = raster_terms(args, region.crs, frame.origin);
   set_derived_options(options, args, limit.callback());
   MeshResult result = mesh_in_frame(frame, options);
   const PieceSplit split = piece_split(args, result.mesh);

@@ -275,6 +275,36 @@ std::size_t limit_gradient(std::vector<double>& h, int nx, int ny, double cell, 
   return lowered;
 }
 
+namespace {
+
+// The sampled terms at the cell centres inside the domain: each lowers h there; a value that is not a positive
+// number (NaN, zero, negative) is refused naming the term and the place.
+void apply_sampled_terms(const Grid& g, const std::vector<std::uint8_t>& inside, const std::vector<SizeTerm>& terms,
+                         std::vector<double>& h) {
+  if (terms.empty()) return;
+  std::vector<std::size_t> cells;
+  std::vector<Vec2> points;
+  for (std::size_t c = 0; c < g.size(); ++c)
+    if (inside[c]) cells.push_back(c), points.push_back(g.centre(c));
+  for (const SizeTerm& term : terms) {
+    const std::vector<double> v = term.at(points);
+    if (v.size() != points.size()) throw InputError(term.name + ": gave " + std::to_string(v.size()) + " sizes for " +
+                                                    std::to_string(points.size()) + " points");
+    for (std::size_t k = 0; k < v.size(); ++k) {
+      if (!(v[k] > 0.0)) {
+        std::ostringstream os;
+        os.precision(12);
+        os << term.name << ": the size " << v[k] << " at (" << points[k].x << ", " << points[k].y
+           << ") is not a positive number";
+        throw InputError(os.str());
+      }
+      h[cells[k]] = std::min(h[cells[k]], v[k]);
+    }
+  }
+}
+
+}  // namespace
+
 SizeFieldResult make_size_field(const Region& region, const SizeFieldOptions& o) {
   check_size_field_options(o);
   const Grid g = make_grid(region, o);
@@ -304,6 +334,7 @@ SizeFieldResult make_size_field(const Region& region, const SizeFieldOptions& o)
     out.stats.medial_cells = passages.medial_cells;
     out.stats.narrowest_passage = passages.narrowest;
   }
+  apply_sampled_terms(g, out.inside, o.terms, h);
   for (double& v : h) v = std::clamp(v, o.size_min, o.size_max);
   out.stats.limited_cells = limit_gradient(h, g.nx, g.ny, g.cell, o.grade);
   out.stats.cells = g.size();

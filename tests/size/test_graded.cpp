@@ -10,6 +10,8 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <nlohmann/json.hpp>
+
 #include "polysquare/core/error.h"
 #include "polysquare/input/read_region.h"
 #include "polysquare/pipeline/invariants.h"
@@ -139,4 +141,72 @@ TEST(Graded, BadFieldOptionsAreRefusedByName) {
     EXPECT_NE(r.err.find(named), std::string::npos) << flags << ": " << r.err;
     EXPECT_FALSE(fs::exists(out)) << flags;
   }
+}
+
+namespace {
+
+// An ESRI ASCII grid (GDAL's AAIGrid) of `value` over [x0, x0 + n cell] x [y0, y0 + m cell], and a rectangle
+// domain inside it as GeoJSON: the inputs of the raster terms.
+fs::path constant_grid(const std::string& name, double value, double x0, double y0, int n, int m, double cell) {
+  const fs::path p = fs::temp_directory_path() / (name + "_" + std::to_string(::getpid()) + ".asc");
+  std::ofstream out(p);
+  out << "ncols " << n << "\nnrows " << m << "\nxllcorner " << x0 << "\nyllcorner " << y0 << "\ncellsize " << cell
+      << "\nNODATA_value -9999\n";
+  for (int j = 0; j < m; ++j) {
+    for (int i = 0; i < n; ++i) out << value << (i + 1 < n ? " " : "\n");
+  }
+  return p;
+}
+
+fs::path rectangle_geojson(const std::string& name, double x0, double y0, double w, double h) {
+  const fs::path p = fs::temp_directory_path() / (name + "_" + std::to_string(::getpid()) + ".geojson");
+  std::ofstream out(p);
+  out.precision(12);
+  out << R"({"type": "FeatureCollection", "features": [{"type": "Feature", "properties": {"role": "domain"}, )"
+      << R"("geometry": {"type": "Polygon", "coordinates": [[)" << "[" << x0 << ", " << y0 << "], [" << x0 + w << ", "
+      << y0 << "], [" << x0 + w << ", " << y0 + h << "], [" << x0 << ", " << y0 + h << "], [" << x0 << ", " << y0
+      << "]]]}}]}\n";
+  return p;
+}
+
+double field_max_of_run(const std::string& args, int& code) {
+  const fs::path report = fs::temp_directory_path() / ("polysquare_graded_r_" + std::to_string(::getpid()) + ".json");
+  const fs::path mesh = fs::temp_directory_path() / ("polysquare_graded_m_" + std::to_string(::getpid()) + ".msh");
+  code = run("mesh " + args + " -o " + mesh.string() + " --report " + report.string()).code;
+  std::ifstream in(report);
+  const nlohmann::json r = code == 0 ? nlohmann::json::parse(in) : nlohmann::json();
+  fs::remove(report), fs::remove(mesh);
+  return code == 0 ? r["size_field"]["max"].get<double>() : 0.0;
+}
+
+}  // namespace
+
+// --size-field: the field never exceeds the raster's sizes; --per-wavelength: N quads per M2 wavelength over
+// a constant depth of 4 m (lambda = 44,712 s * sqrt(9.81 * 4) = 280,085 m); bad raster values are refused.
+TEST(Graded, RasterAndWavelengthTermsBoundTheField) {
+  const fs::path domain = rectangle_geojson("graded_rect", 1000.0, 2000.0, 2000.0, 1000.0);
+  const fs::path sizes = constant_grid("graded_sizes", 40.0, 900.0, 1900.0, 44, 24, 50.0);
+  const fs::path depth = constant_grid("graded_depth", 4.0, 900.0, 1900.0, 44, 24, 50.0);
+  const fs::path bad = constant_grid("graded_bad", -3.0, 900.0, 1900.0, 44, 24, 50.0);
+  int code = 0;
+  const std::string graded = domain.string() + " --size-min 10 --size-max 200 --grade 0.15";
+  const double plain = field_max_of_run(graded, code);
+  ASSERT_EQ(code, 0);
+  EXPECT_GT(plain, 60.0);  // the distance term alone grows past 60 m inside the rectangle
+  EXPECT_NEAR(field_max_of_run(graded + " --size-field " + sizes.string(), code), 40.0, 1e-6);
+  EXPECT_EQ(code, 0);
+  const double lambda = 44712.0 * std::sqrt(9.81 * 4.0);
+  EXPECT_NEAR(field_max_of_run(graded + " --bathymetry " + depth.string() + " --bathymetry-positive down "
+                               "--per-wavelength " + std::to_string(lambda / 30.0), code), 30.0, 1e-3);
+  EXPECT_EQ(code, 0);
+  const fs::path out = fs::temp_directory_path() / ("polysquare_graded_bad_" + std::to_string(::getpid()) + ".msh");
+  const CliRun r = run("mesh " + graded + " --size-field " + bad.string() + " -o " + out.string());
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("--size-field"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("not a positive number"), std::string::npos) << r.err;
+  const CliRun w = run("mesh " + graded + " --per-wavelength 10 -o " + out.string());
+  EXPECT_EQ(w.code, 2);
+  EXPECT_NE(w.err.find("--bathymetry"), std::string::npos) << w.err;
+  EXPECT_FALSE(fs::exists(out));
+  for (const fs::path& p : {domain, sizes, depth, bad}) fs::remove(p);
 }

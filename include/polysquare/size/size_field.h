@@ -3,12 +3,21 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
+#include <string>
 #include <vector>
 
 #include "polysquare/core/geometry.h"
 #include "polysquare/core/region.h"
 
 namespace polysquare {
+
+/// A size term sampled at points (the CLI's rasters: --size-field, --per-wavelength): h <= the value at each
+/// point, in region units; +inf leaves a point unbounded.
+struct SizeTerm {
+  std::string name;  ///< for messages: the flag and its file
+  std::function<std::vector<double>(const std::vector<Vec2>&)> at;  ///< sizes at the points, in their order
+};
 
 /// What the size at a point is made of. Each term bounds h from above; the field is the least of the terms given,
 /// clipped to [size_min, size_max], then limited in gradient so that |h(x) - h(y)| <= grade |x - y|.
@@ -25,6 +34,7 @@ struct SizeFieldOptions {
   double medial_angle_deg = 120.0;  ///< a point is on a passage's mid-line when the directions to its nearest shore
                                     ///< points on either side open by more than this; smaller openings are
                                     ///< corners of one shore, not passages (they would ask for h -> 0 at corners)
+  std::vector<SizeTerm> terms;  ///< more terms, sampled at the grid's cell centres inside the domain
   double cell = 0.0;            ///< grid spacing in region units; 0 = size_min / 2, coarsened to max_cells
   std::size_t max_cells = 4'000'000;  ///< the grid's cell budget (memory: about 40 bytes a cell while building)
 };
