@@ -176,6 +176,7 @@ void output_flags(CLI::App& t, MeshArgs& m) {
   t.add_option("--report", m.report, "write a JSON report (options, timings, counts, quality)");
   t.add_option("--picture", m.picture,
            "write a picture of the mesh coloured by scaled Jacobian: .png, or .svg for small meshes");
+  t.add_option("--size-picture", m.size_picture, "graded mesh: a PNG of the size field (log colour scale)");
   t.add_option("--partition-picture", m.partition_picture,
            "write an SVG of the background triangulation coloured by subregion, separators and features");
 }

@@ -13,6 +13,7 @@
 #include "polysquare/core/error.h"
 #include "polysquare/io/atomic_file.h"
 #include "polysquare/io/bathymetry.h"
+#include "polysquare/io/render_size_field.h"
 #include "polysquare/io/mesh_io.h"
 #include "polysquare/io/render.h"
 #include "polysquare/io/solver_files.h"
@@ -70,6 +71,10 @@ void check_outputs(const MeshArgs& args) {
     outputs.push_back({args.picture, "--picture"});
   }
   optional(args.partition_picture, "--partition-picture", ".svg");
+  optional(args.size_picture, "--size-picture", ".png");
+  if (!args.size_picture.empty() && !args.options.size.graded())
+    throw InputError("--size-picture draws a graded run's size field: give --size-min and --size-max");
+  if (!args.size_raster.empty()) inputs.push_back({args.size_raster, "--size-field raster"});
   for (const auto& f : args.input_options.feature_files) inputs.push_back({f, "--features file"});
   if (!args.bathymetry.empty()) inputs.push_back({args.bathymetry, "--bathymetry raster"});
   check_distinct_files(outputs, inputs);
@@ -188,8 +193,8 @@ std::vector<SizeTerm> raster_terms(const MeshArgs& args, const std::string& crs,
 
 // A graded run's estimate, from its field on the input curves (mesh_region builds it again on the simplified
 // ones): refused past --max-quads before any meshing.
-void say_field_estimate(std::ostream& info, const Region& region, const MeshOptions& options) {
-  const SizeFieldResult made = make_size_field(region, options.size.field);
+void say_field_estimate(std::ostream& info, const Region& region, const MeshOptions& options,
+                        const SizeFieldResult& made) {
   check_field_estimate(made.stats.estimated_quads, options, region.source.empty() ? "region" : region.source);
   const double area = domain_area(region), h = options.size.field.size_min;
   info << "size field " << short_number(made.stats.min) << " .. " << short_number(made.stats.max) << ", grade "
@@ -200,8 +205,9 @@ void say_field_estimate(std::ostream& info, const Region& region, const MeshOpti
 }
 
 // The figure to choose --size from, before minutes of meshing: quads of size h cover about area / h^2.
-void say_size_estimate(std::ostream& info, const Region& region, const MeshOptions& options) {
-  if (options.size.graded()) return say_field_estimate(info, region, options);
+void say_size_estimate(std::ostream& info, const Region& region, const MeshOptions& options,
+                       const std::optional<SizeFieldResult>& field) {
+  if (field) return say_field_estimate(info, region, options, *field);
   const double size = options.size.h;
   const Box2 box = region.bounding_box();
   const double area = domain_area(region);
@@ -535,7 +541,11 @@ int run_mesh(const MeshArgs& args) {
   MeshOptions options = resolve_sizes(args.options);  // graded: size.h is the least size
   check_mesh_size(region, options);
   options.size.field.terms = raster_terms(args, region.crs, {0.0, 0.0});
-  say_size_estimate(info, region, options);
+  // A graded run's field on the input curves: its estimate now, its picture with the outputs (mesh_region builds
+  // it again on the simplified curves, in its frame).
+  const std::optional<SizeFieldResult> field =
+      options.size.graded() ? std::optional(make_size_field(region, options.size.field)) : std::nullopt;
+  say_size_estimate(info, region, options, field);
   const LocalFrame frame = local_frame(region);
   options.size.field.terms = raster_terms(args, region.crs, frame.origin);
   set_derived_options(options, args, limit.callback());
@@ -556,6 +566,7 @@ int run_mesh(const MeshArgs& args) {
   move_back(result.mesh, frame, options.size.h);
   write_outputs(args, result, region, write_options(args, result.mesh, notes.input_crs, std::move(groups), split),
                 agreement);
+  if (field && !args.size_picture.empty()) render_size_field(args.size_picture, field->field, field->inside, region);
   progress.finish("write");
 
   if (lower_extension(args.output) == ".nc" && measures.fv.orthogonality_above > 0)

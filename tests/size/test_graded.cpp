@@ -210,3 +210,25 @@ TEST(Graded, RasterAndWavelengthTermsBoundTheField) {
   EXPECT_FALSE(fs::exists(out));
   for (const fs::path& p : {domain, sizes, depth, bad}) fs::remove(p);
 }
+
+// --size-picture: a PNG of the field of a graded run, refused (exit 2, no file) without grading.
+TEST(Graded, SizePictureDrawsTheField) {
+  const std::string in = std::string(POLYSQUARE_DATA_DIR) + "/cases/estuary.geojson";
+  const fs::path dir = fs::temp_directory_path() / ("polysquare_graded_pic_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const CliRun r = run("mesh " + in + " --size-min 100 --size-max 800 -o " + (dir / "m.msh").string() +
+                       " --size-picture " + (dir / "field.png").string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  std::ifstream png(dir / "field.png", std::ios::binary);
+  std::string head(8, '\0');
+  png.read(head.data(), 8);
+  EXPECT_EQ(head, std::string("\x89PNG\r\n\x1a\n", 8));
+  EXPECT_GT(fs::file_size(dir / "field.png"), 10000u);
+  const CliRun u = run("mesh " + in + " --size 200 -o " + (dir / "u.msh").string() + " --size-picture " +
+                       (dir / "u.png").string());
+  EXPECT_EQ(u.code, 2);
+  EXPECT_NE(u.err.find("--size-picture"), std::string::npos) << u.err;
+  EXPECT_FALSE(fs::exists(dir / "u.png"));
+  EXPECT_FALSE(fs::exists(dir / "u.msh"));
+  fs::remove_all(dir);
+}
