@@ -42,7 +42,12 @@ void TimeLimit::watch() {
   using Clock = std::chrono::steady_clock;
   std::unique_lock<std::mutex> lock(mutex_);
   const auto start = Clock::now();
-  auto after = [&](double s) { return start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s)); };
+  // A limit beyond about a century is no limit: in the clock's nanoseconds 1e10 s would overflow to the past and
+  // stop the run at once.
+  auto after = [&](double s) {
+    return s > 3e9 ? Clock::time_point::max()
+                   : start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
+  };
   const auto deadline = seconds_ > 0 ? after(seconds_) : Clock::time_point::max();
   const auto read_deadline = read_seconds_ > 0 ? after(read_seconds_) : Clock::time_point::max();  // reading starts now
   bool read_timeout = false;
