@@ -35,9 +35,7 @@ SizeConformity size_conformity(const QuadMesh& mesh, const SizeField& field) {
   std::vector<double> jumps;
   for (std::size_t q = 0; q < n; ++q)
     for (int e = 0; e < 4; ++e) {
-      const auto u = static_cast<std::uint32_t>(mesh.quads[q][e]), v = static_cast<std::uint32_t>(mesh.quads[q][(e + 1) % 4]);
-      const std::uint64_t key = static_cast<std::uint64_t>(std::min(u, v)) << 32 | std::max(u, v);
-      auto [it, inserted] = first.try_emplace(key, q);
+      auto [it, inserted] = first.try_emplace(edge_key(mesh.quads[q][e], mesh.quads[q][(e + 1) % 4]), q);
       if (inserted) continue;
       const double s = size[it->second], t = size[q];
       jumps.push_back(std::max(s, t) / std::max(std::min(s, t), 1e-300));
