@@ -23,6 +23,7 @@ struct MeshArgs {
   std::string bathymetry, bathymetry_positive = "up";  ///< raster of elevations (up) or depths (down)
   std::string size_raster;        ///< --size-field: a raster of sizes (graded runs)
   std::string size_picture;       ///< --size-picture: a PNG of the size field (graded runs)
+  std::string picture_color = "sj";  ///< --picture-color: what colours --picture's quads (size: graded runs)
   double per_wavelength = 0.0;    ///< --per-wavelength N: quads per M2 tidal wavelength, with --bathymetry
   std::string msh_version = "2.2", msh_features = "nodes";
   std::size_t pieces = 0;  ///< --pieces: .vtu pieces of a .pvtu output (0 = one per million quads)

@@ -174,8 +174,14 @@ void output_flags(CLI::App& t, MeshArgs& m) {
       ->check(CLI::IsMember({"nodes", "lines", "none"}))
       ->capture_default_str();
   t.add_option("--report", m.report, "write a JSON report (options, timings, counts, quality)");
-  t.add_option("--picture", m.picture,
-           "write a picture of the mesh coloured by scaled Jacobian: .png, or .svg for small meshes");
+  CLI::Option* picture = t.add_option("--picture", m.picture,
+           "write a picture of the mesh coloured by --picture-color: .png, or .svg for small meshes");
+  t.add_option("--picture-color", m.picture_color,
+               "what colours --picture's quads: sj (scaled Jacobian), skew, part (subregion), singularities (plain, "
+               "valence marks only) or size (graded mesh: sqrt(area) / h of the size field, log scale 0.5-2)")
+      ->check(CLI::IsMember({"sj", "skew", "part", "singularities", "size"}))
+      ->needs(picture)
+      ->capture_default_str();
   t.add_option("--size-picture", m.size_picture, "graded mesh: a PNG of the size field (log colour scale)");
   t.add_option("--partition-picture", m.partition_picture,
            "write an SVG of the background triangulation coloured by subregion, separators and features");

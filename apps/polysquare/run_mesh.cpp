@@ -33,9 +33,13 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// --picture: PNG, or SVG when the mesh is small enough for one (else a PNG beside it, with a warning).
-void write_picture(const fs::path& picture, const QuadMesh& mesh, const Region& region) {
+// --picture: PNG, or SVG when the mesh is small enough for one (else a PNG beside it, with a warning); coloured
+// by --picture-color, `field` the graded run's size field (nullptr for a uniform run).
+void write_picture(const MeshArgs& args, const QuadMesh& mesh, const Region& region, const SizeField* field) {
+  const fs::path picture = args.picture;
   RenderOptions ro;
+  ro.color = parse_render_color(args.picture_color);
+  ro.size_field = field;
   fs::path to = picture;
   if (lower_extension(picture) == ".svg" && mesh.quads.size() > ro.svg_max_quads) {
     to.replace_extension(".png");
@@ -74,6 +78,9 @@ void check_outputs(const MeshArgs& args) {
   optional(args.size_picture, "--size-picture", ".png");
   if (!args.size_picture.empty() && !args.options.size.graded())
     throw InputError("--size-picture draws a graded run's size field: give --size-min and --size-max");
+  if (args.picture_color == "size" && !args.options.size.graded())
+    throw InputError("--picture-color size colours the quads by a graded run's size field: give --size-min and "
+                     "--size-max");
   if (!args.size_raster.empty()) inputs.push_back({args.size_raster, "--size-field raster"});
   for (const auto& f : args.input_options.feature_files) inputs.push_back({f, "--features file"});
   if (!args.bathymetry.empty()) inputs.push_back({args.bathymetry, "--bathymetry raster"});
@@ -395,14 +402,15 @@ MeshWriteOptions write_options(const MeshArgs& args, const QuadMesh& mesh, const
 }
 
 // Outputs are written only after the whole mesh passed its checks, and committed together: each goes to a
-// synced temporary, and all are renamed onto their targets only when every one was written.
-void write_outputs(const MeshArgs& args, const MeshResult& result, const Region& region, const MeshWriteOptions& write,
-                   PieceAgreement& agreement) {
+// synced temporary, and all are renamed onto their targets only when every one was written. `field`: a graded
+// run's size field, in the input's coordinates (nullptr for a uniform run).
+void write_outputs(const MeshArgs& args, const MeshResult& result, const Region& region, const SizeField* field,
+                   const MeshWriteOptions& write, PieceAgreement& agreement) {
   OutputBatch batch;
   write_mesh(args.output, result.mesh, write);
   if (!args.report.empty())
     write_file_atomically(args.report, [&](std::ostream& os) { os << report_text(result.report); }, false);
-  if (!args.picture.empty()) write_picture(args.picture, result.mesh, region);
+  if (!args.picture.empty()) write_picture(args, result.mesh, region, field);
   if (!args.partition_picture.empty()) {
     PartitionResult partition;
     partition.triangle_part = result.background_part;
@@ -564,8 +572,8 @@ int run_mesh(const MeshArgs& args) {
   limit.stop();  // the outputs are committed whole or not at all, never cut off between two renames
   progress.start("write");
   move_back(result.mesh, frame, options.size.h);
-  write_outputs(args, result, region, write_options(args, result.mesh, notes.input_crs, std::move(groups), split),
-                agreement);
+  write_outputs(args, result, region, field ? &field->field : nullptr,
+                write_options(args, result.mesh, notes.input_crs, std::move(groups), split), agreement);
   if (field && !args.size_picture.empty()) render_size_field(args.size_picture, field->field, field->inside, region);
   progress.finish("write");
 

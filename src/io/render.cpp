@@ -20,6 +20,7 @@
 #include "polysquare/io/atomic_file.h"
 #include "polysquare/io/mesh_io.h"
 #include "polysquare/quality/quality.h"
+#include "polysquare/size/size_conformity.h"
 
 namespace polysquare {
 
@@ -33,13 +34,10 @@ constexpr std::array<Rgb, 12> kPalette{{{0.12, 0.47, 0.71}, {1.00, 0.50, 0.05}, 
                                         {0.89, 0.47, 0.76}, {0.50, 0.50, 0.50}, {0.74, 0.74, 0.13},
                                         {0.09, 0.75, 0.81}, {0.68, 0.78, 0.91}, {1.00, 0.73, 0.47}}};
 
-// Goodness t in [0, 1] (0 = worst): dark red, red, yellow, light green, green.
-Rgb ramp(double t) {
-  static constexpr std::array<std::pair<double, Rgb>, 5> stops{{{0.0, {0.50, 0.00, 0.05}},
-                                                                {0.3, {0.89, 0.20, 0.11}},
-                                                                {0.6, {0.99, 0.80, 0.25}},
-                                                                {0.8, {0.60, 0.80, 0.35}},
-                                                                {1.0, {0.10, 0.55, 0.25}}}};
+using ColourStops = std::array<std::pair<double, Rgb>, 5>;
+
+// The colour at t in [0, 1] between `stops` (increasing t, the first at 0, the last at 1), linearly.
+Rgb interpolate(const ColourStops& stops, double t) {
   t = std::clamp(std::isfinite(t) ? t : 0.0, 0.0, 1.0);
   for (std::size_t i = 1; i < stops.size(); ++i) {
     if (t <= stops[i].first) {
@@ -50,6 +48,50 @@ Rgb ramp(double t) {
     }
   }
   return stops.back().second;
+}
+
+// Goodness t in [0, 1] (0 = worst): dark red, red, yellow, light green, green.
+Rgb ramp(double t) {
+  static constexpr ColourStops stops{{{0.0, {0.50, 0.00, 0.05}},
+                                      {0.3, {0.89, 0.20, 0.11}},
+                                      {0.6, {0.99, 0.80, 0.25}},
+                                      {0.8, {0.60, 0.80, 0.35}},
+                                      {1.0, {0.10, 0.55, 0.25}}}};
+  return interpolate(stops, t);
+}
+
+// Too small (t = 0) blue, on target (0.5) pale green, not white (the background), too large (1) red: a
+// diverging scale, so that both ways off the size read as strong colours.
+Rgb diverging_ramp(double t) {
+  static constexpr ColourStops stops{{{0.0, {0.10, 0.25, 0.65}},
+                                      {0.25, {0.45, 0.68, 0.92}},
+                                      {0.5, {0.80, 0.92, 0.72}},
+                                      {0.75, {0.97, 0.60, 0.33}},
+                                      {1.0, {0.72, 0.06, 0.10}}}};
+  return interpolate(stops, t);
+}
+
+// Where a measure value lies on the colour bar, 0 (bottom) to 1 (top): sj and skew as they are, a size ratio on
+// a log scale from 0.5 to 2, clamped (twice too small and twice too large equally strong colours).
+double bar_position(RenderColor color, double value) {
+  if (color != RenderColor::size_ratio) return value;
+  return std::clamp(0.5 + 0.5 * std::log2(value), 0.0, 1.0);  // log2(0) = -inf: the bottom
+}
+
+// The measure value at a position on the colour bar (bar_position's inverse), for its scale's labels.
+double bar_value(RenderColor color, double position) {
+  return color == RenderColor::size_ratio ? std::exp2(2.0 * position - 1.0) : position;
+}
+
+// The colour at a position on the colour bar.
+Rgb bar_color(RenderColor color, double position) {
+  if (color == RenderColor::size_ratio) return diverging_ramp(position);
+  return color == RenderColor::skew ? ramp(1.0 - position) : ramp(position);
+}
+
+const char* measure_name(RenderColor color) {
+  if (color == RenderColor::size_ratio) return "size / h (log scale)";
+  return color == RenderColor::sj ? "scaled Jacobian" : "skew";
 }
 
 cairo_status_t append_to_string(void* closure, const unsigned char* data, unsigned int length) {
@@ -95,7 +137,7 @@ std::array<double, 3> valence_color(int valence, bool boundary) {
 }
 
 std::array<double, 3> measure_color(RenderColor color, double value) {
-  return color == RenderColor::skew ? ramp(1.0 - value) : ramp(value);
+  return bar_color(color, bar_position(color, value));
 }
 
 RenderColor parse_render_color(std::string_view text) {
@@ -103,7 +145,9 @@ RenderColor parse_render_color(std::string_view text) {
   if (text == "skew") return RenderColor::skew;
   if (text == "part") return RenderColor::part;
   if (text == "singularities") return RenderColor::singularities;
-  throw InputError("--color must be sj, skew, part or singularities, got '" + std::string(text) + "'");
+  if (text == "size") return RenderColor::size_ratio;
+  throw InputError("the picture's colour must be sj, skew, part, singularities or size, got '" + std::string(text) +
+                   "'");
 }
 
 Box2 parse_window(std::string_view text) {
@@ -137,6 +181,8 @@ bool check_picture_request(const std::filesystem::path& path, const QuadMesh& me
   if (mesh.quads.empty()) throw InputError(path.string() + ": the mesh has no quads to draw");
   if (options.width_px < 300 || options.width_px > 16000)
     throw InputError("picture width must be between 300 and 16000 pixels, got " + std::to_string(options.width_px));
+  if (options.color == RenderColor::size_ratio && (!options.size_field || options.size_field->empty()))
+    throw InputError(path.string() + ": colouring by size ratio needs a graded run's size field");
   return svg;
 }
 
@@ -209,7 +255,21 @@ void measure_range(RenderStats& st, const std::vector<std::size_t>& visible, con
   if (visible.empty()) st.value_min = st.value_max = 0.0;
 }
 
-bool colored_by_measure(RenderColor color) { return color == RenderColor::sj || color == RenderColor::skew; }
+bool colored_by_measure(RenderColor color) {
+  return color == RenderColor::sj || color == RenderColor::skew || color == RenderColor::size_ratio;
+}
+
+// Each quad's measure: its shape (sj, skew; also for the colourings by subregion and valence, which need none), or
+// its size against the field.
+std::vector<double> quad_values(const QuadMesh& mesh, const RenderOptions& options) {
+  if (options.color == RenderColor::size_ratio) {
+    std::vector<double> ratio(mesh.quads.size());
+    for (std::size_t q = 0; q < ratio.size(); ++q) ratio[q] = quad_size_ratio(mesh, q, *options.size_field);
+    return ratio;
+  }
+  QuadMetrics metrics = quad_metrics(mesh);
+  return options.color == RenderColor::skew ? std::move(metrics.skew) : std::move(metrics.sj);
+}
 
 // Drawing on the plot: plane (x, y) at RenderStats' pixel position.
 struct Canvas {
@@ -239,7 +299,7 @@ struct Canvas {
   }
 };
 
-// Quads, one path per colour (256 levels of the measure, or the subregion colour): a million quads fill fast,
+// Quads, one path per colour (256 levels of the colour bar, or the subregion colour): a million quads fill fast,
 // and the SVG holds a few paths instead of one element per quad.
 void fill_quads(const Canvas& c, const std::vector<std::size_t>& visible, const std::vector<double>& values,
                 RenderColor color) {
@@ -247,7 +307,7 @@ void fill_quads(const Canvas& c, const std::vector<std::size_t>& visible, const 
   for (std::size_t i : visible) {
     int key = 0;
     if (colored_by_measure(color))
-      key = static_cast<int>(std::lround(std::clamp(values[i], 0.0, 1.0) * 255.0));
+      key = static_cast<int>(std::lround(std::clamp(bar_position(color, values[i]), 0.0, 1.0) * 255.0));
     else if (color == RenderColor::part)
       key = c.mesh.quad_part.size() == c.mesh.quads.size() ? static_cast<int>((c.mesh.quad_part[i] % 12 + 12) % 12) : 0;
     buckets[key].push_back(i);
@@ -257,7 +317,7 @@ void fill_quads(const Canvas& c, const std::vector<std::size_t>& visible, const 
   for (const auto& [key, quads] : buckets) {
     for (std::size_t i : quads) c.quad_path(i);
     if (colored_by_measure(color))
-      set(c.cr, measure_color(color, key / 255.0));
+      set(c.cr, bar_color(color, key / 255.0));
     else if (color == RenderColor::part)
       set(c.cr, kPalette[static_cast<std::size_t>(key)]);
     else
@@ -369,16 +429,15 @@ std::map<int, std::size_t> mark_singular_nodes(const Canvas& c, RenderStats& st,
 // The colour bar of the measure at (lx, ly) with its scale and the range drawn (into st's bar); returns the y
 // below it.
 double draw_colour_bar(cairo_t* cr, RenderStats& st, RenderColor color, double lx, double ly) {
-  text(cr, lx, ly, color == RenderColor::sj ? "scaled Jacobian" : "skew");
+  text_within(cr, lx, ly, measure_name(color), st.width_px - kPad);
   const double top = ly + 10, height = 200, bar_w = 20;
   st.bar_x0 = lx;
   st.bar_y0 = top;
   st.bar_w = bar_w;
   st.bar_h = height;
   constexpr int slices = 100;
-  for (int s = 0; s < slices; ++s) {  // value 0 at the bottom, 1 at the top
-    const double v = (s + 0.5) / slices;
-    set(cr, measure_color(color, v));
+  for (int s = 0; s < slices; ++s) {  // position 0 at the bottom, 1 at the top
+    set(cr, bar_color(color, (s + 0.5) / slices));
     cairo_rectangle(cr, lx, top + height * (1.0 - (s + 1.0) / slices), bar_w, height / slices + 0.5);
     cairo_fill(cr);
   }
@@ -391,11 +450,11 @@ double draw_colour_bar(cairo_t* cr, RenderStats& st, RenderColor color, double l
     cairo_move_to(cr, lx + bar_w, y);
     cairo_line_to(cr, lx + bar_w + 5, y);
     cairo_stroke(cr);
-    text(cr, lx + bar_w + 8, y + 4, fixed(t / 4.0, 2));
+    text(cr, lx + bar_w + 8, y + 4, fixed(bar_value(color, t / 4.0), 2));
   }
   // The range drawn: a bracket beside the bar from the smallest to the largest value.
-  const double ymin = top + height * (1.0 - std::clamp(st.value_min, 0.0, 1.0));
-  const double ymax = top + height * (1.0 - std::clamp(st.value_max, 0.0, 1.0));
+  const double ymin = top + height * (1.0 - std::clamp(bar_position(color, st.value_min), 0.0, 1.0));
+  const double ymax = top + height * (1.0 - std::clamp(bar_position(color, st.value_max), 0.0, 1.0));
   cairo_move_to(cr, lx - 3, ymin);
   cairo_line_to(cr, lx - 7, ymin);
   cairo_line_to(cr, lx - 7, ymax);
@@ -432,7 +491,7 @@ void draw_valence_legend(cairo_t* cr, const RenderStats& st, const std::map<int,
   if (!st.edges_drawn) text(cr, lx, ly, "(quad edges hidden)");
 }
 
-// The colour bar with its scale (sj, skew) or the subregion count, then the valence legend.
+// The colour bar with its scale (sj, skew, size ratio) or the subregion count, then the valence legend.
 void draw_legend_column(const Canvas& c, RenderStats& st, RenderColor color, const std::vector<std::size_t>& visible,
                         const std::map<int, std::size_t>& marked_by_extra) {
   cairo_t* cr = c.cr;
@@ -485,8 +544,7 @@ RenderStats render_mesh(const std::filesystem::path& path, const QuadMesh& mesh,
                      std::to_string(options.svg_max_quads) + "); write a .png, or narrow the window");
   const double median_px = median_edge_px(mesh, visible, st.scale);
   st.edges_drawn = median_px >= options.min_edge_px;
-  const QuadMetrics metrics = quad_metrics(mesh);
-  const std::vector<double>& values = options.color == RenderColor::skew ? metrics.skew : metrics.sj;
+  const std::vector<double> values = quad_values(mesh, options);
   measure_range(st, visible, values);
 
   std::string bytes;

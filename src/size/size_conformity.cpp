@@ -17,6 +17,18 @@ double quantile(std::vector<double>& v, double q) {
 
 }  // namespace
 
+double quad_size(const QuadMesh& mesh, std::size_t q) {
+  const auto& k = mesh.quads[q];
+  const Vec2 a = mesh.nodes[k[0]], b = mesh.nodes[k[1]], c = mesh.nodes[k[2]], d = mesh.nodes[k[3]];
+  return std::sqrt(std::max(0.5 * (orient2(a, b, c) + orient2(a, c, d)), 0.0));
+}
+
+double quad_size_ratio(const QuadMesh& mesh, std::size_t q, const SizeField& field) {
+  const auto& k = mesh.quads[q];
+  const Vec2 centroid = 0.25 * (mesh.nodes[k[0]] + mesh.nodes[k[1]] + mesh.nodes[k[2]] + mesh.nodes[k[3]]);
+  return quad_size(mesh, q) / field.at(centroid);
+}
+
 SizeConformity size_conformity(const QuadMesh& mesh, const SizeField& field) {
   SizeConformity out;
   const std::size_t n = mesh.quads.size();
@@ -24,11 +36,8 @@ SizeConformity size_conformity(const QuadMesh& mesh, const SizeField& field) {
   if (n == 0 || field.empty()) return out;
   std::vector<double> size(n), ratio(n);
   for (std::size_t q = 0; q < n; ++q) {
-    const auto& k = mesh.quads[q];
-    const Vec2 a = mesh.nodes[k[0]], b = mesh.nodes[k[1]], c = mesh.nodes[k[2]], d = mesh.nodes[k[3]];
-    const double area = 0.5 * (orient2(a, b, c) + orient2(a, c, d));
-    size[q] = std::sqrt(std::max(area, 0.0));
-    ratio[q] = size[q] / field.at(0.25 * (a + b + c + d));
+    size[q] = quad_size(mesh, q);
+    ratio[q] = quad_size_ratio(mesh, q, field);
   }
   // Each edge's first quad, then the ratio when the second one comes.
   std::unordered_map<std::uint64_t, std::size_t> first;

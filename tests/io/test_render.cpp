@@ -1,9 +1,11 @@
 // Pictures (render_mesh): colours where the quads are, the colour bar's scale, boundary edges, valence marks,
-// the window, the level of detail, SVG only for small meshes, and the CLI's render command.
+// the window, the level of detail, SVG only for small meshes, colours by size against a graded run's field, and
+// the CLI's render command and mesh --picture.
 #include <gtest/gtest.h>
 
 #include <cairo/cairo.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
@@ -13,8 +15,12 @@
 #include <unistd.h>
 
 #include "polysquare/core/error.h"
+#include "polysquare/input/read_region.h"
 #include "polysquare/io/render.h"
+#include "polysquare/pipeline/mesh_region.h"
 #include "polysquare/quality/quality.h"
+#include "polysquare/size/size_conformity.h"
+#include "polysquare/size/size_field.h"
 
 namespace fs = std::filesystem;
 using namespace polysquare;
@@ -78,6 +84,19 @@ QuadMesh grid(int n) {
       const int v = j * (n + 1) + i;
       m.quads.push_back({v, v + 1, v + n + 2, v + n + 1});
     }
+  return m;
+}
+
+// Squares of side 1, 2, 4 and 8 in a row, apart: against a field of h = 2 everywhere, size ratios 0.5, 1, 2, 4.
+QuadMesh squares_of_sides_1_2_4_8() {
+  QuadMesh m;
+  double x = 0.0;
+  for (double side : {1.0, 2.0, 4.0, 8.0}) {
+    const auto base = static_cast<std::int32_t>(m.nodes.size());
+    m.nodes.insert(m.nodes.end(), {{x, 0}, {x + side, 0}, {x + side, side}, {x, side}});
+    m.quads.push_back({base, base + 1, base + 2, base + 3});
+    x += side + 0.5;
+  }
   return m;
 }
 
@@ -272,4 +291,135 @@ TEST_F(Render, CliRenderAndMeshPicture) {
   EXPECT_EQ(run("render " + msh + " -o " + (dir_ / "x.png").string() + " --window 1,2,3"), 2);
   EXPECT_EQ(run("render " + msh + " -o " + (dir_ / "x.gif").string()), 2);
   EXPECT_FALSE(fs::exists(dir_ / "x.png"));
+}
+
+TEST_F(Render, SizeRatioColoursQuadsOnADivergingLogScale) {
+  const QuadMesh mesh = squares_of_sides_1_2_4_8();
+  const SizeField field({0, 0}, 10.0, 2, 2, {2.0, 2.0, 2.0, 2.0});
+  const std::array<double, 4> ratio{0.5, 1.0, 2.0, 4.0};
+  for (std::size_t q = 0; q < 4; ++q) ASSERT_NEAR(quad_size_ratio(mesh, q, field), ratio[q], 1e-12);
+  RenderOptions ro;
+  ro.width_px = 800;
+  ro.color = RenderColor::size_ratio;
+  ro.size_field = &field;
+  const RenderStats st = render_mesh(dir_ / "r.png", mesh, nullptr, ro);
+  const Png png(dir_ / "r.png");
+  ASSERT_TRUE(png.ok());
+  EXPECT_EQ(png.width(), 800);
+  EXPECT_EQ(png.height(), st.height_px);
+  EXPECT_DOUBLE_EQ(st.value_min, 0.5);
+  EXPECT_DOUBLE_EQ(st.value_max, 4.0);
+  std::array<std::array<int, 3>, 4> centre;
+  for (std::size_t q = 0; q < 4; ++q) {
+    const double side = mesh.nodes[static_cast<std::size_t>(mesh.quads[q][1])].x -
+                        mesh.nodes[static_cast<std::size_t>(mesh.quads[q][0])].x;
+    const auto [x, y] = to_px(st, mesh.nodes[static_cast<std::size_t>(mesh.quads[q][0])] + Vec2{side / 2, side / 2});
+    centre[q] = png.pixel(x, y);
+    expect_color(centre[q], measure_color(RenderColor::size_ratio, ratio[q]), 4, "ratio " + std::to_string(ratio[q]));
+  }
+  // Twice too small blue, on target pale green (not the white background), twice too large red, and four times
+  // as red as twice: the scale ends at 2.
+  EXPECT_GT(centre[0][2], centre[0][0] + 80);
+  EXPECT_GT(centre[1][1], centre[1][0]);
+  EXPECT_GT(centre[1][1], centre[1][2]);
+  EXPECT_LT(centre[1][0], 235);
+  EXPECT_GT(centre[2][0], centre[2][2] + 80);
+  EXPECT_EQ(centre[3], centre[2]);
+  // The colour bar: ratio 1 at its middle, 2^-0.8 near its bottom, 2^0.8 near its top.
+  ASSERT_GT(st.bar_h, 0.0);
+  const double bx = st.bar_x0 + st.bar_w / 2;
+  expect_color(png.pixel(bx, st.bar_y0 + 0.5 * st.bar_h), measure_color(RenderColor::size_ratio, 1.0), 8, "bar 1");
+  expect_color(png.pixel(bx, st.bar_y0 + 0.9 * st.bar_h), measure_color(RenderColor::size_ratio, std::exp2(-0.8)), 8,
+               "bar 0.57");
+  expect_color(png.pixel(bx, st.bar_y0 + 0.1 * st.bar_h), measure_color(RenderColor::size_ratio, std::exp2(0.8)), 8,
+               "bar 1.74");
+  EXPECT_EQ(parse_render_color("size"), RenderColor::size_ratio);
+  // Without a field there is nothing to measure the size against: refused, nothing written.
+  ro.size_field = nullptr;
+  EXPECT_THROW(render_mesh(dir_ / "none.png", mesh, nullptr, ro), InputError);
+  const SizeField empty;
+  ro.size_field = &empty;
+  EXPECT_THROW(render_mesh(dir_ / "none.png", mesh, nullptr, ro), InputError);
+  EXPECT_FALSE(fs::exists(dir_ / "none.png"));
+}
+
+// A graded mesh of a small case (the dam channel, 2-10 m) coloured by its field: each quad's pixel has the colour
+// of its own size ratio, the same figure the report's size conformity summarises.
+TEST_F(Render, GradedMeshColouredBySizeRatio) {
+  const Region region = read_region(std::string(POLYSQUARE_DATA_DIR) + "/cases/dam_channel.geojson");
+  MeshOptions options;
+  options.size.field.size_min = 2.0;
+  options.size.field.size_max = 10.0;
+  const MeshResult r = mesh_region(region, options);
+  const SizeField field = make_size_field(region, options.size.field).field;
+  RenderOptions ro;
+  ro.width_px = 1000;
+  ro.color = RenderColor::size_ratio;
+  ro.size_field = &field;
+  const RenderStats st = render_mesh(dir_ / "g.png", r.mesh, nullptr, ro);
+  const Png png(dir_ / "g.png");
+  ASSERT_TRUE(png.ok());
+  EXPECT_EQ(png.width(), 1000);
+  EXPECT_EQ(png.height(), st.height_px);
+  EXPECT_EQ(st.quads_drawn, r.mesh.quads.size());
+  // The quads with the least and the largest ratio among those big enough on the picture that their centre is
+  // clear of edges and valence marks.
+  const QuadMetrics metrics = quad_metrics(r.mesh);
+  std::vector<std::size_t> big;
+  for (std::size_t q = 0; q < r.mesh.quads.size(); ++q)
+    if (quad_size(r.mesh, q) * st.scale > 40.0 && metrics.sj[q] > 0.8) big.push_back(q);
+  ASSERT_GE(big.size(), 10u);
+  const auto by_ratio = [&](std::size_t a, std::size_t b) {
+    return quad_size_ratio(r.mesh, a, field) < quad_size_ratio(r.mesh, b, field);
+  };
+  const std::size_t lo = *std::min_element(big.begin(), big.end(), by_ratio);
+  const std::size_t hi = *std::max_element(big.begin(), big.end(), by_ratio);
+  // Far enough apart on the scale that the two colours tell them apart (a picture coloured by anything else fails).
+  const auto lo_colour = measure_color(RenderColor::size_ratio, quad_size_ratio(r.mesh, lo, field));
+  const auto hi_colour = measure_color(RenderColor::size_ratio, quad_size_ratio(r.mesh, hi, field));
+  ASSERT_GT(std::abs(lo_colour[0] - hi_colour[0]) + std::abs(lo_colour[2] - hi_colour[2]), 0.1);
+  for (std::size_t q : {lo, hi, big[big.size() / 2]}) {
+    Vec2 c{0, 0};
+    for (std::int32_t v : r.mesh.quads[q]) c = c + 0.25 * r.mesh.nodes[static_cast<std::size_t>(v)];
+    const auto [x, y] = to_px(st, c);
+    expect_color(png.pixel(x, y), measure_color(RenderColor::size_ratio, quad_size_ratio(r.mesh, q, field)), 4,
+                 "quad " + std::to_string(q));
+  }
+}
+
+// --picture-color size: a graded run's picture by size ratio; a uniform run has no field to colour by: exit 2
+// naming the flag, before meshing, nothing written.
+TEST_F(Render, CliPictureColorSizeNeedsAGradedRun) {
+  auto run = [&](const std::string& args) {
+    const std::string cmd = std::string(POLYSQUARE_CLI) + " " + args + " > /dev/null 2> " + (dir_ / "err").string();
+    return WEXITSTATUS(std::system(cmd.c_str()));
+  };
+  auto err = [&] {
+    std::ifstream in(dir_ / "err");
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  };
+  const std::string in = std::string(POLYSQUARE_DATA_DIR) + "/cases/dam_channel.geojson";
+  ASSERT_EQ(run("mesh " + in + " --size-min 2 --size-max 10 -o " + (dir_ / "g.msh").string() + " --picture " +
+                (dir_ / "g.png").string() + " --picture-color size"),
+            0)
+      << err();
+  const Png g(dir_ / "g.png");
+  ASSERT_TRUE(g.ok());
+  EXPECT_EQ(g.width(), 1600);
+  EXPECT_EQ(run("mesh " + in + " --size 4 -o " + (dir_ / "u.msh").string() + " --picture " + (dir_ / "u.png").string() +
+                " --picture-color size"),
+            2);
+  // One line, the error: refused before reading and meshing, which would say more first.
+  const std::string e = err();
+  EXPECT_EQ(e.rfind("error: ", 0), 0u) << e;
+  EXPECT_NE(e.find("--picture-color"), std::string::npos) << e;
+  EXPECT_EQ(std::count(e.begin(), e.end(), '\n'), 1) << e;
+  EXPECT_FALSE(fs::exists(dir_ / "u.png"));
+  EXPECT_FALSE(fs::exists(dir_ / "u.msh"));
+  // Without --picture there is nothing to colour; a colour not in the list is refused by name.
+  EXPECT_EQ(run("mesh " + in + " --size 4 -o " + (dir_ / "u.msh").string() + " --picture-color sj"), 2);
+  EXPECT_EQ(run("mesh " + in + " --size 4 -o " + (dir_ / "u.msh").string() + " --picture " +
+                (dir_ / "u.png").string() + " --picture-color bogus"),
+            2);
+  EXPECT_FALSE(fs::exists(dir_ / "u.msh"));
 }

@@ -16,6 +16,13 @@ struct SizeConformity {
   std::size_t quads = 0;
 };
 
+/// sqrt(area) of quad `q` of `mesh` (0 for a quad of negative area), region units.
+double quad_size(const QuadMesh& mesh, std::size_t q);
+
+/// quad_size over the field at the quad's centroid (the mean of its four nodes): 1 where quad `q` has the size
+/// `field` asks for, 2 where it is twice as large.
+double quad_size_ratio(const QuadMesh& mesh, std::size_t q, const SizeField& field);
+
 /// The conformity of `mesh` (quads only) to `field`.
 SizeConformity size_conformity(const QuadMesh& mesh, const SizeField& field);
 
