@@ -1,2 +1,3 @@
 list(APPEND TEST_SOURCES size/test_size_field.cpp)
 list(APPEND TEST_SOURCES size/test_graded.cpp)
+list(APPEND TEST_SOURCES size/test_size_attribute.cpp)

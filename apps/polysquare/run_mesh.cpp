@@ -209,12 +209,16 @@ void say_field_estimate(std::ostream& info, const Region& region, const MeshOpti
        << static_cast<long long>(std::llround(made.stats.estimated_quads))
        << " quads (integral of 1 / h^2; uniform at --size-min: " << static_cast<long long>(std::llround(area / (h * h)))
        << ")\n";
+  for (const std::string& w : made.warnings) std::cerr << "warning: " << w << "\n";
 }
 
 // The figure to choose --size from, before minutes of meshing: quads of size h cover about area / h^2.
 void say_size_estimate(std::ostream& info, const Region& region, const MeshOptions& options,
                        const std::optional<SizeFieldResult>& field) {
   if (field) return say_field_estimate(info, region, options, *field);
+  if (has_size_attributes(region))
+    std::cerr << "warning: the input's size attributes are followed by graded runs only: give --size-min and "
+                 "--size-max (instead of --size) to follow them\n";
   const double size = options.size.h;
   const Box2 box = region.bounding_box();
   const double area = domain_area(region);

@@ -43,8 +43,9 @@ std::size_t make_parts_valid(Region& region, std::vector<std::string>* repairs) 
   for (int part = 0; part < region.num_parts; ++part) {
     int source = -1;
     std::string name;
+    double size = 0.0;
     for (const Ring& r : region.rings)
-      if (r.part == part) source = r.source_feature, name = r.name;
+      if (r.part == part) source = r.source_feature, name = r.name, size = r.size;
     const auto poly = to_ogr(region, part);
     if (poly->IsValid()) {
       for (const Ring& r : region.rings)
@@ -63,7 +64,7 @@ std::size_t make_parts_valid(Region& region, std::vector<std::string>* repairs) 
       if (p->get_Area() <= 0.0) return;
       const std::size_t first = rings.size();
       add_polygon(*p, parts++, source, rings);
-      for (std::size_t k = first; k < rings.size(); ++k) rings[k].name = name;
+      for (std::size_t k = first; k < rings.size(); ++k) rings[k].name = name, rings[k].size = size;
       ++made;
     };
     if (fixed && wkbFlatten(fixed->getGeometryType()) == wkbPolygon) take(fixed.get());

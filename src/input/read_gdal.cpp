@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <memory>
 #include <mutex>
 #include <sstream>
@@ -80,12 +81,29 @@ struct Reader {
   int source = -1;
   const OGRCoordinateTransformation* transform = nullptr;
   std::string name, kind;  // the feature's `name` and `kind` attributes (empty when absent)
+  double size = 0.0;       // its `size` attribute (0 when absent)
+  const char* size_unused_on = nullptr;  // what took no size: "points", "boundary segments"
   // ESRI Shapefile stores outer rings clockwise and holes counter-clockwise: a writer turns rings of the other
   // orientation (GeoJSON's) around, keeping the first point. Such rings are turned back keeping it too, so the
   // ring has its original order and start, and the mesh is the one of the file it was converted from.
   bool clockwise_outer_rings = false;
 
   [[noreturn]] void fail(const std::string& what) const { throw InputError(where + ": " + what); }
+
+  // The `size` attribute: a quad size in region units, 0 when absent or null. A text field, or a size that is not
+  // a positive finite number, is refused: a size taken wrongly would grade the whole mesh without a word.
+  void read_size(OGRFeature& feature, int field) {
+    if (field < 0 || !feature.IsFieldSetAndNotNull(field)) return;
+    const std::string of = name.empty() ? std::string() : " of '" + name + "'";
+    const OGRFieldType type = feature.GetFieldDefnRef(field)->GetType();
+    if (type != OFTReal && type != OFTInteger && type != OFTInteger64)
+      fail("size \"" + std::string(feature.GetFieldAsString(field)).substr(0, 80) + "\"" + of +
+           " is not a number (the size field holds " + OGRFieldDefn::GetFieldTypeName(type) + "; give it a numeric type)");
+    size = feature.GetFieldAsDouble(field);
+    if (!(std::isfinite(size) && size > 0.0))
+      fail("size " + std::string(feature.GetFieldAsString(field)) + of +
+           " is not a positive number (the quad size, in the region's units)");
+  }
 
   std::vector<Vec2> points(const OGRSimpleCurve& curve) const {
     std::vector<Vec2> out(static_cast<std::size_t>(curve.getNumPoints()));
@@ -132,6 +150,7 @@ struct Reader {
     }
     switch (wkbFlatten(g.getGeometryType())) {
       case wkbLineString: {
+        size_unused_on = "boundary segments";
         BoundarySegment b;
         b.name = name;
         b.kind = kind;
@@ -164,12 +183,12 @@ struct Reader {
           const int part = region.num_parts++;
           for (int k = 0; k <= poly.getNumInteriorRings(); ++k) {
             const OGRLinearRing* r = k == 0 ? poly.getExteriorRing() : poly.getInteriorRing(k - 1);
-            region.rings.push_back({ring(*r, k), part, k > 0, source, name});
+            region.rings.push_back({ring(*r, k), part, k > 0, source, name, size});
           }
         } else {  // a polygon feature is a closed curve along each of its rings, as for GeoJSON
           for (int k = 0; k <= poly.getNumInteriorRings(); ++k)
             region.features.push_back({ring(k == 0 ? *poly.getExteriorRing() : *poly.getInteriorRing(k - 1), k), true,
-                                       source, name, kind});
+                                       source, name, kind, size});
         }
         return;
       }
@@ -177,12 +196,13 @@ struct Reader {
       case wkbLinearRing:
         if (domain) fail("a domain must be a polygon, got a line string (give it the role \"feature\")");
         if (wkbFlatten(g.getGeometryType()) == wkbLinearRing)
-          region.features.push_back({ring(*g.toLinearRing(), 0), true, source, name, kind});
+          region.features.push_back({ring(*g.toLinearRing(), 0), true, source, name, kind, size});
         else
-          region.features.push_back({points(*g.toLineString()), false, source, name, kind});
+          region.features.push_back({points(*g.toLineString()), false, source, name, kind, size});
         return;
       case wkbPoint: {
         if (domain) fail("a domain must be a polygon, got a point");
+        size_unused_on = "points";
         std::vector<double> x{g.toPoint()->getX()}, y{g.toPoint()->getY()};
         to_region_crs(x, y);
         region.feature_points.push_back({x[0], y[0]});
@@ -273,6 +293,7 @@ void read_gdal(const std::filesystem::path& path, LayerRole default_role, const 
     const int role_field = layer->GetLayerDefn()->GetFieldIndex("role");
     const int name_field = layer->GetLayerDefn()->GetFieldIndex("name");
     const int kind_field = layer->GetLayerDefn()->GetFieldIndex("kind");
+    const int size_field = layer->GetLayerDefn()->GetFieldIndex("size");
     CPLErrorReset();
     layer->ResetReading();
     for (auto& feature : *layer) {
@@ -283,32 +304,26 @@ void read_gdal(const std::filesystem::path& path, LayerRole default_role, const 
       feature_names.push_back(reader.where);
       if (name_field >= 0 && feature->IsFieldSetAndNotNull(name_field)) reader.name = feature->GetFieldAsString(name_field);
       if (kind_field >= 0 && feature->IsFieldSetAndNotNull(kind_field)) reader.kind = feature->GetFieldAsString(kind_field);
+      reader.read_size(*feature, size_field);
       const OGRGeometry* g = feature->GetGeometryRef();
       if (!g) reader.fail("the feature has no geometry");
-      bool is_domain = false;
-      if (mode == Mode::boundary) {
-        reader.add_boundary(*g);
-        continue;
+      std::string role = mode == Mode::boundary ? "boundary"
+                         : mode == Mode::domain ? "domain"
+                         : mode == Mode::feature ? "feature"
+                                                 : "";
+      if (mode == Mode::by_attribute && role_field >= 0 && feature->IsFieldSetAndNotNull(role_field))
+        role = feature->GetFieldAsString(role_field);
+      if (role.empty()) {
+        const OGRwkbGeometryType t = wkbFlatten(g->getGeometryType());
+        const bool polygon = t == wkbPolygon || t == wkbMultiPolygon || t == wkbCurvePolygon || t == wkbMultiSurface;
+        role = default_role == LayerRole::by_geometry && polygon ? "domain" : "feature";
       }
-      if (mode == Mode::domain || mode == Mode::feature) {
-        is_domain = mode == Mode::domain;
-      } else {
-        std::string role;
-        if (role_field >= 0 && feature->IsFieldSetAndNotNull(role_field)) role = feature->GetFieldAsString(role_field);
-        if (role.empty()) {
-          const OGRwkbGeometryType t = wkbFlatten(g->getGeometryType());
-          is_domain = default_role == LayerRole::by_geometry &&
-                      (t == wkbPolygon || t == wkbMultiPolygon || t == wkbCurvePolygon || t == wkbMultiSurface);
-        } else if (role == "domain" || role == "feature") {
-          is_domain = role == "domain";
-        } else if (role == "boundary") {
-          reader.add_boundary(*g);
-          continue;
-        } else {
-          reader.fail("unknown role \"" + role + "\" (expected \"domain\", \"feature\" or \"boundary\")");
-        }
-      }
-      reader.add(*g, is_domain);
+      if (role == "boundary") reader.add_boundary(*g);
+      else if (role == "domain" || role == "feature") reader.add(*g, role == "domain");
+      else reader.fail("unknown role \"" + role + "\" (expected \"domain\", \"feature\" or \"boundary\")");
+      if (reader.size > 0.0 && reader.size_unused_on)
+        notes.warnings.push_back(reader.where + ": its size is not used (sizes hold inside domain polygons and along "
+                                 "feature lines and polygons, not on " + std::string(reader.size_unused_on) + ")");
     }
     // Some drivers (GeoPackage) only run the filter while reading and then stop early without a feature.
     if (CPLGetLastErrorType() == CE_Failure)

@@ -316,11 +316,22 @@ void keep_stretches_in_domain(const Region& region, const FeatureCurve& c, const
     if (piece.snap_front) piece.points.front() = onto_ring(region, ring_inserts, piece.points.front());
     if (piece.snap_back) piece.points.back() = onto_ring(region, ring_inserts, piece.points.back());
     if (piece.points.size() == 2 && piece.points[0] == piece.points[1]) continue;
-    out.push_back({std::move(piece.points), stretches.closed_kept, c.source_feature, c.name, c.kind});
+    out.push_back({std::move(piece.points), stretches.closed_kept, c.source_feature, c.name, c.kind, c.size});
     kept = true;
   }
   if (!kept && !on_boundary)  // a curve lying along the boundary is already in the mesh
     throw InputError(name + " lies outside the domain, at " + point_text(lerp(c.points[0], c.points[1], 0.5)));
+}
+
+// The insides of closed curves with a size, which their pieces no longer enclose once cut (each kept once, so
+// splitting twice adds nothing).
+void keep_size_areas(Region& region) {
+  for (const FeatureCurve& c : region.features) {
+    if (!c.closed || c.size <= 0.0) continue;
+    const bool known = std::any_of(region.size_areas.begin(), region.size_areas.end(),
+                                   [&](const Ring& r) { return r.points == c.points && r.size == c.size; });
+    if (!known) region.size_areas.push_back({c.points, -1, false, c.source_feature, c.name, c.size});
+  }
 }
 
 }  // namespace
@@ -328,6 +339,7 @@ void keep_stretches_in_domain(const Region& region, const FeatureCurve& c, const
 FeatureSplitStats split_features(Region& region, const FeatureSplitOptions& options) {
   FeatureSplitStats stats;
   if (region.features.empty()) return stats;
+  keep_size_areas(region);
   const double tol = options.snap_relative * region.bounding_box().diagonal();
 
   Inserts inserts = crossing_points(collect_pieces(region), tol, stats);

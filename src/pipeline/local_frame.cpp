@@ -17,8 +17,9 @@ Vec2 local_origin(const Region& region) {
 }
 
 void translate(Region& region, Vec2 offset) {
-  for (Ring& r : region.rings)
-    for (Vec2& p : r.points) p = {p.x + offset.x, p.y + offset.y};
+  for (std::vector<Ring>* rings : {&region.rings, &region.size_areas})
+    for (Ring& r : *rings)
+      for (Vec2& p : r.points) p = {p.x + offset.x, p.y + offset.y};
   for (FeatureCurve& c : region.features)
     for (Vec2& p : c.points) p = {p.x + offset.x, p.y + offset.y};
   for (Vec2& p : region.feature_points) p = {p.x + offset.x, p.y + offset.y};

@@ -4,7 +4,9 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <map>
 #include <queue>
+#include <set>
 #include <sstream>
 #include <string>
 
@@ -143,6 +145,16 @@ void propagate(const Grid& g, std::vector<double>& best, std::vector<std::int32_
   }
 }
 
+// Calls visit(cell) for each cell that the segment passes through (sampled at half-cell steps).
+template <class Visit>
+void cells_along(const Grid& g, const Segment& seg, Visit visit) {
+  const int steps = 1 + static_cast<int>(std::ceil(2.0 * distance(seg.a, seg.b) / g.cell));
+  for (int k = 0; k <= steps; ++k) {
+    const Vec2 p = lerp(seg.a, seg.b, static_cast<double>(k) / steps);
+    visit(static_cast<std::size_t>(g.row(p.y)) * g.nx + g.column(p.x));
+  }
+}
+
 struct Distances {
   std::vector<double> distance;      ///< per cell, to the nearest segment
   std::vector<std::int32_t> nearest;  ///< per cell, that segment (-1 when there is none)
@@ -153,16 +165,11 @@ struct Distances {
 Distances distance_to_segments(const Grid& g, const std::vector<Segment>& segments) {
   Distances d{std::vector<double>(g.size(), std::numeric_limits<double>::infinity()),
               std::vector<std::int32_t>(g.size(), -1)};
-  for (std::size_t s = 0; s < segments.size(); ++s) {
-    const Segment& seg = segments[s];
-    const int steps = 1 + static_cast<int>(std::ceil(2.0 * distance(seg.a, seg.b) / g.cell));
-    for (int k = 0; k <= steps; ++k) {
-      const Vec2 p = lerp(seg.a, seg.b, static_cast<double>(k) / steps);
-      const std::size_t c = static_cast<std::size_t>(g.row(p.y)) * g.nx + g.column(p.x);
-      const double dist = distance(g.centre(c), nearest_on_segment(g.centre(c), seg));
+  for (std::size_t s = 0; s < segments.size(); ++s)
+    cells_along(g, segments[s], [&](std::size_t c) {
+      const double dist = distance(g.centre(c), nearest_on_segment(g.centre(c), segments[s]));
       if (dist < d.distance[c]) d.distance[c] = dist, d.nearest[c] = static_cast<std::int32_t>(s);
-    }
-  }
+    });
   propagate(g, d.distance, d.nearest, nullptr, [&](std::size_t c, std::int32_t s) {
     const Vec2 p = g.centre(c);
     return distance(p, nearest_on_segment(p, segments[static_cast<std::size_t>(s)]));
@@ -170,20 +177,29 @@ Distances distance_to_segments(const Grid& g, const std::vector<Segment>& segmen
   return d;
 }
 
+void add_segments(const std::vector<Vec2>& points, bool closed, std::vector<Segment>& out) {
+  const std::size_t n = points.size();
+  for (std::size_t k = 0; k + 1 < n; ++k) out.push_back({points[k], points[k + 1]});
+  if (closed && n > 2) out.push_back({points[n - 1], points[0]});
+}
+
 std::vector<Segment> ring_segments(const Region& region) {
   std::vector<Segment> out;
-  for (const Ring& r : region.rings)
-    for (std::size_t k = 0; k < r.points.size(); ++k) out.push_back({r.points[k], r.points[(k + 1) % r.points.size()]});
+  for (const Ring& r : region.rings) add_segments(r.points, true, out);
   return out;
 }
 
-std::vector<Segment> feature_segments(const Region& region) {
+// The distance term's curves: the rings of parts and the feature curves that have no size attribute (a size
+// takes HMIN's place along its own curves). `rings_only`: they are exactly the rings.
+std::vector<Segment> hmin_segments(const Region& region, bool& rings_only) {
   std::vector<Segment> out;
-  for (const FeatureCurve& f : region.features) {
-    const std::size_t n = f.points.size();
-    for (std::size_t k = 0; k + 1 < n; ++k) out.push_back({f.points[k], f.points[k + 1]});
-    if (f.closed && n > 2) out.push_back({f.points[n - 1], f.points[0]});
+  rings_only = true;
+  for (const Ring& r : region.rings) {
+    if (r.size > 0.0) rings_only = false;
+    else add_segments(r.points, true, out);
   }
+  for (const FeatureCurve& f : region.features)
+    if (f.size <= 0.0) add_segments(f.points, f.closed, out), rings_only = false;
   return out;
 }
 
@@ -303,7 +319,55 @@ void apply_sampled_terms(const Grid& g, const std::vector<std::uint8_t>& inside,
   }
 }
 
+// The inputs' size attributes: h <= s inside a domain part or a closed feature curve of size s, and at the cells
+// along a curve of size s. The gradient limit, run after them, grades the latter away as s + grade * (distance to
+// the curve), as the distance term grades HMIN away.
+void apply_size_attributes(const Grid& g, const Region& region, std::vector<double>& h) {
+  auto bound_inside = [&](const std::vector<const Ring*>& rings, double size) {
+    const std::vector<std::uint8_t> inside = inside_cells(g, rings);
+    for (std::size_t c = 0; c < g.size(); ++c)
+      if (inside[c]) h[c] = std::min(h[c], size);
+  };
+  std::map<double, std::vector<const Ring*>> parts_by_size;  // parts do not overlap: one even-odd pass per size
+  for (const Ring& r : region.rings)
+    if (r.size > 0.0) parts_by_size[r.size].push_back(&r);
+  for (const auto& [size, rings] : parts_by_size) bound_inside(rings, size);
+  for (const Ring& area : region.size_areas) bound_inside({&area}, area.size);
+  for (const FeatureCurve& f : region.features) {
+    if (f.size <= 0.0) continue;
+    std::vector<Segment> segments;
+    add_segments(f.points, f.closed, segments);
+    for (const Segment& seg : segments) cells_along(g, seg, [&](std::size_t c) { h[c] = std::min(h[c], f.size); });
+  }
+}
+
+// One sentence per input feature whose size attribute lies outside [size_min, size_max], which the clip changes.
+std::vector<std::string> clipped_size_warnings(const Region& region, const SizeFieldOptions& o) {
+  std::vector<std::string> out;
+  std::set<int> said;  // a feature's rings, pieces and area carry one size: one sentence each
+  auto check = [&](double size, int source, const std::string& name) {
+    if (size <= 0.0 || (size >= o.size_min && size <= o.size_max) || !said.insert(source).second) return;
+    std::ostringstream os;
+    os.precision(6);
+    os << region.source << (region.source.empty() ? "" : ": ") << "feature " << source
+       << (name.empty() ? std::string() : " ('" + name + "')") << ": its size " << size
+       << (size < o.size_min ? " is below --size-min " : " is above --size-max ")
+       << (size < o.size_min ? o.size_min : o.size_max) << ", which the field takes instead";
+    out.push_back(os.str());
+  };
+  for (const Ring& r : region.rings) check(r.size, r.source_feature, r.name);
+  for (const FeatureCurve& f : region.features) check(f.size, f.source_feature, f.name);
+  for (const Ring& a : region.size_areas) check(a.size, a.source_feature, a.name);
+  return out;
+}
+
 }  // namespace
+
+bool has_size_attributes(const Region& region) {
+  auto sized = [](const auto& item) { return item.size > 0.0; };
+  return std::any_of(region.rings.begin(), region.rings.end(), sized) ||
+         std::any_of(region.features.begin(), region.features.end(), sized) || !region.size_areas.empty();
+}
 
 SizeFieldResult make_size_field(const Region& region, const SizeFieldOptions& o) {
   check_size_field_options(o);
@@ -314,17 +378,15 @@ SizeFieldResult make_size_field(const Region& region, const SizeFieldOptions& o)
   out.inside = inside_cells(g, rings);
   std::vector<double> h(g.size(), o.size_max);
   const std::vector<Segment> shores = ring_segments(region);
-  std::vector<Segment> curves = feature_segments(region);
-  // The distance to the rings is the passage term's, and the distance term's too when there is no feature curve:
+  bool rings_only = false;
+  const std::vector<Segment> curves = hmin_segments(region, rings_only);
+  // The distance to the rings is the passage term's, and the distance term's too when its curves are the rings:
   // each wave over the grid runs once, and only for a term that asks for it.
   Distances shore, to_curves;
-  if (o.across > 0 || (o.distance_term && curves.empty())) shore = distance_to_segments(g, shores);
-  if (o.distance_term) {
-    if (!curves.empty()) {
-      curves.insert(curves.begin(), shores.begin(), shores.end());
-      to_curves = distance_to_segments(g, curves);
-    }
-    const std::vector<double>& d = curves.empty() ? shore.distance : to_curves.distance;
+  if (o.across > 0 || (o.distance_term && rings_only)) shore = distance_to_segments(g, shores);
+  if (o.distance_term && !curves.empty()) {
+    if (!rings_only) to_curves = distance_to_segments(g, curves);
+    const std::vector<double>& d = rings_only ? shore.distance : to_curves.distance;
     for (std::size_t c = 0; c < g.size(); ++c) h[c] = std::min(h[c], o.size_min + o.grade * d[c]);
   }
   if (o.across > 0) {
@@ -335,6 +397,8 @@ SizeFieldResult make_size_field(const Region& region, const SizeFieldOptions& o)
     out.stats.narrowest_passage = passages.narrowest;
   }
   apply_sampled_terms(g, out.inside, o.terms, h);
+  apply_size_attributes(g, region, h);
+  out.warnings = clipped_size_warnings(region, o);
   for (double& v : h) v = std::clamp(v, o.size_min, o.size_max);
   out.stats.limited_cells = limit_gradient(h, g.nx, g.ny, g.cell, o.grade);
   out.stats.cells = g.size();

@@ -17,6 +17,7 @@ struct Ring {
   bool hole = false;        ///< true for an inner ring (hole) of its part
   int source_feature = -1;  ///< index of the GeoJSON feature it came from (for error messages)
   std::string name;         ///< the domain's `name` attribute (empty when none is given)
+  double size = 0.0;        ///< the polygon's `size` attribute: the quad size inside its part, region units (0 = none)
 };
 
 /// A feature curve the mesh must follow: a chain of mesh edges whose nodes lie on it.
@@ -28,6 +29,7 @@ struct FeatureCurve {
   int source_feature = -1;  ///< index of the GeoJSON feature it came from
   std::string name;         ///< the input's `name` attribute (empty: a name is generated, "feature_<c>")
   std::string kind;         ///< the input's `kind` attribute (free text; empty when none is given)
+  double size = 0.0;        ///< the input's `size` attribute: the quad size along the curve, region units (0 = none)
 };
 
 /// A named piece of a boundary ring, from a line with role "boundary" (or a --boundary file) lying on it.
@@ -50,6 +52,8 @@ struct Region {
   std::vector<FeatureCurve> features;  ///< feature curves (open or closed)
   std::vector<Vec2> feature_points;    ///< isolated points that must be mesh nodes
   std::vector<BoundarySegment> boundary_segments;  ///< named pieces of the rings (open boundaries and others)
+  std::vector<Ring> size_areas;        ///< closed feature curves with a size, as validation found them: the size
+                                       ///< holds inside them (splitting cuts the curves themselves into open pieces)
   int num_parts = 0;                   ///< number of polygon parts (disconnected pieces)
   std::string crs;                     ///< e.g. "EPSG:32616"; empty for arbitrary planar units
   std::string units;                   ///< e.g. "m"; empty when unknown

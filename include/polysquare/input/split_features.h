@@ -28,7 +28,8 @@ struct FeatureSplitStats {
 
 /// Splits every feature curve at its crossings (the crossing point is computed once and inserted into both
 /// curves, and into the ring when the other curve is a ring), drops pieces outside the domain, inside holes or
-/// along the boundary, and keeps source_feature on every piece. Pieces are judged segment by segment: a stretch
+/// along the boundary, and keeps source_feature, name, kind and size on every piece; a closed curve with a size
+/// is first added to region.size_areas, so its inside keeps the size after the cuts. Pieces are judged segment by segment: a stretch
 /// of segments whose midpoints lie within the snap distance of a ring runs along the boundary and is dropped
 /// (with a warning), and a stretch of the same curve that then leaves the boundary is kept, its end moved onto
 /// the ring (inserted there as a vertex), so a curve that starts along the boundary is not lost whole. Rings must already be valid (validate_region).

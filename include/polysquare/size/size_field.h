@@ -21,6 +21,9 @@ struct SizeTerm {
 
 /// What the size at a point is made of. Each term bounds h from above; the field is the least of the terms given,
 /// clipped to [size_min, size_max], then limited in gradient so that |h(x) - h(y)| <= grade |x - y|.
+/// The region's size attributes are terms too: h <= s inside a domain part (Ring::size) or a closed feature curve
+/// (Region::size_areas) of size s, and h <= s + grade * (distance to the curve) for a feature curve of size s
+/// (FeatureCurve::size), whose curves and rings then leave the distance term (their size takes HMIN's place).
 /// The terms follow OceanMesh2D's `edgefx` (Roberts et al., GMD 12, 2019): `dis` is the distance term, `fs` the
 /// passage-width term, `g` the gradient limit.
 struct SizeFieldOptions {
@@ -28,7 +31,8 @@ struct SizeFieldOptions {
                                 ///< term) and the least size anywhere
   double size_max = 0.0;        ///< HMAX (>= size_min): the largest size
   double grade = 0.15;          ///< G (> 0): the gradient limit, and the growth of the distance term
-  bool distance_term = true;    ///< h <= size_min + grade * (distance to the rings and the feature curves)
+  bool distance_term = true;    ///< h <= size_min + grade * (distance to the rings and the feature curves that
+                                ///< have no size attribute)
   double across = 0.0;          ///< N > 0: h <= (local passage width) / N, so that N quads cross every passage
                                 ///< between two shores (rings); 0 = off
   double medial_angle_deg = 120.0;  ///< a point is on a passage's mid-line when the directions to its nearest shore
@@ -88,11 +92,16 @@ struct SizeFieldResult {
   SizeField field;
   SizeFieldStats stats;
   std::vector<std::uint8_t> inside;  ///< per grid cell: its centre lies inside the domain
+  std::vector<std::string> warnings;  ///< one sentence per input feature whose size attribute lies outside
+                                      ///< [size_min, size_max] (the field takes the bound instead)
 };
 
 /// Refuses bad field options with an InputError that names the flag: non-finite or non-positive sizes,
 /// size_min > size_max, a grade that is not a finite positive number, a negative `across`.
 void check_size_field_options(const SizeFieldOptions& options);
+
+/// Whether any ring, feature curve or size area of the region has a size attribute (only graded runs follow them).
+bool has_size_attributes(const Region& region);
 
 /// Builds the field of `options` over `region` (validated: closed rings, holes inside their parts).
 SizeFieldResult make_size_field(const Region& region, const SizeFieldOptions& options);
