@@ -5,6 +5,9 @@
 
 #include <algorithm>
 #include <csignal>
+#include <exception>
+#include <new>
+#include <unistd.h>
 #include <iostream>
 #include <optional>
 
@@ -29,6 +32,23 @@ void on_signal(int sig) {
   remove_pending_temporaries();
   std::signal(sig, SIG_DFL);
   std::raise(sig);
+}
+
+// An exception no one catches (one thrown in a thread of a library): out of memory is said in one line and ends
+// the run in exit 3, the run's temporaries removed; anything else aborts as before.
+[[noreturn]] void on_terminate() {
+  remove_pending_temporaries();
+  if (const std::exception_ptr p = std::current_exception()) {
+    try {
+      std::rethrow_exception(p);
+    } catch (const std::bad_alloc&) {
+      static const char line[] = "error: the run ran out of memory; nothing written\n";
+      [[maybe_unused]] const ssize_t n = ::write(2, line, sizeof line - 1);
+      ::_exit(3);
+    } catch (...) {
+    }
+  }
+  std::abort();
 }
 
 struct RenderArgs {
@@ -140,6 +160,19 @@ int exit_on_error(const MpiDriver& mpi) {
   } catch (const MeshingError& e) {
     std::cerr << "error: " << e.what() << "\n";
     return 3;
+  } catch (const std::bad_alloc& e) {
+    // Out of memory: this process may have met it alone while the others wait on it, so it speaks and ends the
+    // job. What it held, outputs' temporaries included, was freed on the way here.
+    remove_pending_temporaries();
+    const bool said = dynamic_cast<const cli::OutOfMemory*>(&e) != nullptr;
+    if (mpi.rank() != 0) {
+      std::cerr.rdbuf(std::clog.rdbuf());
+      std::cerr.clear();
+    }
+    std::cerr << "error: " << (mpi.rank() != 0 ? "rank " + std::to_string(mpi.rank()) + ": " : std::string())
+              << (said ? e.what() : "the run ran out of memory; nothing written") << "\n";
+    mpi.abort(3);
+    return 3;
   } catch (const std::exception& e) {
     if (mpi.rank() != 0) {
       std::cerr.rdbuf(std::clog.rdbuf());
@@ -161,6 +194,7 @@ int main(int argc, char** argv) {
   if (mpi.rank() != 0) std::cerr.rdbuf(nullptr);  // rank 0 speaks for all: they meet the same warnings
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
+  std::set_terminate(on_terminate);
   spdlog::set_level(spdlog::level::warn);
 
   CLI::App app{"polysquare: feature-aligned semi-structured quad meshes of 2D regions"};

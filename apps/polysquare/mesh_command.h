@@ -4,6 +4,7 @@
 #include <CLI/CLI.hpp>
 
 #include <cstddef>
+#include <new>
 #include <string>
 
 #include "polysquare/driver/mpi_driver.h"
@@ -35,7 +36,17 @@ struct MeshArgs {
 /// Adds the `mesh` subcommand to `app`, its flags bound to `args`.
 CLI::App* add_mesh_command(CLI::App& app, MeshArgs& args);
 
-/// Runs `polysquare mesh`; returns the exit code (errors are thrown: InputError, MeshingError).
+/// std::bad_alloc met by a run, with what the run would have needed (the estimated quads) in what().
+class OutOfMemory : public std::bad_alloc {
+ public:
+  explicit OutOfMemory(std::string message) : message_(std::move(message)) {}
+  const char* what() const noexcept override { return message_.c_str(); }
+
+ private:
+  std::string message_;
+};
+
+/// Runs `polysquare mesh`; returns the exit code (errors are thrown: InputError, MeshingError, OutOfMemory).
 int run_mesh(const MeshArgs& args);
 
 }  // namespace polysquare::cli

@@ -14,6 +14,7 @@
 #include "polysquare/io/atomic_file.h"
 #include "polysquare/io/bathymetry.h"
 #include "polysquare/io/render_size_field.h"
+#include "polysquare/io/mesh_groups.h"
 #include "polysquare/io/mesh_io.h"
 #include "polysquare/io/render.h"
 #include "polysquare/io/solver_files.h"
@@ -49,33 +50,49 @@ void write_picture(const MeshArgs& args, const QuadMesh& mesh, const Region& reg
   render_mesh(to, mesh, &region, ro);
 }
 
-// Every output is checked before any work (format, directory, writability, distinct, not an input): a refusal
-// takes milliseconds, not a meshing run.
-void check_outputs(const MeshArgs& args) {
+// What reading the input says about the files the run writes: its CRS (a .gr3 of geographic input gets a .ll),
+// its open boundary segments (a .nc gets a .pli for each) and the quads it needs (a .pvtu's pieces).
+struct InputFacts {
+  std::string input_crs;
+  std::vector<std::string> open_segments;
+  double estimated_quads = 0.0;
+};
+
+// Every file the run may write, and every file it reads, checked before any work: format, directory, writability,
+// name lengths, and none the same file as another output or an input (weakly canonical paths, links). Companions
+// included: the PNG a too-large SVG picture becomes, a .pvtu's pieces, and, once the input is read (facts), a
+// .gr3's .ll and a .nc's .pli files. Called before reading (facts nullptr: a refusal takes milliseconds) and
+// after (facts given), both before meshing, so that nothing is refused after minutes of work or half written.
+void check_outputs(const MeshArgs& args, const InputFacts* facts) {
   check_output_path(args.output);
   std::vector<std::pair<fs::path, std::string>> outputs{{args.output, "-o"}}, inputs{{args.input, "input"}};
-  if (lower_extension(args.output) == ".gr3")
-    outputs.push_back({fs::path(args.output).replace_extension(".ll"), "the .ll companion of -o"});
-  // A .pvtu's pieces: those asked for, or the first (their number follows the mesh); the others are checked
-  // when they are written, before anything is committed.
-  if (lower_extension(args.output) == ".pvtu")
-    for (std::size_t k = 0; k < std::max<std::size_t>(args.pieces, 1); ++k) {
-      const fs::path piece = pvtu_piece_path(args.output, k);
-      check_output_file(piece, "a piece of -o", {".vtu"});
-      outputs.push_back({piece, "a piece of -o"});
-    }
-  auto optional = [&](const std::string& path, const char* what, const char* ext) {
-    if (path.empty()) return;
-    check_output_file(path, what, {ext});
+  auto add = [&](const fs::path& path, const std::string& what, std::vector<std::string> extensions) {
+    check_output_file(path, what, extensions);
     outputs.push_back({path, what});
   };
-  optional(args.report, "--report", ".json");
-  if (!args.picture.empty()) {
-    check_output_file(args.picture, "--picture", {".png", ".svg"});
-    outputs.push_back({args.picture, "--picture"});
+  if (facts)
+    for (const CompanionFile& c : companion_files(args.output, facts->input_crs, facts->open_segments))
+      add(c.path, c.what + " (" + args.output + ")", {});
+  // A .pvtu's pieces: those asked for, or as many as the estimate (or the processes) will make; any others are
+  // checked when they are written, before anything is committed.
+  if (lower_extension(args.output) == ".pvtu") {
+    double pieces = static_cast<double>(std::max<std::size_t>(args.pieces, 1));
+    if (args.pieces == 0 && facts) pieces = std::max(pieces, std::ceil(1.5 * facts->estimated_quads / 1e6));
+    if (args.pieces == 0 && args.mpi) pieces = std::max(pieces, static_cast<double>(args.mpi->processes()));
+    for (std::size_t k = 0; k < static_cast<std::size_t>(std::min(pieces, 4096.0)); ++k)
+      add(pvtu_piece_path(args.output, k), "a piece of -o", {".vtu"});
   }
-  optional(args.partition_picture, "--partition-picture", ".svg");
-  optional(args.size_picture, "--size-picture", ".png");
+  if (!args.report.empty()) add(args.report, "--report", {".json"});
+  if (!args.picture.empty()) {
+    add(args.picture, "--picture", {".png", ".svg"});
+    if (lower_extension(args.picture) == ".svg")
+      add(fs::path(args.picture).replace_extension(".png"),
+          "--picture's PNG (written instead of the SVG when the mesh has more than " +
+              std::to_string(RenderOptions().svg_max_quads) + " quads)",
+          {".png"});
+  }
+  if (!args.partition_picture.empty()) add(args.partition_picture, "--partition-picture", {".svg"});
+  if (!args.size_picture.empty()) add(args.size_picture, "--size-picture", {".png"});
   if (!args.size_picture.empty() && !args.options.size.graded())
     throw InputError("--size-picture draws a graded run's size field: give --size-min and --size-max");
   if (args.picture_color == "size" && !args.options.size.graded())
@@ -83,6 +100,7 @@ void check_outputs(const MeshArgs& args) {
                      "--size-max");
   if (!args.size_raster.empty()) inputs.push_back({args.size_raster, "--size-field raster"});
   for (const auto& f : args.input_options.feature_files) inputs.push_back({f, "--features file"});
+  for (const auto& f : args.input_options.boundary_files) inputs.push_back({f, "--boundary file"});
   if (!args.bathymetry.empty()) inputs.push_back({args.bathymetry, "--bathymetry raster"});
   check_distinct_files(outputs, inputs);
 }
@@ -99,7 +117,7 @@ void check_mesh_args(const MeshArgs& args) {
   if (!(std::isfinite(args.read_time_limit) && args.read_time_limit >= 0))
     throw InputError("--read-time-limit must be a finite number of seconds >= 0 (0 = none), got " +
                      short_number(args.read_time_limit));
-  check_outputs(args);  // before minutes of meshing
+  check_outputs(args, nullptr);  // before reading, let alone meshing
   const std::string out_ext = lower_extension(args.output);
   if (args.pieces > 0 && out_ext != ".pvtu")
     throw InputError("--pieces writes a parallel VTK file: -o must end in .pvtu, not " + args.output);
@@ -200,8 +218,8 @@ std::vector<SizeTerm> raster_terms(const MeshArgs& args, const std::string& crs,
 
 // A graded run's estimate, from its field on the input curves (mesh_region builds it again on the simplified
 // ones): refused past --max-quads before any meshing.
-void say_field_estimate(std::ostream& info, const Region& region, const MeshOptions& options,
-                        const SizeFieldResult& made) {
+double say_field_estimate(std::ostream& info, const Region& region, const MeshOptions& options,
+                          const SizeFieldResult& made) {
   check_field_estimate(made.stats.estimated_quads, options, region.source.empty() ? "region" : region.source);
   const double area = domain_area(region), h = options.size.field.size_min;
   info << "size field " << short_number(made.stats.min) << " .. " << short_number(made.stats.max) << ", grade "
@@ -210,10 +228,12 @@ void say_field_estimate(std::ostream& info, const Region& region, const MeshOpti
        << " quads (integral of 1 / h^2; uniform at --size-min: " << static_cast<long long>(std::llround(area / (h * h)))
        << ")\n";
   for (const std::string& w : made.warnings) std::cerr << "warning: " << w << "\n";
+  return made.stats.estimated_quads;
 }
 
-// The figure to choose --size from, before minutes of meshing: quads of size h cover about area / h^2.
-void say_size_estimate(std::ostream& info, const Region& region, const MeshOptions& options,
+// The figure to choose --size from, before minutes of meshing: quads of size h cover about area / h^2. Returns
+// the estimate.
+double say_size_estimate(std::ostream& info, const Region& region, const MeshOptions& options,
                        const std::optional<SizeFieldResult>& field) {
   if (field) return say_field_estimate(info, region, options, *field);
   if (has_size_attributes(region))
@@ -226,6 +246,7 @@ void say_size_estimate(std::ostream& info, const Region& region, const MeshOptio
        << ", area " << short_number(area) << ": --size " << short_number(size) << " gives about "
        << static_cast<long long>(std::llround(area / (size * size)))
        << " quads (area / size^2; half the size, four times as many)\n";
+  return area / (size * size);
 }
 
 // Far from the origin (1e8 .. 1e11 around a small domain) the region is meshed in a local frame and the mesh
@@ -408,13 +429,14 @@ MeshWriteOptions write_options(const MeshArgs& args, const QuadMesh& mesh, const
 // Outputs are written only after the whole mesh passed its checks, and committed together: each goes to a
 // synced temporary, and all are renamed onto their targets only when every one was written. `field`: a graded
 // run's size field, in the input's coordinates (nullptr for a uniform run).
-void write_outputs(const MeshArgs& args, const MeshResult& result, const Region& region, const SizeField* field,
-                   const MeshWriteOptions& write, PieceAgreement& agreement) {
+void write_outputs(const MeshArgs& args, const MeshResult& result, const Region& region,
+                   const SizeFieldResult* field, const MeshWriteOptions& write, PieceAgreement& agreement) {
   OutputBatch batch;
   write_mesh(args.output, result.mesh, write);
   if (!args.report.empty())
     write_file_atomically(args.report, [&](std::ostream& os) { os << report_text(result.report); }, false);
-  if (!args.picture.empty()) write_picture(args, result.mesh, region, field);
+  if (!args.picture.empty()) write_picture(args, result.mesh, region, field ? &field->field : nullptr);
+  if (field && !args.size_picture.empty()) render_size_field(args.size_picture, field->field, field->inside, region);
   if (!args.partition_picture.empty()) {
     PartitionResult partition;
     partition.triangle_part = result.background_part;
@@ -540,11 +562,16 @@ void print_summary(const MeshResult& result, const MeshMeasures& m, const std::s
 
 }  // namespace
 
-int run_mesh(const MeshArgs& args) {
-  check_mesh_args(args);
+namespace {
+
+// The run after its arguments were checked; `estimated_quads` is set as soon as the input is read (for the
+// out-of-memory message).
+int mesh_checked(const MeshArgs& args, double& estimated_quads) {
   // Progress on a terminal (never in a pipe or under CI), stage timings with --verbose; quiet: warnings only.
   TerminalProgress shown(args.quiet ? Verbosity::quiet : args.verbose ? Verbosity::verbose : Verbosity::normal);
-  TimeLimit limit(args.time_limit, args.read_time_limit, args.input, shown.callback());
+  // Under mpirun every process keeps the time; rank 0 alone says it was spent.
+  TimeLimit limit(args.time_limit, args.read_time_limit, args.input, shown.callback(),
+                  !args.mpi || args.mpi->rank() == 0);
   ProgressReporter progress(limit.callback());
   std::ostringstream discarded;
   std::ostream& info = args.quiet ? discarded : std::cerr;
@@ -557,7 +584,10 @@ int run_mesh(const MeshArgs& args) {
   // it again on the simplified curves, in its frame).
   const std::optional<SizeFieldResult> field =
       options.size.graded() ? std::optional(make_size_field(region, options.size.field)) : std::nullopt;
-  say_size_estimate(info, region, options, field);
+  estimated_quads = say_size_estimate(info, region, options, field);
+  // The files the input decides (a .gr3's .ll, a .nc's .pli files, a .pvtu's pieces), before meshing.
+  const InputFacts facts{notes.input_crs, open_segment_names(region), estimated_quads};
+  check_outputs(args, &facts);
   const LocalFrame frame = local_frame(region);
   options.size.field.terms = raster_terms(args, region.crs, frame.origin);
   set_derived_options(options, args, limit.callback());
@@ -576,9 +606,8 @@ int run_mesh(const MeshArgs& args) {
   limit.stop();  // the outputs are committed whole or not at all, never cut off between two renames
   progress.start("write");
   move_back(result.mesh, frame, options.size.h);
-  write_outputs(args, result, region, field ? &field->field : nullptr,
+  write_outputs(args, result, region, field ? &*field : nullptr,
                 write_options(args, result.mesh, notes.input_crs, std::move(groups), split), agreement);
-  if (field && !args.size_picture.empty()) render_size_field(args.size_picture, field->field, field->inside, region);
   progress.finish("write");
 
   if (lower_extension(args.output) == ".nc" && measures.fv.orthogonality_above > 0)
@@ -591,6 +620,24 @@ int run_mesh(const MeshArgs& args) {
   say_candidates(result.report, args.options.subregions.parts, frame, info);
   if (!args.quiet) print_summary(result, measures, args.output, group_summary);
   return 0;
+}
+
+}  // namespace
+
+int run_mesh(const MeshArgs& args) {
+  check_mesh_args(args);
+  double estimated_quads = 0.0;
+  try {
+    return mesh_checked(args, estimated_quads);
+  } catch (const std::bad_alloc&) {
+    // Everything the run held is freed by now (the outputs' temporaries too: OutputBatch); say what it needed.
+    std::string text = args.input + ": the run ran out of memory";
+    if (estimated_quads > 0)
+      text += " (about " + short_number(estimated_quads) + " quads estimated; a larger --size needs fewer, and "
+              "--max-quads refuses such runs before meshing)";
+    text += "; nothing written";
+    throw OutOfMemory(text);
+  }
 }
 
 }  // namespace polysquare::cli

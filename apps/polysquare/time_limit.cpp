@@ -12,10 +12,11 @@ namespace polysquare::cli {
 
 namespace {
 constexpr const char* kReading = "read input";
+constexpr int kSilentGrace = 5;  // seconds a silent process waits for the speaking one to end the job
 }
 
-TimeLimit::TimeLimit(double seconds, double read_seconds, std::string input, ProgressCallback next)
-    : seconds_(seconds), read_seconds_(read_seconds), input_(std::move(input)), next_(std::move(next)) {
+TimeLimit::TimeLimit(double seconds, double read_seconds, std::string input, ProgressCallback next, bool speak)
+    : seconds_(seconds), read_seconds_(read_seconds), speak_(speak), input_(std::move(input)), next_(std::move(next)) {
   if (seconds_ > 0 || read_seconds_ > 0) watcher_ = std::thread([this] { watch(); });
 }
 
@@ -62,6 +63,13 @@ void TimeLimit::watch() {
       break;
     }
     if (stop_) return;
+  }
+  // Out of time on a process that does not speak (MPI rank > 0): rank 0, whose clock runs alike, prints the one
+  // line and ends the job; this one ends itself only if that did not happen within the grace.
+  if (!speak_) {
+    if (wake_.wait_for(lock, std::chrono::seconds(kSilentGrace), [&] { return stop_; })) return;
+    remove_pending_temporaries();
+    ::_exit(3);
   }
   // Out of time: one line, the run's temporaries removed, exit 3 without unwinding the busy worker threads.
   std::string line = std::string(interactive_terminal(stderr) ? "\r\033[K" : "") + "error: " + input_ + ": ";

@@ -21,7 +21,9 @@ namespace polysquare::cli {
 /// of its own, `read_seconds` (0: none), since a reader stuck in a malformed file (a GDAL driver) has no other.
 class TimeLimit {
  public:
-  TimeLimit(double seconds, double read_seconds, std::string input, ProgressCallback next);
+  /// `speak` false: another process (MPI rank 0) prints the line; this one waits 5 s for that process
+  /// to end the job, then ends itself with exit 3 without a word.
+  TimeLimit(double seconds, double read_seconds, std::string input, ProgressCallback next, bool speak = true);
   ~TimeLimit() { stop(); }
   /// Stops watching (before the outputs are committed: a run is never cut between two renames).
   void stop();
@@ -34,6 +36,7 @@ class TimeLimit {
   void on_event(const ProgressEvent& e);
   void watch();
   double seconds_, read_seconds_;
+  bool speak_;
   std::string input_;
   ProgressCallback next_;
   std::mutex mutex_;

@@ -1,6 +1,7 @@
 #include "polysquare/io/atomic_file.h"
 
 #include <fcntl.h>
+#include <limits.h>
 #include <signal.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -197,15 +198,30 @@ void check_output_file(const fs::path& path, const std::string& what, const std:
     throw InputError(name + ": unknown " + what + " format '" + lower_extension(path) + "' (known: " + list + ")");
   }
   const fs::path dir = directory_of(path);
+  // Lengths first: a name the file system cannot hold would otherwise fail in the writer, after meshing (or read
+  // as a missing directory). Every component within NAME_MAX bytes, the whole path and its temporary's within
+  // PATH_MAX.
+  const long fs_name_max = ::pathconf(fs::is_directory(dir, ec) ? dir.c_str() : ".", _PC_NAME_MAX);
+  const std::size_t name_max = fs_name_max > 0 ? static_cast<std::size_t>(fs_name_max) : std::size_t{NAME_MAX};
+  if (file.size() > name_max)
+    throw InputError(name + ": the file name has " + std::to_string(file.size()) +
+                     " characters, more than the file system allows (" + std::to_string(name_max) + ") (" + what + ")");
+  for (const fs::path& part : path.parent_path())
+    if (part.string().size() > name_max)
+      throw InputError(name + ": a directory name in the path has " + std::to_string(part.string().size()) +
+                       " characters, more than the file system allows (" + std::to_string(name_max) + ") (" + what +
+                       ")");
+  const std::size_t longest =
+      std::max(fs::absolute(path, ec).string().size(), fs::absolute(temporary_path(path), ec).string().size());
+  if (longest >= std::size_t{PATH_MAX})
+    throw InputError(name + ": the path has " + std::to_string(longest) +
+                     " characters (with its directory and temporary), more than the system allows (PATH_MAX " +
+                     std::to_string(PATH_MAX) + ") (" + what + ")");
   if (!fs::is_directory(dir, ec))
     throw InputError(name + ": the directory " + dir.string() + " does not exist (" + what + ")");
   // Outputs are written to a temporary beside the target and renamed, so the directory must be writable.
   if (::access(dir.c_str(), W_OK | X_OK) != 0)
     throw InputError(name + ": the directory " + dir.string() + " is not writable (" + what + ")");
-  const long name_max = ::pathconf(dir.c_str(), _PC_NAME_MAX);
-  if (name_max > 0 && file.size() > static_cast<std::size_t>(name_max))
-    throw InputError(name + ": the file name has " + std::to_string(file.size()) +
-                     " characters, more than the file system allows (" + std::to_string(name_max) + ") (" + what + ")");
   if (fs::exists(path, ec)) {
     if (!fs::is_regular_file(path, ec))
       throw InputError(name + ": exists and is not a regular file (" + what + ")");

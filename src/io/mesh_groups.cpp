@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <set>
 #include <numeric>
 #include <sstream>
 
@@ -211,6 +212,25 @@ std::vector<CurveGroup> feature_groups(const QuadMesh& mesh, const Region* regio
   return features;
 }
 
+}  // namespace
+
+std::string segment_group_name(const Region& region, std::size_t s) {
+  const std::string& name = region.boundary_segments.at(s).name;
+  return name.empty() ? "segment_" + std::to_string(s) : name;
+}
+
+std::vector<std::string> open_segment_names(const Region& region) {
+  std::vector<std::string> open;
+  std::set<std::string> seen;
+  for (std::size_t s = 0; s < region.boundary_segments.size(); ++s) {
+    const std::string name = segment_group_name(region, s);
+    if (seen.insert(name).second && region.boundary_segments[s].kind == "open") open.push_back(name);
+  }
+  return open;
+}
+
+namespace {
+
 // Segments, merged by name.
 std::vector<CurveGroup> segment_groups(const Region* region, const std::vector<BoundaryLoop>& loops,
                                        const std::vector<Placed>& placed, int& tag) {
@@ -218,7 +238,7 @@ std::vector<CurveGroup> segment_groups(const Region* region, const std::vector<B
   std::map<std::string, std::size_t> index;
   for (const Placed& p : placed) {
     const BoundarySegment& b = region->boundary_segments[static_cast<std::size_t>(p.segment)];
-    const std::string name = b.name.empty() ? "segment_" + std::to_string(p.segment) : b.name;
+    const std::string name = segment_group_name(*region, static_cast<std::size_t>(p.segment));
     auto [it, inserted] = index.try_emplace(name, segments.size());
     if (inserted) {
       CurveGroup s;

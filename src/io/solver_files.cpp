@@ -122,6 +122,14 @@ std::vector<BoundaryLoop> boundary_loops(const QuadMesh& mesh) {
   return loops;
 }
 
+namespace {
+// A .gr3 of geographic input gets its lon/lat twin (.ll).
+bool gr3_has_lonlat(const std::string& input_crs) {
+  const crs::CrsInfo input = crs::crs_info(input_crs);
+  return input.known && input.geographic;
+}
+}  // namespace
+
 // The groups to write: the caller's, else the generated ones; every boundary edge must be in a chain.
 MeshGroups groups_for(const QuadMesh& mesh, const MeshWriteOptions& options) {
   boundary_loops(mesh);  // throws when the boundary is not a set of loops
@@ -131,10 +139,9 @@ MeshGroups groups_for(const QuadMesh& mesh, const MeshWriteOptions& options) {
 void write_gr3(const fs::path& path, const QuadMesh& mesh, const MeshWriteOptions& options) {
   check_depth(path, mesh, options);
   const MeshGroups groups = groups_for(mesh, options);
-  const crs::CrsInfo input = crs::crs_info(options.input_crs);
   // The lon/lat companion first: a CRS that cannot be transformed fails before anything is written.
   std::vector<Vec2> lonlat;
-  if (input.known && input.geographic) lonlat = crs::to_lonlat(mesh.nodes, mesh.crs);
+  if (gr3_has_lonlat(options.input_crs)) lonlat = crs::to_lonlat(mesh.nodes, mesh.crs);
   const std::string crs_text = mesh.crs.empty() ? "no CRS" : mesh.crs;
   write_file_atomically(path, [&](std::ostream& os) {
     write_gr3_text(os, mesh, mesh.nodes, "polysquare " + crs_text, options, groups);
@@ -186,6 +193,18 @@ void write_2dm(const fs::path& path, const QuadMesh& mesh, const MeshWriteOption
 const std::vector<std::string>& output_extensions() {
   static const std::vector<std::string> known{".msh", ".vtu", ".pvtu", ".gr3", ".nc", ".2dm", ".exo"};
   return known;
+}
+
+std::vector<CompanionFile> companion_files(const fs::path& path, const std::string& input_crs,
+                                           const std::vector<std::string>& open_segments) {
+  std::vector<CompanionFile> companions;
+  const std::string ext = lower_extension(path);
+  if (ext == ".gr3" && gr3_has_lonlat(input_crs))
+    companions.push_back({fs::path(path).replace_extension(".ll"), "the .ll companion of -o (lon/lat of the nodes)"});
+  if (ext == ".nc")
+    for (PliFile& f : pli_files(path, open_segments))
+      companions.push_back({std::move(f.path), "the boundary polyline of open segment \"" + f.segment + "\""});
+  return companions;
 }
 
 void check_output_path(const fs::path& path) { check_output_file(path, "output", output_extensions()); }

@@ -4,6 +4,7 @@
 #include <array>
 #include <cctype>
 #include <initializer_list>
+#include <map>
 #include <utility>
 #include <string>
 #include <vector>
@@ -168,8 +169,7 @@ void put_ugrid(NcFile& f, const UgridVars& v, const QuadMesh& mesh, const EdgeTa
 
 // D-Flow FM takes boundary conditions on polylines (.pli, Tekal blocks: name, "rows 2", then x y per row)
 // named in its external forcing file; each open segment gets one along its boundary nodes.
-void write_pli_files(const std::filesystem::path& path, const QuadMesh& mesh, const MeshWriteOptions& options) {
-  const MeshGroups groups = options.groups.empty() ? mesh_groups(mesh) : options.groups;
+void write_pli_files(const std::filesystem::path& path, const QuadMesh& mesh, const MeshGroups& groups) {
   for (const CurveGroup& g : groups.segments) {
     if (g.kind != "open") continue;
     write_file_atomically(pli_path(path, g.name), [&](std::ostream& os) {
@@ -195,6 +195,12 @@ void write_ugrid(const std::filesystem::path& path, const QuadMesh& mesh, const 
   const std::vector<Vec2> centres = face_circumcentres(mesh, edges);
   const crs::CrsInfo info = crs::crs_info(mesh.crs);
   const UgridSizes sizes{mesh.nodes.size(), edges.nodes.size(), mesh.quads.size()};
+  // Two open groups whose names give one .pli are refused before any file is written.
+  const MeshGroups groups = options.groups.empty() ? mesh_groups(mesh) : options.groups;
+  std::vector<std::string> open;
+  for (const CurveGroup& g : groups.segments)
+    if (g.kind == "open") open.push_back(g.name);
+  pli_files(path, open);
   write_path_atomically(path, [&](const std::filesystem::path& tmp) {
     NcFile f(tmp, path.string());
     const UgridVars vars = define_ugrid(f, sizes, info, !options.depth.empty(), mesh);
@@ -202,7 +208,7 @@ void write_ugrid(const std::filesystem::path& path, const QuadMesh& mesh, const 
     put_ugrid(f, vars, mesh, edges, centres, options.depth);
     f.close();
   });
-  write_pli_files(path, mesh, options);
+  write_pli_files(path, mesh, groups);
 }
 
 std::string file_safe(const std::string& name) {
@@ -214,6 +220,26 @@ std::string file_safe(const std::string& name) {
 
 fs::path pli_path(const fs::path& net_file, const std::string& name) {
   return net_file.parent_path() / (net_file.stem().string() + "_" + file_safe(name) + ".pli");
+}
+
+std::vector<PliFile> pli_files(const fs::path& net_file, const std::vector<std::string>& open_segments) {
+  std::vector<PliFile> files;
+  std::map<std::string, std::size_t> by_name;  // file name in lower case -> index in files
+  for (const std::string& name : open_segments) {
+    PliFile f{name, pli_path(net_file, name)};
+    std::string key = f.path.filename().string();
+    for (char& ch : key) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+    const auto [it, inserted] = by_name.try_emplace(key, files.size());
+    if (!inserted) {
+      const PliFile& first = files[it->second];
+      throw InputError(f.path.string() + ": the open boundary segments \"" + first.segment + "\" and \"" + name +
+                       "\" would both be written to this boundary polyline (file names keep letters, digits, '-' "
+                       "and '_', the others become '_', and letter case does not tell files apart on Windows and "
+                       "macOS); rename one of them");
+    }
+    files.push_back(std::move(f));
+  }
+  return files;
 }
 
 }  // namespace polysquare

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <sstream>
 
 #include "polysquare/core/error.h"
@@ -82,6 +83,7 @@ void check_mesh_size(const Region& region, const MeshOptions& options) {
     throw InputError(src + ": the domain's extent is not a finite positive size (" + short_number(w) + " x " +
                      short_number(h) + ")");
   double area = 0.0;
+  std::map<int, double> part_areas;  // by Ring::part
   for (const Ring& r : region.rings) {
     double s = 0.0;
     const auto& p = r.points;
@@ -92,12 +94,24 @@ void check_mesh_size(const Region& region, const MeshOptions& options) {
       s += a.x * b.y - a.y * b.x;
     }
     area += r.hole ? -std::abs(0.5 * s) : std::abs(0.5 * s);
+    part_areas[r.part] += r.hole ? -std::abs(0.5 * s) : std::abs(0.5 * s);
   }
   if (!(std::isfinite(area) && area > 0))
     throw InputError(src + ": the domain's area is not a finite positive number (" + short_number(area) + ")");
+  const std::string flag = o.size.graded() ? "--size-min " : "--size ";
+  const std::string extent = short_number(w) + " x " + short_number(h);
   if (o.size.h > 0.5 * std::min(w, h))
-    throw InputError(src + ": size " + short_number(o.size.h) + " is larger than half the region's extent (" +
-                     short_number(w) + " x " + short_number(h) + ")");
+    throw InputError(src + ": " + flag + short_number(o.size.h) + " is larger than half the region's extent (" +
+                     extent + ")");
+  // Parts smaller than one quad are left out (and reported); when that is every part, the size is what is wrong
+  // (a region of scattered islets, a thin diagonal sliver), said before meshing rather than after.
+  double largest = 0.0;
+  for (const auto& [part, a] : part_areas) largest = std::max(largest, a);
+  if (o.curves.drop_small_parts && largest < o.size.h * o.size.h)
+    throw InputError(src + ": " + flag + short_number(o.size.h) + " is larger than every polygon part: the largest has area " +
+                     short_number(largest) + ", less than one quad (" + short_number(o.size.h * o.size.h) +
+                     "), in a region of extent " + extent + "; the size must be below the square root of that area, " +
+                     short_number(std::sqrt(largest)));
   // A graded run's estimate comes from its field (the size stage of mesh_region refuses it there).
   const double estimate = o.size.graded() ? 0.0 : area / (o.size.h * o.size.h);
   if (!(estimate <= static_cast<double>(o.size.max_quads)))

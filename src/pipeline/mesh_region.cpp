@@ -92,9 +92,10 @@ RegionParts split_parts(const Region& work, const MeshOptions& options, const st
     }
     out.parts.push_back(std::move(p));
   }
-  if (out.parts.empty())
-    throw MeshingError(src + ": every polygon part is smaller than one element (size^2 = " +
-                       std::to_string(options.size.h * options.size.h) + "); use a smaller size");
+  if (out.parts.empty())  // a size problem (check_mesh_size says so before simplifying, here after)
+    throw InputError(src + ": every polygon part is smaller than one element once its curves are simplified (" +
+                     std::string(options.size.graded() ? "--size-min " : "--size ") + short_number(options.size.h) +
+                     ", size^2 = " + short_number(options.size.h * options.size.h) + "); use a smaller size");
   return out;
 }
 

@@ -115,6 +115,22 @@ TEST(CliOutputs, LongOutputNamesAreWrittenWithShortTemporaries) {
   EXPECT_LT(polysquare::temporary_path(out).filename().string().size(), 50u);
 }
 
+// Issue 52: a path longer than PATH_MAX (17 directory names of 250 letters), for -o or for --report, is refused
+// before the input is read, naming the limit (not read as a missing directory, nor met by a writer after meshing).
+TEST(CliOutputs, PathsLongerThanPathMaxAreRefusedBeforeReading) {
+  TempDir dir("cli_path_max");
+  std::string deep = dir.path.string();
+  for (int k = 0; k < 17; ++k) deep += "/" + std::string(250, 'd');
+  for (const std::string& outputs :
+       {"-o " + deep + "/m.msh", "-o " + dir.path.string() + "/m.msh --report " + deep + "/r.json"}) {
+    const CliResult r = run("mesh " + kSlowInput + " " + outputs);
+    EXPECT_EQ(r.code, 2) << r.err;
+    EXPECT_NE(r.err.find("more than the system allows (PATH_MAX"), std::string::npos) << r.err;
+    EXPECT_EQ(lines(r.err), 1u) << r.err;  // before reading: no "region ... gives about N quads" line
+  }
+  EXPECT_TRUE(dir.entries().empty());
+}
+
 TEST(CliOutputs, ARerunRemovesTheTemporariesOfAKilledRun) {
   TempDir dir("cli_stale");
   const fs::path out = dir.path / "m.msh";

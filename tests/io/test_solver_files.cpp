@@ -357,6 +357,35 @@ TEST(SolverFiles, OutputPathCheckedBeforeMeshing) {
   EXPECT_FALSE(fs::exists(temp("x.gr3")));
 }
 
+// Issue 52: the boundary polylines of a net file, named after their segments, are known before meshing; two open
+// segments whose names give one file (file_safe maps them alike, or they differ in letter case only) are refused
+// naming both, and the companions of each format are listed for the CLI's check.
+TEST(SolverFiles, PliFilesAreNamedBeforeMeshingAndNamesThatGiveOneFileAreRefused) {
+  const std::vector<PliFile> files = pli_files("d/m.nc", {"north sea", "Elbe-river", "segment_2"});
+  ASSERT_EQ(files.size(), 3u);
+  EXPECT_EQ(files[0].path, std::filesystem::path("d/m_north_sea.pli"));
+  EXPECT_EQ(files[1].path, std::filesystem::path("d/m_Elbe-river.pli"));
+  EXPECT_EQ(files[1].segment, "Elbe-river");
+  const std::vector<std::pair<std::string, std::string>> alike{
+      {"north sea", "north/sea"}, {"Elbe (Nord)", "Elbe [Nord]"}, {"Ocean", "ocean"}, {"S\u00fcd", "S\u00f8d"},
+      {"segment 1", "segment_1"}};
+  for (const auto& [a, b] : alike) {
+    try {
+      pli_files("m.nc", {"other", a, b});
+      ADD_FAILURE() << a << " and " << b << " were not refused";
+    } catch (const InputError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("\"" + a + "\" and \"" + b + "\""), std::string::npos) << what;
+    }
+  }
+  EXPECT_TRUE(companion_files("m.msh", "EPSG:4326", {"a"}).empty());
+  EXPECT_TRUE(companion_files("m.gr3", "EPSG:32632", {"a"}).empty());  // projected input: no .ll
+  ASSERT_EQ(companion_files("m.gr3", "EPSG:4326", {}).size(), 1u);
+  EXPECT_EQ(companion_files("m.gr3", "EPSG:4326", {})[0].path, std::filesystem::path("m.ll"));
+  ASSERT_EQ(companion_files("m.nc", "", {"a", "b"}).size(), 2u);
+  EXPECT_THROW(companion_files("m.nc", "", {"a b", "a/b"}), InputError);
+}
+
 TEST(SolverFiles, CliWritesNetFileWithDepthAndReportsFiniteVolumeQuality) {
   const fs::path nc = temp("cli_net.nc"), report = temp("cli_report.json");
   int code = 0;

@@ -56,6 +56,14 @@ struct MeshGroups {
 /// its start node forward to its end node.
 MeshGroups mesh_groups(const QuadMesh& mesh, const Region* region = nullptr);
 
+/// The name of boundary segment `s`'s group: its `name`, or "segment_<s>" when the input gives none (segments of
+/// one name are one group).
+std::string segment_group_name(const Region& region, std::size_t s);
+
+/// The names of the open boundary groups (kind "open": a segment group's kind is its first segment's), in the
+/// order mesh_groups lists them; before meshing, so that their companion files (.pli) can be checked.
+std::vector<std::string> open_segment_names(const Region& region);
+
 /// One line for the CLI, "  groups: channel (1), 1 boundary ring(s) (2), dam_lower (3), inflow (5, open)\n":
 /// domains, named features and segments with their tags, the rings (hundreds on a coast) as a tag range.
 std::string format_groups_text(const MeshGroups& groups);

@@ -44,6 +44,32 @@ std::string file_safe(const std::string& name);
 /// `<stem>_<file_safe(name)>.pli` (mesh_net.nc, "ocean" -> mesh_net_ocean.pli).
 std::filesystem::path pli_path(const std::filesystem::path& net_file, const std::string& name);
 
+/// A boundary polyline write_ugrid writes: the open segment group's name and its file (pli_path).
+struct PliFile {
+  std::string segment;
+  std::filesystem::path path;
+};
+
+/// The boundary polylines write_ugrid writes beside `net_file` for the open segment groups `open_segments`
+/// (open_segment_names before meshing, the groups' names when writing). Two names that give one file (file_safe
+/// maps them alike, "north sea" and "north/sea", or they differ only in letter case, which Windows and macOS,
+/// where D-Flow FM models are often run, do not tell apart) are refused: InputError naming both segments and the
+/// file. Refusing, rather than numbering one of them, keeps every file named after its segment, as the external
+/// forcing file refers to it.
+std::vector<PliFile> pli_files(const std::filesystem::path& net_file, const std::vector<std::string>& open_segments);
+
+/// A file write_mesh writes beside its output, and what it is ("the .ll companion of -o").
+struct CompanionFile {
+  std::filesystem::path path;
+  std::string what;
+};
+
+/// The companions write_mesh(path, ...) writes besides `path`: a .gr3's `<stem>.ll` when `input_crs` is
+/// geographic, a .nc's .pli per open segment group (pli_files, which refuses two names giving one file). A
+/// .pvtu's pieces depend on the mesh's size (pvtu_piece_path). For checking every output before meshing.
+std::vector<CompanionFile> companion_files(const std::filesystem::path& path, const std::string& input_crs,
+                                           const std::vector<std::string>& open_segments);
+
 /// D-Flow FM UGRID-1.0 net file (netCDF classic, 64-bit offset), as Deltares' tools write it: topology variable
 /// mesh2d (cf_role mesh_topology, topology_dimension 2), mesh2d_node_x/y, mesh2d_edge_nodes (edges in
 /// edge_table order), mesh2d_face_nodes (counter-clockwise, start_index 1, _FillValue -999), edge midpoints and
