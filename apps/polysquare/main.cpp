@@ -1,14 +1,16 @@
 // polysquare command-line tool: parses options into the library's options structs, calls the library, reports.
-// Exit codes: 0 success, 1 unexpected error, 2 bad input or options, 3 meshing failure.
+// Exit codes: 0 success, 1 unexpected error, 2 bad input or options, 3 meshing failure (time limit and out of
+// memory too).
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <csignal>
+#include <cstdio>
 #include <exception>
-#include <new>
-#include <unistd.h>
 #include <iostream>
+#include <new>
 #include <optional>
 
 #include "mesh_command.h"
@@ -35,7 +37,7 @@ void on_signal(int sig) {
 }
 
 // An exception no one catches (one thrown in a thread of a library): out of memory is said in one line and ends
-// the run in exit 3, the run's temporaries removed; anything else aborts as before.
+// the run in exit 3; anything else is said and aborts, as before. The run's temporaries are removed either way.
 [[noreturn]] void on_terminate() {
   remove_pending_temporaries();
   if (const std::exception_ptr p = std::current_exception()) {
@@ -45,6 +47,8 @@ void on_signal(int sig) {
       static const char line[] = "error: the run ran out of memory; nothing written\n";
       [[maybe_unused]] const ssize_t n = ::write(2, line, sizeof line - 1);
       ::_exit(3);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "error: unexpected failure: %s\n", e.what());
     } catch (...) {
     }
   }
