@@ -131,6 +131,32 @@ TEST(CliOutputs, PathsLongerThanPathMaxAreRefusedBeforeReading) {
   EXPECT_TRUE(dir.entries().empty());
 }
 
+// Issue 52: an output that is an input under another name (a symbolic link to the --boundary file, a hard link to
+// the --features file) is refused before reading, naming both options, and the input stays as it was.
+TEST(CliOutputs, OutputsThroughLinksToInputsAreRefused) {
+  TempDir dir("cli_output_links");
+  const fs::path boundary = dir.path / "lines.json", features = dir.path / "features.json";
+  fs::copy_file(std::string(POLYSQUARE_TEST_DATA_DIR) + "/round3_outputs/boundary_lines.json", boundary);
+  fs::copy_file(std::string(POLYSQUARE_TEST_DATA_DIR) + "/round3_outputs/feature_lines.json", features);
+  fs::create_symlink(boundary, dir.path / "report.json");
+  fs::create_hard_link(features, dir.path / "hard.json");
+  const std::string lines_before = slurp(boundary), features_before = slurp(features);
+  const std::string square = std::string(POLYSQUARE_TEST_DATA_DIR) + "/round3_outputs/square.geojson --size 10 -o " +
+                             (dir.path / "m.msh").string();
+  const std::vector<std::pair<std::string, std::string>> cases{
+      {" --boundary " + boundary.string() + " --report " + (dir.path / "report.json").string(), "--boundary file"},
+      {" --features " + features.string() + " --report " + (dir.path / "hard.json").string(), "--features file"}};
+  for (const auto& [args, what] : cases) {
+    const CliResult r = run("mesh " + square + args);
+    EXPECT_EQ(r.code, 2) << r.err;
+    EXPECT_NE(r.err.find("--report would overwrite the " + what), std::string::npos) << r.err;
+    EXPECT_EQ(lines(r.err), 1u) << r.err;
+  }
+  EXPECT_EQ(slurp(boundary), lines_before);
+  EXPECT_EQ(slurp(features), features_before);
+  EXPECT_EQ(dir.entries(), (std::vector<std::string>{"features.json", "hard.json", "lines.json", "report.json"}));
+}
+
 TEST(CliOutputs, ARerunRemovesTheTemporariesOfAKilledRun) {
   TempDir dir("cli_stale");
   const fs::path out = dir.path / "m.msh";
