@@ -157,6 +157,27 @@ TEST(CliOutputs, OutputsThroughLinksToInputsAreRefused) {
   EXPECT_EQ(dir.entries(), (std::vector<std::string>{"features.json", "hard.json", "lines.json", "report.json"}));
 }
 
+// Issue 52: --size-picture is committed with the other outputs, all or none: its directory removed while the run
+// meshes (after every check: -v says "stage simplify" once mesh_region started), the run ends in exit 2 and the mesh
+// and report are not written either (the size picture used to be written after the others were committed).
+TEST(CliOutputs, TheSizePictureIsCommittedWithTheOtherOutputs) {
+  TempDir dir("cli_size_picture_batch");
+  fs::create_directories(dir.path / "sub");
+  const std::string d = dir.path.string(), err_file = fs::temp_directory_path() / ("polysquare_sp_err_" + std::to_string(::getpid()));
+  const std::string cmd = std::string(POLYSQUARE_CLI) + " mesh " + std::string(POLYSQUARE_TEST_DATA_DIR) +
+                          "/round3_outputs/big_square.geojson --size-min 2 --size-max 40 -v -o " + d + "/m.msh --report " +
+                          d + "/r.json --size-picture " + d + "/sub/p.png 2> " + err_file +
+                          " & pid=$!; n=0; until grep -q \"stage simplify\" " + err_file +
+                          " || [ $n -gt 600 ]; do sleep 0.05; n=$((n+1)); done; rm -rf " + d + "/sub; wait $pid";
+  const int status = std::system(("sh -c '" + cmd + "'").c_str());
+  const std::string err = slurp(err_file);
+  fs::remove(err_file);
+  EXPECT_EQ(WEXITSTATUS(status), 2) << err;
+  EXPECT_NE(err.find("error: " + d + "/sub/p.png"), std::string::npos) << err;
+  EXPECT_EQ(err.find("error: "), err.rfind("error: ")) << err;  // one error line (-v prints the stages too)
+  EXPECT_TRUE(dir.entries().empty());  // no mesh, no report, no temporary
+}
+
 TEST(CliOutputs, ARerunRemovesTheTemporariesOfAKilledRun) {
   TempDir dir("cli_stale");
   const fs::path out = dir.path / "m.msh";
