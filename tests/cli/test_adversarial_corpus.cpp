@@ -38,7 +38,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// The corpus directories under tests/data whose cases.tsv rows are run, each with its README.md.
+// The corpus directories under tests/data whose cases.tsv rows are run, each with its README.md listing every file
+// (a new corpus: add its directory here; its test names are prefixed by it).
 const std::vector<std::string> kCorpora{"adversarial", "round3_outputs"};
 
 fs::path corpus_dir(const std::string& corpus) { return fs::path(POLYSQUARE_TEST_DATA_DIR) / corpus; }

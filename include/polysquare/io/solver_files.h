@@ -64,7 +64,7 @@ struct CompanionFile {
   std::string what;
 };
 
-/// The companions write_mesh(path, ...) writes besides `path`: a .gr3's `<stem>.ll` when `input_crs` is
+/// The companions write_mesh(path, ...) writes beside `path`: a .gr3's `<stem>.ll` when `input_crs` is
 /// geographic, a .nc's .pli per open segment group (pli_files, which refuses two names giving one file). A
 /// .pvtu's pieces depend on the mesh's size (pvtu_piece_path). For checking every output before meshing.
 std::vector<CompanionFile> companion_files(const std::filesystem::path& path, const std::string& input_crs,
