@@ -3,9 +3,11 @@
 #include <cpl_error.h>
 #include <ogr_spatialref.h>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <sstream>
+#include <vector>
 
 #include "io/crs_info.h"
 #include "polysquare/core/error.h"
@@ -37,7 +39,66 @@ bool looks_like_degrees(const Region& region, const Box2& box) {
   return false;
 }
 
+std::string number_text(double v) {
+  std::ostringstream os;
+  os.precision(6);
+  os << v;
+  return os.str();
+}
+
+// Every longitude of the region (rings, curves, points, boundary segments), in degrees.
+std::vector<double> longitudes(const Region& region, double to_degree) {
+  std::vector<double> lon;
+  auto add = [&](const std::vector<Vec2>& pts) {
+    for (Vec2 p : pts) lon.push_back(p.x * to_degree);
+  };
+  for (const Ring& r : region.rings) add(r.points);
+  for (const FeatureCurve& c : region.features) add(c.points);
+  add(region.feature_points);
+  for (const BoundarySegment& b : region.boundary_segments) add(b.line);
+  return lon;
+}
+
+// Messages about places of a projected region name them in the input's own coordinates.
+class InputPlaces : public PlaceTextHook {
+ public:
+  InputPlaces(std::unique_ptr<OGRCoordinateTransformation> t) : transform_(std::move(t)) {}
+  std::string text(Vec2 p) const override {
+    double x = p.x, y = p.y;
+    int ok = 0;
+    if (!transform_->Transform(1, &x, &y, nullptr, nullptr, &ok) || !ok || !std::isfinite(x) || !std::isfinite(y))
+      return plain_point_text(p) + " (in the meshing CRS)";
+    return plain_point_text({x, y});
+  }
+
+ private:
+  std::unique_ptr<OGRCoordinateTransformation> transform_;
+};
+
 }  // namespace
+
+LonRange longitude_range(const std::vector<double>& lon_degrees) {
+  LonRange range;
+  std::vector<double> lon;
+  lon.reserve(lon_degrees.size());
+  for (double l : lon_degrees)
+    if (std::isfinite(l)) lon.push_back(l - 360.0 * std::floor(l / 360.0));  // into [0, 360)
+  if (lon.empty()) return range;
+  std::sort(lon.begin(), lon.end());
+  lon.erase(std::unique(lon.begin(), lon.end()), lon.end());
+  // The arc covering every longitude is the circle less its largest gap between neighbouring longitudes.
+  double gap = 360.0 - (lon.back() - lon.front());
+  double start = lon.front();
+  for (std::size_t i = 1; i < lon.size(); ++i)
+    if (lon[i] - lon[i - 1] > gap) gap = lon[i] - lon[i - 1], start = lon[i];
+  range.width = 360.0 - gap;
+  range.west = start > 180.0 ? start - 360.0 : start;  // [-180, 180]
+  range.east = range.west + range.width;
+  range.centre = range.west + 0.5 * range.width;
+  if (range.centre >= 180.0) range.centre -= 360.0;
+  range.crosses_antimeridian = range.east > 180.0;
+  return range;
+}
 
 int utm_epsg(double lon, double lat) {
   // Clamped before the cast: a longitude far out of range (a broken file) must not overflow an int.
@@ -61,19 +122,27 @@ void project_region(Region& region, const std::string& target_crs, InputNotes& n
     return;
   }
   OGRSpatialReference source;
-  if (!crs::parse(region.crs, source)) {
-    notes.warnings.push_back(region.source + ": CRS \"" + region.crs.substr(0, 80) +
-                             "\" is not one PROJ knows; coordinates are taken as planar");
-    return;
-  }
+  // A CRS the file names but PROJ does not know (an EPSG code that does not exist, a typo) is refused: taking the
+  // coordinates as planar would mesh degrees, or feet, as metres without a word.
+  if (!crs::parse(region.crs, source))
+    throw InputError(region.source + ": CRS \"" + region.crs.substr(0, 80) + "\" is not one PROJ knows" +
+                     (region.crs.rfind("EPSG:", 0) == 0 ? " (no such EPSG code)" : std::string()) +
+                     "; name a known CRS (ogr2ogr -a_srs EPSG:n) or none to mesh the coordinates as planar units");
+  if (source.IsGeocentric())
+    throw InputError(region.source + ": CRS " + region.crs.substr(0, 80) +
+                     " is geocentric (x, y, z from the earth's centre); a planar region needs a geographic or projected "
+                     "CRS (ogr2ogr -t_srs EPSG:4326 converts)");
   if (!source.IsGeographic() && !source.IsProjected())
     throw InputError(region.source + ": CRS " + region.crs.substr(0, 80) +
                      " is neither geographic nor projected; a planar region needs one of those");
   if (source.IsProjected() && target_crs.empty()) {
     region.units = units_of(source);
     if (region.units != "m")
-      notes.warnings.push_back(region.source + ": the CRS's unit is " + region.units + ", so --size is in " +
-                               region.units + " (--crs EPSG:n reprojects to a metric CRS)");
+      // Kept in the CRS's unit (the mesh is written in the input's CRS, as the user's other tools read it), and
+      // said: --size, the report's lengths and areas are in that unit (the report's input.units names it).
+      notes.warnings.push_back(region.source + ": the CRS " + region.crs.substr(0, 80) + " is in " + region.units +
+                               " (" + number_text(source.GetLinearUnits()) + " m), so --size and the report's lengths are in " +
+                               region.units + ", not metres (--crs EPSG:n meshes in a metric CRS)");
     return;
   }
   if (source.IsGeographic()) {
@@ -88,11 +157,29 @@ void project_region(Region& region, const std::string& target_crs, InputNotes& n
   }
   OGRSpatialReference target;
   std::string target_name = target_crs;
-  if (target_name.empty()) {
-    // The centre's longitude and latitude, in degrees, whatever the source's geographic unit.
-    const Vec2 c = 0.5 * (box.lo + box.hi);
+  if (target_name.empty() && source.IsGeographic()) {
+    // The centre's longitude and latitude, in degrees, whatever the source's geographic unit. The longitude's
+    // centre is taken on the circle: a region across the antimeridian (179.9 and -179.9) has its centre at 180,
+    // not at 0 (which put it in zone 31, 180 degrees from its central meridian).
     const double to_degree = source.GetAngularUnits() / (M_PI / 180.0);
-    target_name = "EPSG:" + std::to_string(utm_epsg(c.x * to_degree, c.y * to_degree));
+    const double lat_lo = box.lo.y * to_degree, lat_hi = box.hi.y * to_degree;
+    // UTM covers 80 S to 84 N; past that (a cap reaching the pole) its zones do not hold the region.
+    if (lat_hi > 84.0 || lat_lo < -80.0)
+      throw InputError(region.source + ": the region reaches latitude " + number_text(lat_hi > 84.0 ? lat_hi : lat_lo) +
+                       ", beyond " + (lat_hi > 84.0 ? "84 N" : "80 S") + " where UTM zones end; give --crs a polar "
+                       "CRS (" + (lat_hi > 84.0 ? "EPSG:3413 or EPSG:3995" : "EPSG:3031") +
+                       "), with no ring along latitude " + (lat_hi > 84.0 ? "90" : "-90") + ", which is one point");
+    const LonRange lon = longitude_range(longitudes(region, to_degree));
+    if (lon.width > 180.0)
+      throw InputError(region.source + ": the region spans " + number_text(lon.width) +
+                       " degrees of longitude (from " + number_text(lon.west) + " to " + number_text(lon.east) +
+                       "), more than half the earth: no UTM zone holds it; give --crs a CRS for it");
+    target_name = "EPSG:" + std::to_string(utm_epsg(lon.centre, 0.5 * (lat_lo + lat_hi)));
+    if (lon.crosses_antimeridian)
+      notes.warnings.push_back(region.source + ": the region crosses the antimeridian (longitudes " +
+                               number_text(lon.west) + " to " + number_text(lon.east > 180.0 ? lon.east - 360.0 : lon.east) +
+                               "); meshed in " + target_name + ", the UTM zone of its centre at longitude " +
+                               number_text(lon.centre));
   }
   if (!crs::parse(target_name, target)) throw InputError("--crs " + target_name + ": not a CRS PROJ knows");
   if (!target.IsProjected()) throw InputError("--crs " + target_name + ": not a projected CRS (meshing needs planar coordinates)");
@@ -117,6 +204,17 @@ void project_region(Region& region, const std::string& target_crs, InputNotes& n
   region.crs = target_name;
   region.units = units_of(target);
   notes.reprojected = true;
+}
+
+std::unique_ptr<PlaceTextHook> input_place_text(const Region& region, const InputNotes& notes) {
+  if (!notes.reprojected) return nullptr;
+  OGRSpatialReference meshed, input;
+  if (!crs::parse(region.crs, meshed) || !crs::parse(notes.input_crs, input)) return nullptr;
+  CPLPushErrorHandler(CPLQuietErrorHandler);
+  std::unique_ptr<OGRCoordinateTransformation> t(OGRCreateCoordinateTransformation(&meshed, &input));
+  CPLPopErrorHandler();
+  if (!t) return nullptr;
+  return std::make_unique<InputPlaces>(std::move(t));
 }
 
 }  // namespace polysquare

@@ -385,6 +385,9 @@ Region read_input(const std::filesystem::path& path, const InputOptions& options
                      (names.empty() ? std::string() : " from " + std::to_string(names.size()) + " feature(s)"));
   try {
     project_region(region, options.crs, notes);
+    // Places in messages from here on are in the input's own coordinates (lon/lat), not the projected metres.
+    const std::unique_ptr<PlaceTextHook> places = input_place_text(region, notes);
+    const ScopedPlaceText scoped(places.get());
     snap_near_coincident(region, options.snap_relative, &notes.snaps);
     validate_region(region, options, &notes.repairs, &notes.warnings);
   } catch (const InputError& e) {
