@@ -1,4 +1,5 @@
-// Issue 13, round two: the CLI on every row of tests/data/adversarial/cases.tsv ends as the row promises: exit 0
+// Issue 13, round two, and issue 52, round three (tests/data/round3_gis: GIS files, CRSs, rasters; arguments may
+// name files of the corpus as {corpus}/FILE): the CLI on every row of tests/data/adversarial/cases.tsv ends as the row promises: exit 0
 // with a mesh that passes the overlap-aware invariant check, or exit 2/3 with exactly one "error: " line naming
 // what is wrong, and no file left behind (no output, no temporary, the input untouched). The rows are data; speed
 // is measured by bench/adversarial_corpus.py, not here.
