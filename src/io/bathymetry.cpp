@@ -121,6 +121,9 @@ std::vector<std::string> check_bathymetry(const std::filesystem::path& raster, c
   const int j0 = std::clamp(static_cast<int>(std::floor(py_lo)) - 1, 0, r.ny - 1);
   const int j1 = std::clamp(static_cast<int>(std::ceil(py_hi)) + 1, 0, r.ny - 1);
   const std::size_t w = static_cast<std::size_t>(i1 - i0 + 1);
+  // A window of more than 10^8 cells (a domain of 100 km at 10 m cells) is not scanned: reading it would cost
+  // more than the meshing; sampling still leaves infinite cells out.
+  if (static_cast<double>(w) * (j1 - j0 + 1) > 1e8) return warnings;
   int has_nodata = 0;
   const double nodata = r.band->GetNoDataValue(&has_nodata);
   std::size_t infinite = 0, values = 0;
