@@ -1,6 +1,7 @@
 #include "polysquare/input/project_region.h"
 
 #include <cpl_error.h>
+#include <ogr_geometry.h>
 #include <ogr_spatialref.h>
 
 #include <algorithm>
@@ -57,6 +58,73 @@ std::vector<double> longitudes(const Region& region, double to_degree) {
   add(region.feature_points);
   for (const BoundarySegment& b : region.boundary_segments) add(b.line);
   return lon;
+}
+
+// A region split at the antimeridian (RFC 7946 asks for it) comes as polygon parts meeting along longitude 180:
+// the parts with a vertex there are united (GEOS through OGR), with their western longitudes taken past 180 so
+// the pieces are contiguous; said in a warning. Meshed as given, the parts would meet along the seam (refused) or
+// be meshed apart with a wall between them. Attributes (name, size) of the first part united are kept.
+void unite_antimeridian_parts(Region& region, double to_degree, InputNotes& notes) {
+  std::vector<int> on_seam;
+  for (int part = 0; part < region.num_parts; ++part) {
+    bool seam = false;
+    for (const Ring& r : region.rings)
+      if (r.part == part)
+        for (Vec2 p : r.points) seam |= p.x * to_degree == 180.0;
+    if (seam) on_seam.push_back(part);
+  }
+  if (on_seam.size() < 2) return;
+  OGRMultiPolygon pieces;
+  const Ring* first = nullptr;
+  for (int part : on_seam) {
+    OGRPolygon poly;
+    for (const Ring& r : region.rings) {
+      if (r.part != part) continue;
+      if (!first) first = &r;
+      OGRLinearRing ring;
+      for (Vec2 p : r.points) ring.addPoint(p.x * to_degree < 0 ? p.x + 360.0 / to_degree : p.x, p.y);
+      ring.addPoint(ring.getX(0), ring.getY(0));
+      poly.addRing(&ring);  // the readers give a part's outer ring first, then its holes
+    }
+    pieces.addGeometry(&poly);
+  }
+  CPLPushErrorHandler(CPLQuietErrorHandler);
+  std::unique_ptr<OGRGeometry> united(pieces.UnionCascaded());
+  CPLPopErrorHandler();
+  if (!united) return;
+  std::vector<const OGRPolygon*> polys;
+  if (wkbFlatten(united->getGeometryType()) == wkbPolygon) polys.push_back(united->toPolygon());
+  else if (wkbFlatten(united->getGeometryType()) == wkbMultiPolygon)
+    for (const OGRPolygon* p : *united->toMultiPolygon()) polys.push_back(p);
+  else return;
+  if (polys.size() >= on_seam.size()) return;
+  const Ring keep = *first;
+  std::vector<Ring> rings;
+  std::vector<int> renumber(static_cast<std::size_t>(region.num_parts), -1);
+  int parts = 0;
+  for (const Ring& r : region.rings) {
+    if (std::find(on_seam.begin(), on_seam.end(), r.part) != on_seam.end()) continue;
+    if (renumber[static_cast<std::size_t>(r.part)] < 0) renumber[static_cast<std::size_t>(r.part)] = parts++;
+    rings.push_back(r);
+    rings.back().part = renumber[static_cast<std::size_t>(r.part)];
+  }
+  for (const OGRPolygon* p : polys) {
+    const int part = parts++;
+    for (int k = 0; k <= p->getNumInteriorRings(); ++k) {
+      const OGRLinearRing* lr = k == 0 ? p->getExteriorRing() : p->getInteriorRing(k - 1);
+      Ring r = keep;
+      r.part = part;
+      r.hole = k > 0;
+      r.points.clear();
+      for (int i = 0; i + 1 < lr->getNumPoints(); ++i) r.points.push_back({lr->getX(i), lr->getY(i)});
+      rings.push_back(std::move(r));
+    }
+  }
+  notes.warnings.push_back(region.source + ": " + std::to_string(on_seam.size()) +
+                           " polygon parts meet along the antimeridian (longitude 180 / -180): meshed as " +
+                           std::to_string(polys.size()) + " part(s)");
+  region.rings = std::move(rings);
+  region.num_parts = parts;
 }
 
 // Messages about places of a projected region name them in the input's own coordinates.
@@ -186,6 +254,45 @@ void project_region(Region& region, const std::string& target_crs, InputNotes& n
   std::unique_ptr<OGRCoordinateTransformation> transform(OGRCreateCoordinateTransformation(&source, &target));
   if (!transform)
     throw InputError(region.source + ": cannot transform from " + region.crs.substr(0, 80) + " to " + target_name);
+  // A cap drawn in longitude/latitude runs along latitude 90 (or -90) from one longitude to another: on the earth
+  // (and in a polar CRS) those vertices are one point, the pole. They are taken as one, said; else the ring
+  // repeated a point.
+  if (source.IsGeographic()) {
+    const double to_degree = source.GetAngularUnits() / (M_PI / 180.0);
+    auto at_pole = [&](Vec2 p) { return std::abs(p.y * to_degree) == 90.0; };
+    // Longitude -180 is longitude 180: one value for both, so a region split at the antimeridian (RFC 7946) has
+    // its two sides' points projected to the same bits.
+    auto seam = [&](std::vector<Vec2>& pts) {
+      for (Vec2& p : pts)
+        if (p.x * to_degree == -180.0) p.x = 180.0 / to_degree;
+    };
+    for (Ring& r : region.rings) seam(r.points);
+    for (FeatureCurve& c : region.features) seam(c.points);
+    seam(region.feature_points);
+    for (BoundarySegment& b : region.boundary_segments) seam(b.line);
+    unite_antimeridian_parts(region, to_degree, notes);
+    auto collapse = [&](std::vector<Vec2>& pts, bool closed, int feature) {
+      std::vector<Vec2> kept;
+      for (std::size_t i = 0; i < pts.size(); ++i)
+        if (kept.empty() || !(at_pole(pts[i]) && at_pole(kept.back()) && pts[i].y == kept.back().y)) kept.push_back(pts[i]);
+      while (closed && kept.size() > 1 && at_pole(kept.front()) && at_pole(kept.back()) && kept.front().y == kept.back().y)
+        kept.pop_back();
+      if (kept.size() == pts.size()) return;
+      double pole = 90.0;
+      for (Vec2 p : kept)
+        if (at_pole(p)) {
+          pole = p.y * to_degree;
+          break;
+        }
+      notes.warnings.push_back(region.source + ": feature " + std::to_string(feature) + " runs along latitude " +
+                               number_text(pole) +
+                               ", which is one point (the pole): " + std::to_string(pts.size() - kept.size() + 1) +
+                               " vertices there are taken as one");
+      pts = std::move(kept);
+    };
+    for (Ring& r : region.rings) collapse(r.points, true, r.source_feature);
+    for (FeatureCurve& c : region.features) collapse(c.points, c.closed, c.source_feature);
+  }
   auto project = [&](std::vector<Vec2>& pts, const std::string& what) {
     std::vector<double> x(pts.size()), y(pts.size());
     std::vector<int> ok(pts.size(), 0);
