@@ -191,6 +191,21 @@ Region read_noted_input(const MeshArgs& args, ProgressReporter& progress, InputN
   return region;
 }
 
+// The rasters, opened and checked against the region before meshing (readable, placed by a CRS, covering the
+// domain), their warnings said.
+void check_rasters(const MeshArgs& args, const Region& region, const InputNotes& notes) {
+  std::vector<Vec2> domain;
+  for (const Ring& r : region.rings) domain.insert(domain.end(), r.points.begin(), r.points.end());
+  std::vector<std::string> warnings;
+  if (!args.bathymetry.empty())
+    warnings = check_bathymetry(args.bathymetry, domain, region.crs, notes.input_crs, {args.bathymetry_positive == "down"});
+  if (!args.size_raster.empty()) {
+    const std::vector<std::string> more = check_bathymetry(args.size_raster, domain, region.crs, notes.input_crs, {true});
+    warnings.insert(warnings.end(), more.begin(), more.end());
+  }
+  for (const std::string& w : warnings) std::cerr << "warning: " << w << "\n";
+}
+
 // The sampled terms of a graded run's field, for points of a frame whose origin is `origin` in the input's
 // coordinates (crs): --size-field's sizes, and --per-wavelength's N quads per M2 wavelength where the water is
 // deeper than zero (44,712 s is the M2 period; lambda = T sqrt(g depth), OceanMesh2D's `wl` term).
@@ -577,6 +592,7 @@ int mesh_checked(const MeshArgs& args, double& estimated_quads) {
   std::ostream& info = args.quiet ? discarded : std::cerr;
   InputNotes notes;
   const Region region = read_noted_input(args, progress, notes, info);
+  check_rasters(args, region, notes);  // before minutes of meshing
   MeshOptions options = resolve_sizes(args.options);  // graded: size.h is the least size
   check_mesh_size(region, options);
   options.size.field.terms = raster_terms(args, region.crs, {0.0, 0.0});

@@ -87,6 +87,14 @@ struct Reader {
   // orientation (GeoJSON's) around, keeping the first point. Such rings are turned back keeping it too, so the
   // ring has its original order and start, and the mesh is the one of the file it was converted from.
   bool clockwise_outer_rings = false;
+  // The third coordinates read (polysquare meshes in 2D: varying z is dropped with a warning, as for GeoJSON).
+  mutable double z_min = INFINITY, z_max = -INFINITY;
+  std::string curved;  // the first curved geometry linearized ("CurvePolygon"), empty when none
+
+  void note_z(double z) const {
+    z_min = std::fmin(z_min, z);
+    z_max = std::fmax(z_max, z);
+  }
 
   [[noreturn]] void fail(const std::string& what) const { throw InputError(where + ": " + what); }
 
@@ -111,6 +119,7 @@ struct Reader {
     for (std::size_t i = 0; i < out.size(); ++i) {
       x[i] = curve.getX(static_cast<int>(i));
       y[i] = curve.getY(static_cast<int>(i));
+      if (curve.Is3D()) note_z(curve.getZ(static_cast<int>(i)));
     }
     to_region_crs(x, y);
     for (std::size_t i = 0; i < out.size(); ++i) out[i] = {x[i], y[i]};
@@ -145,6 +154,7 @@ struct Reader {
     if (g.hasCurveGeometry()) {
       std::unique_ptr<OGRGeometry> linear(g.getLinearGeometry());
       if (!linear) fail("cannot linearize a " + std::string(g.getGeometryName()));
+      if (curved.empty()) curved = g.getGeometryName();
       add_boundary(*linear);
       return;
     }
@@ -170,9 +180,10 @@ struct Reader {
 
   void add(const OGRGeometry& g, bool domain) {
     if (g.IsEmpty()) return;
-    if (g.hasCurveGeometry()) {  // arcs (GML, DXF) become polylines at GDAL's default step
+    if (g.hasCurveGeometry()) {  // arcs (GML, DXF, GeoPackage) become polylines at GDAL's default step, said
       std::unique_ptr<OGRGeometry> linear(g.getLinearGeometry());
       if (!linear) fail("cannot linearize a " + std::string(g.getGeometryName()));
+      if (curved.empty()) curved = g.getGeometryName();
       add(*linear, domain);
       return;
     }
@@ -204,6 +215,7 @@ struct Reader {
         if (domain) fail("a domain must be a polygon, got a point");
         size_unused_on = "points";
         std::vector<double> x{g.toPoint()->getX()}, y{g.toPoint()->getY()};
+        if (g.Is3D()) note_z(g.toPoint()->getZ());
         to_region_crs(x, y);
         region.feature_points.push_back({x[0], y[0]});
         return;
@@ -272,8 +284,42 @@ void read_gdal(const std::filesystem::path& path, LayerRole default_role, const 
     if (!options.where.empty() && layer->SetAttributeFilter(options.where.c_str()) != OGRERR_NONE)
       throw InputError(file + ", layer '" + name + "': --where \"" + options.where + "\" is not a valid filter here" +
                        gdal_message());
+    // An attribute table (a GeoPackage table without a geometry column) has no shapes to mesh: skipped with a
+    // warning, refused when an option names it.
+    if (layer->GetLayerDefn()->GetGeomFieldCount() == 0) {
+      const bool named = name == options.domain_layer || contains(options.feature_layers, name);
+      if (named)
+        throw InputError(file + ", layer '" + name + "' has no geometry column (an attribute table); " +
+                         (name == options.domain_layer ? "--domain-layer" : "--feature-layer") +
+                         " needs a layer of shapes; the layers are " + list());
+      notes.warnings.push_back(file + ", layer '" + name + "' has no geometry column (an attribute table): skipped");
+      continue;
+    }
+    const OGRSpatialReference* srs = layer_srs(*ds, *layer);
+    // A Shapefile whose .prj GDAL cannot read comes without a CRS: refused, not meshed as planar units (a lon/lat
+    // file would be meshed in degrees without a word).
+    if (!srs && EQUAL(ds->GetDriverName(), "ESRI Shapefile"))
+      for (const char* ext : {".prj", ".PRJ"})
+        if (std::filesystem::path prj = std::filesystem::path(path).replace_extension(ext); std::filesystem::exists(prj))
+          throw InputError(prj.string() + ": GDAL cannot read the CRS in it; correct it (ogr2ogr -a_srs EPSG:n writes "
+                           "one) or remove it to mesh the coordinates as planar units");
+    // GeoPackage's undefined CRSs: srs_id -1 (Cartesian) is planar units, as no CRS; srs_id 0 (geographic, datum
+    // unknown) is taken as WGS 84 longitude/latitude, said.
+    OGRSpatialReference wgs84;
+    if (srs && srs->IsLocal()) {
+      const char* n = srs->GetName();
+      if (!n || std::string(n) != "Undefined Cartesian SRS")
+        notes.warnings.push_back(file + ", layer '" + name + "' is in a local engineering CRS" +
+                                 (n ? " '" + std::string(n) + "'" : std::string()) + ": its coordinates are meshed as planar units");
+      srs = nullptr;
+    } else if (srs && srs->IsGeographic() && srs->GetName() && std::string(srs->GetName()) == "Undefined geographic SRS") {
+      wgs84.importFromEPSG(4326);
+      notes.warnings.push_back(file + ", layer '" + name + "' has an undefined geographic CRS (GeoPackage srs_id 0): "
+                               "its longitudes and latitudes are taken as WGS 84 (EPSG:4326; ogr2ogr -a_srs sets the right one)");
+      srs = &wgs84;
+    }
     std::unique_ptr<OGRCoordinateTransformation> transform;
-    if (const OGRSpatialReference* srs = layer_srs(*ds, *layer)) {
+    if (srs) {
       OGRSpatialReference layer_srs_gis(*srs);
       layer_srs_gis.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
       if (!have_region_srs && region.rings.empty() && region.features.empty() && region.feature_points.empty()) {
@@ -296,6 +342,8 @@ void read_gdal(const std::filesystem::path& path, LayerRole default_role, const 
     const int size_field = layer->GetLayerDefn()->GetFieldIndex("size");
     CPLErrorReset();
     layer->ResetReading();
+    std::size_t varying_z = 0, curved = 0;
+    std::string first_varying_z, first_curved;
     for (auto& feature : *layer) {
       Reader reader{region, feature_names,
                     file + ", layer '" + name + "', FID " + std::to_string(feature->GetFID()),
@@ -306,7 +354,8 @@ void read_gdal(const std::filesystem::path& path, LayerRole default_role, const 
       if (kind_field >= 0 && feature->IsFieldSetAndNotNull(kind_field)) reader.kind = feature->GetFieldAsString(kind_field);
       reader.read_size(*feature, size_field);
       const OGRGeometry* g = feature->GetGeometryRef();
-      if (!g) reader.fail("the feature has no geometry");
+      if (!g)
+        reader.fail("the feature has no geometry (a row without a shape: delete it, or leave it out with --where)");
       std::string role = mode == Mode::boundary ? "boundary"
                          : mode == Mode::domain ? "domain"
                          : mode == Mode::feature ? "feature"
@@ -321,10 +370,21 @@ void read_gdal(const std::filesystem::path& path, LayerRole default_role, const 
       if (role == "boundary") reader.add_boundary(*g);
       else if (role == "domain" || role == "feature") reader.add(*g, role == "domain");
       else reader.fail("unknown role \"" + role + "\" (expected \"domain\", \"feature\" or \"boundary\")");
+      if (reader.z_min < reader.z_max && varying_z++ == 0) first_varying_z = "FID " + std::to_string(feature->GetFID());
+      if (!reader.curved.empty() && curved++ == 0)
+        first_curved = "FID " + std::to_string(feature->GetFID()) + " (a " + reader.curved + ")";
       if (reader.size > 0.0 && reader.size_unused_on)
         notes.warnings.push_back(reader.where + ": its size is not used (sizes hold inside domain polygons and along "
                                  "feature lines and polygons, not on " + std::string(reader.size_unused_on) + ")");
     }
+    if (varying_z > 0)
+      notes.warnings.push_back(file + ", layer '" + name + "': " + first_varying_z +
+                               (varying_z > 1 ? " and " + std::to_string(varying_z - 1) + " more features have" : std::string(" has")) +
+                               " positions whose third coordinate (z) varies; the mesh is 2D and z is dropped");
+    if (curved > 0)
+      notes.warnings.push_back(file + ", layer '" + name + "': " + first_curved +
+                               (curved > 1 ? " and " + std::to_string(curved - 1) + " more curved geometries are" : std::string(" is")) +
+                               " linearized: arcs become straight segments at GDAL's default step (4 degrees of arc)");
     // Some drivers (GeoPackage) only run the filter while reading and then stop early without a feature.
     if (CPLGetLastErrorType() == CE_Failure)
       throw InputError(file + ", layer '" + name + "': reading failed" +

@@ -141,6 +141,16 @@ void check_line_points(Region& region, const InputOptions& options, std::vector<
     dedupe(ring.points, true, ring_name(region, r), options.repair, repairs);
     if (ring.points.size() < 3)
       throw InputError(ring_name(region, r) + " has fewer than 3 distinct points, at " + point_text(ring.points.front()));
+    // A ring that turns back on itself (two consecutive edges along one line, the second going back over the
+    // first) encloses a spike of no width there; the crossing test skips consecutive edges, so it is refused here
+    // (a lon/lat cap to a pole run there and back along one meridian is one, once projected).
+    const std::vector<Vec2>& p = ring.points;
+    for (std::size_t i = 0; i < p.size() && !options.repair; ++i) {
+      const Vec2 a = p[(i + p.size() - 1) % p.size()], b = p[i], c = p[(i + 1) % p.size()];
+      if (orient2(a, b, c) == 0.0 && dot(b - a, c - b) < 0.0)
+        throw InputError(ring_name(region, r) + " turns back on itself at " + point_text(b) +
+                         " (a spike of no width: two consecutive edges along one line)");
+    }
   }
   for (std::size_t f = 0; f < region.features.size(); ++f) {
     FeatureCurve& c = region.features[f];
@@ -385,6 +395,9 @@ Region read_input(const std::filesystem::path& path, const InputOptions& options
                      (names.empty() ? std::string() : " from " + std::to_string(names.size()) + " feature(s)"));
   try {
     project_region(region, options.crs, notes);
+    // Places in messages from here on are in the input's own coordinates (lon/lat), not the projected metres.
+    const std::unique_ptr<PlaceTextHook> places = input_place_text(region, notes);
+    const ScopedPlaceText scoped(places.get());
     snap_near_coincident(region, options.snap_relative, &notes.snaps);
     validate_region(region, options, &notes.repairs, &notes.warnings);
   } catch (const InputError& e) {

@@ -13,6 +13,7 @@
 //   {long:N}     N letters "n" (file names too long for the file system)
 //   {vmem:MB}    the run under `ulimit -v` of MB megabytes (out of memory); removed from the arguments
 //   {np:N}       the run under `mpirun --quiet -np N` (skipped in a build without MPI); removed from the arguments
+//   {corpus}     the corpus directory (round3_gis: rasters named in the arguments, {corpus}/FILE)
 #include <gtest/gtest.h>
 
 #include <sys/wait.h>
@@ -40,7 +41,7 @@ namespace {
 
 // The corpus directories under tests/data whose cases.tsv rows are run, each with its README.md listing every file
 // (a new corpus: add its directory here; its test names are prefixed by it).
-const std::vector<std::string> kCorpora{"adversarial", "round3_outputs"};
+const std::vector<std::string> kCorpora{"adversarial", "round3_outputs", "round3_gis"};
 
 fs::path corpus_dir(const std::string& corpus) { return fs::path(POLYSQUARE_TEST_DATA_DIR) / corpus; }
 
@@ -187,7 +188,8 @@ TEST_P(AdversarialCorpus, EndsAsPromised) {
   }
   for (const std::string& d : directives.mkdirs) fs::create_directories(work / d);
   const std::set<std::string> before = entries(work);
-  args = replace_all(replace_all(args, "{dir}", work.string()), "{copy}", input);
+  args = replace_all(replace_all(replace_all(args, "{dir}", work.string()), "{copy}", input), "{corpus}",
+                     kCorpus.string());
   // The mesh: -o's value when the row gives one, else out.msh in the row's directory.
   fs::path mesh = work / "out.msh";
   if (const std::size_t o = args.find("-o "); o != std::string::npos)
@@ -271,12 +273,15 @@ INSTANTIATE_TEST_SUITE_P(Corpus, AdversarialCorpus, ::testing::ValuesIn(load_all
 // Every file of each corpus is run by at least one row (and listed in its README.md), and every row's file
 // exists: a file added without a promise, or a promise whose file went away, fails here.
 TEST(AdversarialCorpusTable, CoversEveryFile) {
-  const std::map<std::string, std::size_t> least_files{{"adversarial", 60}, {"round3_outputs", 15}};
+  const std::map<std::string, std::size_t> least_files{{"adversarial", 60}, {"round3_outputs", 15}, {"round3_gis", 20}};
   for (const std::string& corpus : kCorpora) {
     const std::vector<CorpusCase> cases = load_cases(corpus);
     std::set<std::string> used, names;
     for (const CorpusCase& c : cases) {
       used.insert(c.file);
+      used.insert(fs::path(c.file).stem().string());  // a Shapefile's .shx, .dbf, .prj go with its .shp
+      for (std::size_t at = c.args.find("{corpus}/"); at != std::string::npos; at = c.args.find("{corpus}/", at + 1))
+        used.insert(c.args.substr(at + 9, c.args.find(' ', at) - at - 9));  // a raster named in the arguments
       Directives d;
       take_directives(c.args, d);
       used.insert(d.copies.begin(), d.copies.end());
@@ -292,7 +297,8 @@ TEST(AdversarialCorpusTable, CoversEveryFile) {
       const std::string f = e.path().filename().string();
       if (f == "README.md" || f == "cases.tsv") continue;
       ++files;
-      EXPECT_TRUE(used.count(f)) << corpus << ": " << f << " has no row in cases.tsv";
+      EXPECT_TRUE(used.count(f) || (f.find('.') != std::string::npos && used.count(fs::path(f).stem().string())))
+          << corpus << ": " << f << " has no row in cases.tsv";
       EXPECT_NE(readme.find(fs::path(f).stem().string()), std::string::npos) << corpus << ": " << f << " is not in README.md";
     }
     const auto least = least_files.find(corpus);

@@ -313,3 +313,49 @@ TEST(GdalInput, BadInputNamesFileLayerAndFeature) {
   EXPECT_NE(crossing.find("bad.gpkg, layer 'crossing', FID 1"), std::string::npos) << crossing;
   fs::remove_all(dir);
 }
+
+// Issue 52: the longitudes' arc is taken on the circle, so a region across the antimeridian gets the UTM zone of
+// its own centre (180), not of the mean of -180 .. 180 (0, zone 31).
+TEST(GdalInput, LongitudeRangeIsTakenOnTheCircle) {
+  const LonRange across = longitude_range({179.9, -179.9, 180.0});
+  EXPECT_NEAR(across.width, 0.2, 1e-9);
+  EXPECT_NEAR(across.west, 179.9, 1e-9);
+  EXPECT_TRUE(across.crosses_antimeridian);
+  EXPECT_EQ(utm_epsg(across.centre, -17.0), 32701);
+  const LonRange greenwich = longitude_range({-0.1, 0.1});
+  EXPECT_NEAR(greenwich.width, 0.2, 1e-9);
+  EXPECT_NEAR(greenwich.centre, 0.0, 1e-9);
+  EXPECT_FALSE(greenwich.crosses_antimeridian);
+  const LonRange east360 = longitude_range({179.9, 180.1});  // longitudes past 180 as some files write them
+  EXPECT_NEAR(east360.width, 0.2, 1e-9);
+  EXPECT_TRUE(std::abs(east360.centre) == 180.0 || std::abs(east360.centre) < 1e-9 || east360.centre == -180.0);
+  EXPECT_NEAR(longitude_range({-100, 0, 100}).width, 200.0, 1e-9);
+  EXPECT_NEAR(longitude_range({10, 12}).centre, 11.0, 1e-9);
+}
+
+// Issue 52: messages about a projected lon/lat region name places in lon/lat, the coordinates of the user's file.
+TEST(GdalInput, PlacesInMessagesAreInTheInputsCoordinates) {
+  Region region;
+  region.source = "bay";
+  region.crs = "EPSG:4326";
+  region.rings.push_back({{{-122.5, 37.7}, {-122.45, 37.7}, {-122.45, 37.7}, {-122.4, 37.7}, {-122.4, 37.8}, {-122.5, 37.8}}, 0, false, 0, "", 0.0});
+  region.num_parts = 1;
+  InputNotes notes;
+  project_region(region, "", notes);
+  ASSERT_TRUE(notes.reprojected);
+  const std::unique_ptr<PlaceTextHook> places = input_place_text(region, notes);
+  ASSERT_TRUE(places);
+  const Vec2 p = region.rings[0].points[1];
+  EXPECT_EQ(point_text(p).substr(0, 2), "(5");  // UTM metres without the hook
+  {
+    const ScopedPlaceText scoped(places.get());
+    EXPECT_EQ(point_text(p), "(-122.45, 37.7)");
+    try {
+      validate_region(region);
+      ADD_FAILURE() << "a repeated point must be refused";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("repeats the point (-122.45, 37.7)"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_EQ(point_text(p).substr(0, 2), "(5");  // the hook ends with its scope
+}

@@ -54,14 +54,38 @@ inline double quad_min_sj(Vec2 a, Vec2 b, Vec2 c, Vec2 d) {
   return std::min(std::min(corner_sj(d, a, b), corner_sj(a, b, c)), std::min(corner_sj(b, c, d), corner_sj(c, d, a)));
 }
 
-/// "(x, y)" for messages that say where something is.
 /// "(x, y)" with 12 significant digits: input places in messages, exact enough to find a vertex again.
-inline std::string point_text(Vec2 p) {
+inline std::string plain_point_text(Vec2 p) {
   std::ostringstream os;
   os.precision(12);
   os << "(" << p.x << ", " << p.y << ")";
   return os.str();
 }
+
+/// How a place of a projected region is written in messages: in the input's own coordinates (lon/lat), which
+/// the user's file holds, not in the metres it is meshed in. Installed on a thread by ScopedPlaceText.
+class PlaceTextHook {
+ public:
+  virtual ~PlaceTextHook() = default;
+  virtual std::string text(Vec2 p) const = 0;
+};
+inline thread_local const PlaceTextHook* place_text_hook = nullptr;
+
+/// While alive, point_text on this thread writes places through `hook` (nullptr: as they are).
+class ScopedPlaceText {
+ public:
+  explicit ScopedPlaceText(const PlaceTextHook* hook) : previous_(place_text_hook) { place_text_hook = hook; }
+  ~ScopedPlaceText() { place_text_hook = previous_; }
+  ScopedPlaceText(const ScopedPlaceText&) = delete;
+  ScopedPlaceText& operator=(const ScopedPlaceText&) = delete;
+
+ private:
+  const PlaceTextHook* previous_;
+};
+
+/// "(x, y)" for messages that say where something is: plain_point_text, or the input's coordinates of a
+/// projected region while a ScopedPlaceText is alive.
+inline std::string point_text(Vec2 p) { return place_text_hook ? place_text_hook->text(p) : plain_point_text(p); }
 
 inline std::string at_text(Vec2 p) { return "(" + std::to_string(p.x) + ", " + std::to_string(p.y) + ")"; }
 

@@ -22,11 +22,15 @@ enum class LayerRole {
 /// A layer is selected by options.domain_layer / options.feature_layers (see InputOptions), and its features by
 /// options.where. A string `role` attribute ("domain", "feature" or "boundary") overrides `default_role`, except in a layer
 /// named by --domain-layer or --feature-layer, whose role is the option's, and in a --boundary file (every line
-/// is a boundary segment). String attributes `name` and `kind` go to the ring, curve or segment read. Curved geometries are linearized,
-/// Z and M are dropped. Every geometry gets source_feature = feature_names.size() at the time it is read, and
+/// is a boundary segment). String attributes `name` and `kind` go to the ring, curve or segment read. Curved geometries are linearized
+/// (said in notes.warnings, naming the first feature and counting the others), Z and M are dropped (varying z said,
+/// as the GeoJSON reader says it). A layer without a geometry column (an attribute table) is skipped with a warning,
+/// refused when --domain-layer or --feature-layer names it; a feature without geometry is refused naming its FID. Every geometry gets source_feature = feature_names.size() at the time it is read, and
 /// feature_names gets "FILE, layer 'L', FID n" for it.
 /// CRS: the first layer with a spatial reference sets region.crs (when still empty, e.g. "EPSG:32616", else
-/// WKT); later layers in another CRS are transformed into it. GeoJSON without a "crs" member has no CRS, as
+/// WKT); later layers in another CRS are transformed into it. A Shapefile whose .prj GDAL cannot read is refused
+/// naming the .prj; a local engineering CRS (GeoPackage srs_id -1) is no CRS (planar units); GeoPackage's undefined
+/// geographic CRS (srs_id 0) is taken as WGS 84 with a warning. GeoJSON without a "crs" member has no CRS, as
 /// for the native reader (GDAL would assume WGS 84). Throws InputError naming the file, layer and feature.
 void read_gdal(const std::filesystem::path& path, LayerRole default_role, const InputOptions& options, Region& region,
                std::vector<std::string>& feature_names, InputNotes& notes);
