@@ -82,6 +82,11 @@ void partition_flags(CLI::App& t, MeshArgs& m) {
                "grading needs; fewer quads per subregion: less stretched quads, more singular nodes)")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
+  t.add_option("--transition-cost", m.options.map.quantize.transition_cost,
+               "graded mesh: where two subregions' sizes differ, their interface counts may differ by 2 k, joined by "
+               "a row of k transition quads (two singular nodes each) costing this much each (0 = off)")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
   t.add_option(
        "--parts", m.options.subregions.parts,
        "subregions per polygon part (1 = one poly-square per part, 0 = try several counts and keep the best mesh)")

@@ -25,7 +25,7 @@ void mapped_fields(IO& io, M& mm, bool with_problem) {
 template <class IO, class Stats>
 void stats_fields(IO& io, Stats& s) {
   io(s.part), io(s.triangles), io(s.triangle_vertices), io(s.rotation_deg), io(s.deform), io(s.break_points);
-  io(s.segments), io(s.quantize), io(s.quads), io(s.separators), io(s.agreed_turns), io(s.split), io(s.joint_splits);
+  io(s.segments), io(s.quantize), io(s.quads), io(s.separators), io(s.agreed_turns), io(s.transition_rows), io(s.split), io(s.joint_splits);
   io(s.seconds_partition), io(s.seconds_triangulate), io(s.seconds_deform), io(s.seconds_quantize);
   io(s.seconds_snap), io(s.seconds_extract), io(s.joint_maps), io(s.seconds_joint_maps);
   io(s.multipass.passes), io(s.multipass.colours), io(s.multipass.last_move), io(s.multipass.seconds);

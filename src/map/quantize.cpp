@@ -161,12 +161,18 @@ IntegerProgram joint_program(JointProblem& jp, const std::vector<SegmentCoupling
     const double ss = label_sign(s.label), st = label_sign(t.label);
     const int sa = jp.col(c.layout_a, label_axis(s.label), s.break_a), sb = jp.col(c.layout_a, label_axis(s.label), s.break_b);
     const int ta = jp.col(c.layout_b, label_axis(t.label), t.break_a), tb = jp.col(c.layout_b, label_axis(t.label), t.break_b);
+    std::vector<std::pair<int, double>> row{{sb, ss}, {sa, -ss}, {tb, -st}, {ta, st}};
     if (elastic) {
       const int e = P.add_columns(2, 0.0, inf, options.broken_coupling_cost);
-      P.add_row({{sb, ss}, {sa, -ss}, {tb, -st}, {ta, st}, {e, 1.0}, {e + 1, -1.0}}, 0.0, 0.0);
-    } else {
-      P.add_row({{sb, ss}, {sa, -ss}, {tb, -st}, {ta, st}}, 0.0, 0.0);
+      row.insert(row.end(), {{e, 1.0}, {e + 1, -1.0}});
     }
+    if (c.transition) {
+      // n_a - n_b = 2 (fans on b's side - fans on a's side); a fan costs as a relative deviation of the target.
+      const double t_c = std::max(target[c.layout_a][static_cast<std::size_t>(c.segment_a)], 1.0);
+      const int f = P.add_columns(2, 0.0, inf, options.transition_cost / t_c, true);
+      row.insert(row.end(), {{f, -2.0}, {f + 1, 2.0}});
+    }
+    P.add_row(row, 0.0, 0.0);
   }
   for (const EvenGroup& g : even_groups) {
     // sum of the counts - 2 m = 0, m integer.

@@ -144,7 +144,7 @@ void from_json(const json& j, SubregionReport& s) {
 
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(PartReport, part, triangles, rotation_deg, deform, split, break_points, segments,
                                    quantization_max_relative_deviation, quads, seconds, joint_maps, agreed_turns,
-                                   multipass, subregions)
+                                   transition_rows, multipass, subregions)
 
 void to_json(json& j, const PoorQuadReport& p) {
   j = {{"at", p.at}, {"scaled_jacobian", p.scaled_jacobian}, {"edge_ratio", p.edge_ratio}};

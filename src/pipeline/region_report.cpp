@@ -40,6 +40,7 @@ PartReport part_report(const PartMapStats& s) {
                  s.seconds_joint_maps};
   out.joint_maps = s.joint_maps;
   out.agreed_turns = s.agreed_turns;
+  out.transition_rows = s.transition_rows;
   out.multipass = {s.multipass.passes, s.multipass.colours, s.multipass.last_move, s.multipass.seconds};
   for (const SubregionStats& r : s.subregions) out.subregions.push_back(subregion_report(r));
   return out;

@@ -137,6 +137,7 @@ struct PartMapStats {
   std::size_t separators = 0;      ///< separator chains between subregions
   std::size_t agreed_turns = 0;    ///< PPM: pairs of breaks on feature interfaces made to turn alike on both sides
   std::vector<SubregionStats> subregions;  ///< PPM: every subregion, in order
+  std::size_t transition_rows = 0;         ///< PPM, graded: rows joining two counts of one interface (last map)
   SplitStats split;                        ///< PPM: subregions split before the joint map
   std::vector<std::pair<int, int>> failed_maps;  ///< PPM: subregions whose own map failed in the joint map (not
                                                  ///< requested patches), with their poly-square side counts

@@ -36,6 +36,9 @@ struct QuantizeOptions {
                                      ///< kept at any cost: branch-and-cut ran to the time limit and kept the
                                      ///< dive's point on each such program measured (25k columns, 20 s per
                                      ///< solve), and what it returns at a time limit depends on the machine
+  double transition_cost = 2.0;  ///< graded PPM: cost of one transition fan on a coupling marked `transition`
+                                 ///< (two elements of mismatch, two singular nodes), relative to the coupled
+                                 ///< target as the sides' deviations are; 0 = no coupling is marked
   bool screen_separations = true;  ///< each round's separations are tried on their layout alone before they join
                                    ///< the program; those that contradict its sides or each other give way to the
                                    ///< next choice for their conflict (false: added as found, and the solve fails)
@@ -85,6 +88,7 @@ struct SegmentCoupling {
   int segment_a = 0;
   std::size_t layout_b = 0;
   int segment_b = 0;
+  bool transition = false;  ///< the counts may differ by an even number, joined by a transition row (fans)
 };
 
 /// Segments (layout, segment) whose element counts must add up to an even number: the interfaces around a

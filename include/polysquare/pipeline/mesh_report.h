@@ -110,6 +110,7 @@ struct PartReport {
   PartSecondsReport seconds;
   int joint_maps = 0;
   std::size_t agreed_turns = 0;
+  std::size_t transition_rows = 0;
   MultipassReport multipass;
   std::vector<SubregionReport> subregions;
 };
