@@ -92,10 +92,37 @@ TEST(Graded, DeltaWaterFollowsItsSizeField) {
   EXPECT_LE(1000.0 * static_cast<double>(q.interior_singularities) / static_cast<double>(r.mesh.quads.size()), 40.0);
   EXPECT_GE(f.size_ratio_median, 0.8);
   EXPECT_LE(f.size_ratio_median, 1.25);
+  EXPECT_GE(f.size_ratio_p05, 0.5);  // 0.47 before transition rows
   EXPECT_LE(f.size_ratio_p95, 1.6);
   EXPECT_LE(f.neighbour_ratio_p99, 2.0);
   // Sizes really vary: the largest quads are many times the smallest.
   EXPECT_GT(f.max / f.min, 10.0);
+}
+
+// Transition rows: where neighbouring subregions want counts far apart, rows of fans join them, so the quads along
+// a shore keep the shore's size instead of the far side's. On the estuary (100 m at the shore, 800 m offshore) the
+// smallest quads come nearer their size than with every row keeping its count (--transition-cost 0), and the mesh
+// stays semi-structured.
+TEST(Graded, TransitionRowsBringQuadsNearerTheirSize) {
+  const Region region = read_region(std::string(POLYSQUARE_DATA_DIR) + "/cases/estuary.geojson");
+  MeshOptions without = graded(100.0, 800.0);
+  without.map.quantize.transition_cost = 0.0;
+  const MeshResult a = mesh_region(region, graded(100.0, 800.0)), b = mesh_region(region, without);
+  auto rows = [](const MeshResult& r) {
+    std::size_t n = 0;
+    for (const PartReport& p : r.report.parts) n += p.transition_rows;
+    return n;
+  };
+  EXPECT_GT(rows(a), 0u);
+  EXPECT_EQ(rows(b), 0u);
+  for (const MeshResult* r : {&a, &b}) EXPECT_TRUE(check_invariants(r->mesh).ok());
+  ASSERT_TRUE(a.report.size_field && b.report.size_field);
+  EXPECT_GE(a.report.size_field->size_ratio_p05, 0.5);
+  EXPECT_GT(a.report.size_field->size_ratio_p05, b.report.size_field->size_ratio_p05 + 0.03);
+  EXPECT_GT(a.report.size_field->size_ratio_median, b.report.size_field->size_ratio_median);
+  const QualityReport q = compute_quality(a.mesh);
+  EXPECT_GE(q.regular_quad_fraction, 0.9);
+  EXPECT_LE(1000.0 * static_cast<double>(q.interior_singularities) / static_cast<double>(a.mesh.quads.size()), 40.0);
 }
 
 // A 2 km x 1 km basin with a 30 m wide, 600 m long channel: --across 3 puts at least three quads across the
