@@ -175,6 +175,112 @@ int utm_epsg(double lon, double lat) {
   return (lat >= 0 ? 32600 : 32700) + zone;
 }
 
+namespace {
+
+// The input's CRS, refused when PROJ does not know it (an EPSG code that does not exist, a typo: taking the
+// coordinates as planar would mesh degrees, or feet, as metres without a word) or when it is not planar-able.
+void parse_source_crs(const Region& region, OGRSpatialReference& source) {
+  if (!crs::parse(region.crs, source))
+    throw InputError(region.source + ": CRS \"" + region.crs.substr(0, 80) + "\" is not one PROJ knows" +
+                     (region.crs.rfind("EPSG:", 0) == 0 ? " (no such EPSG code)" : std::string()) +
+                     "; name a known CRS (ogr2ogr -a_srs EPSG:n) or none to mesh the coordinates as planar units");
+  if (source.IsGeocentric())
+    throw InputError(region.source + ": CRS " + region.crs.substr(0, 80) +
+                     " is geocentric (x, y, z from the earth's centre); a planar region needs a geographic or projected "
+                     "CRS (ogr2ogr -t_srs EPSG:4326 converts)");
+  if (!source.IsGeographic() && !source.IsProjected())
+    throw InputError(region.source + ": CRS " + region.crs.substr(0, 80) +
+                     " is neither geographic nor projected; a planar region needs one of those");
+}
+
+// The UTM zone of a geographic region's centre (its longitude taken on the circle: a region across the
+// antimeridian, 179.9 and -179.9, has its centre at 180, not at 0, which put it in zone 31); refused beyond UTM's
+// latitudes and wider than half the earth.
+std::string utm_zone_of(const Region& region, const OGRSpatialReference& source, const Box2& box, InputNotes& notes) {
+  // The centre's longitude and latitude, in degrees, whatever the source's geographic unit. The longitude's
+  // centre is taken on the circle: a region across the antimeridian (179.9 and -179.9) has its centre at 180,
+  // not at 0 (which put it in zone 31, 180 degrees from its central meridian).
+  const double to_degree = source.GetAngularUnits() / (M_PI / 180.0);
+  const double lat_lo = box.lo.y * to_degree, lat_hi = box.hi.y * to_degree;
+  // UTM covers 80 S to 84 N; past that (a cap reaching the pole) its zones do not hold the region.
+  if (lat_hi > 84.0 || lat_lo < -80.0)
+    throw InputError(region.source + ": the region reaches latitude " + number_text(lat_hi > 84.0 ? lat_hi : lat_lo) +
+                     ", beyond " + (lat_hi > 84.0 ? "84 N" : "80 S") + " where UTM zones end; give --crs a polar "
+                     "CRS (" + (lat_hi > 84.0 ? "EPSG:3413 or EPSG:3995" : "EPSG:3031") +
+                     "), with no ring along latitude " + (lat_hi > 84.0 ? "90" : "-90") + ", which is one point");
+  const LonRange lon = longitude_range(longitudes(region, to_degree));
+  if (lon.width > 180.0)
+    throw InputError(region.source + ": the region spans " + number_text(lon.width) +
+                     " degrees of longitude (from " + number_text(lon.west) + " to " + number_text(lon.east) +
+                     "), more than half the earth: no UTM zone holds it; give --crs a CRS for it");
+  const std::string target_name = "EPSG:" + std::to_string(utm_epsg(lon.centre, 0.5 * (lat_lo + lat_hi)));
+  if (lon.crosses_antimeridian)
+    notes.warnings.push_back(region.source + ": the region crosses the antimeridian (longitudes " +
+                             number_text(lon.west) + " to " + number_text(lon.east > 180.0 ? lon.east - 360.0 : lon.east) +
+                             "); meshed in " + target_name + ", the UTM zone of its centre at longitude " +
+                             number_text(lon.centre));
+  return target_name;
+}
+
+// Longitude -180 written as 180 and parts meeting along it united (an RFC 7946 split); a cap drawn along latitude
+// 90 (or -90) has those vertices taken as one point, the pole, said (else the ring repeated a point).
+void mend_seam_and_poles(Region& region, double to_degree, InputNotes& notes) {
+  auto at_pole = [&](Vec2 p) { return std::abs(p.y * to_degree) == 90.0; };
+  // Longitude -180 is longitude 180: one value for both, so a region split at the antimeridian (RFC 7946) has
+  // its two sides' points projected to the same bits.
+  auto seam = [&](std::vector<Vec2>& pts) {
+    for (Vec2& p : pts)
+      if (p.x * to_degree == -180.0) p.x = 180.0 / to_degree;
+  };
+  for (Ring& r : region.rings) seam(r.points);
+  for (FeatureCurve& c : region.features) seam(c.points);
+  seam(region.feature_points);
+  for (BoundarySegment& b : region.boundary_segments) seam(b.line);
+  unite_antimeridian_parts(region, to_degree, notes);
+  auto collapse = [&](std::vector<Vec2>& pts, bool closed, int feature) {
+    std::vector<Vec2> kept;
+    for (std::size_t i = 0; i < pts.size(); ++i)
+      if (kept.empty() || !(at_pole(pts[i]) && at_pole(kept.back()) && pts[i].y == kept.back().y)) kept.push_back(pts[i]);
+    while (closed && kept.size() > 1 && at_pole(kept.front()) && at_pole(kept.back()) && kept.front().y == kept.back().y)
+      kept.pop_back();
+    if (kept.size() == pts.size()) return;
+    double pole = 90.0;
+    for (Vec2 p : kept)
+      if (at_pole(p)) {
+        pole = p.y * to_degree;
+        break;
+      }
+    notes.warnings.push_back(region.source + ": feature " + std::to_string(feature) + " runs along latitude " +
+                             number_text(pole) +
+                             ", which is one point (the pole): " + std::to_string(pts.size() - kept.size() + 1) +
+                             " vertices there are taken as one");
+    pts = std::move(kept);
+  };
+  for (Ring& r : region.rings) collapse(r.points, true, r.source_feature);
+  for (FeatureCurve& c : region.features) collapse(c.points, c.closed, c.source_feature);
+}
+
+// Every point of the region through `transform`; a point it cannot take is refused, named.
+void project_points(Region& region, OGRCoordinateTransformation& transform, const std::string& target_name) {
+  auto project = [&](std::vector<Vec2>& pts, const std::string& what) {
+    std::vector<double> x(pts.size()), y(pts.size());
+    std::vector<int> ok(pts.size(), 0);
+    for (std::size_t i = 0; i < pts.size(); ++i) x[i] = pts[i].x, y[i] = pts[i].y;
+    if (!pts.empty()) transform.Transform(pts.size(), x.data(), y.data(), nullptr, nullptr, ok.data());
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      if (!ok[i] || !std::isfinite(x[i]) || !std::isfinite(y[i]))
+        throw InputError(region.source + ": " + what + ": the point " + point_text(pts[i]) + " cannot be projected to " + target_name);
+      pts[i] = {x[i], y[i]};
+    }
+  };
+  for (Ring& r : region.rings) project(r.points, "feature " + std::to_string(r.source_feature));
+  for (FeatureCurve& c : region.features) project(c.points, "feature " + std::to_string(c.source_feature));
+  project(region.feature_points, "feature points");
+  for (BoundarySegment& b : region.boundary_segments) project(b.line, "feature " + std::to_string(b.source_feature));
+}
+
+}  // namespace
+
 void project_region(Region& region, const std::string& target_crs, InputNotes& notes) {
   const Box2 box = region.bounding_box();
   notes.input_crs = region.crs;
@@ -190,19 +296,7 @@ void project_region(Region& region, const std::string& target_crs, InputNotes& n
     return;
   }
   OGRSpatialReference source;
-  // A CRS the file names but PROJ does not know (an EPSG code that does not exist, a typo) is refused: taking the
-  // coordinates as planar would mesh degrees, or feet, as metres without a word.
-  if (!crs::parse(region.crs, source))
-    throw InputError(region.source + ": CRS \"" + region.crs.substr(0, 80) + "\" is not one PROJ knows" +
-                     (region.crs.rfind("EPSG:", 0) == 0 ? " (no such EPSG code)" : std::string()) +
-                     "; name a known CRS (ogr2ogr -a_srs EPSG:n) or none to mesh the coordinates as planar units");
-  if (source.IsGeocentric())
-    throw InputError(region.source + ": CRS " + region.crs.substr(0, 80) +
-                     " is geocentric (x, y, z from the earth's centre); a planar region needs a geographic or projected "
-                     "CRS (ogr2ogr -t_srs EPSG:4326 converts)");
-  if (!source.IsGeographic() && !source.IsProjected())
-    throw InputError(region.source + ": CRS " + region.crs.substr(0, 80) +
-                     " is neither geographic nor projected; a planar region needs one of those");
+  parse_source_crs(region, source);
   if (source.IsProjected() && target_crs.empty()) {
     region.units = units_of(source);
     if (region.units != "m")
@@ -226,28 +320,7 @@ void project_region(Region& region, const std::string& target_crs, InputNotes& n
   OGRSpatialReference target;
   std::string target_name = target_crs;
   if (target_name.empty() && source.IsGeographic()) {
-    // The centre's longitude and latitude, in degrees, whatever the source's geographic unit. The longitude's
-    // centre is taken on the circle: a region across the antimeridian (179.9 and -179.9) has its centre at 180,
-    // not at 0 (which put it in zone 31, 180 degrees from its central meridian).
-    const double to_degree = source.GetAngularUnits() / (M_PI / 180.0);
-    const double lat_lo = box.lo.y * to_degree, lat_hi = box.hi.y * to_degree;
-    // UTM covers 80 S to 84 N; past that (a cap reaching the pole) its zones do not hold the region.
-    if (lat_hi > 84.0 || lat_lo < -80.0)
-      throw InputError(region.source + ": the region reaches latitude " + number_text(lat_hi > 84.0 ? lat_hi : lat_lo) +
-                       ", beyond " + (lat_hi > 84.0 ? "84 N" : "80 S") + " where UTM zones end; give --crs a polar "
-                       "CRS (" + (lat_hi > 84.0 ? "EPSG:3413 or EPSG:3995" : "EPSG:3031") +
-                       "), with no ring along latitude " + (lat_hi > 84.0 ? "90" : "-90") + ", which is one point");
-    const LonRange lon = longitude_range(longitudes(region, to_degree));
-    if (lon.width > 180.0)
-      throw InputError(region.source + ": the region spans " + number_text(lon.width) +
-                       " degrees of longitude (from " + number_text(lon.west) + " to " + number_text(lon.east) +
-                       "), more than half the earth: no UTM zone holds it; give --crs a CRS for it");
-    target_name = "EPSG:" + std::to_string(utm_epsg(lon.centre, 0.5 * (lat_lo + lat_hi)));
-    if (lon.crosses_antimeridian)
-      notes.warnings.push_back(region.source + ": the region crosses the antimeridian (longitudes " +
-                               number_text(lon.west) + " to " + number_text(lon.east > 180.0 ? lon.east - 360.0 : lon.east) +
-                               "); meshed in " + target_name + ", the UTM zone of its centre at longitude " +
-                               number_text(lon.centre));
+    target_name = utm_zone_of(region, source, box, notes);
   }
   if (!crs::parse(target_name, target)) throw InputError("--crs " + target_name + ": not a CRS PROJ knows");
   if (!target.IsProjected()) throw InputError("--crs " + target_name + ": not a projected CRS (meshing needs planar coordinates)");
@@ -257,57 +330,8 @@ void project_region(Region& region, const std::string& target_crs, InputNotes& n
   // A cap drawn in longitude/latitude runs along latitude 90 (or -90) from one longitude to another: on the earth
   // (and in a polar CRS) those vertices are one point, the pole. They are taken as one, said; else the ring
   // repeated a point.
-  if (source.IsGeographic()) {
-    const double to_degree = source.GetAngularUnits() / (M_PI / 180.0);
-    auto at_pole = [&](Vec2 p) { return std::abs(p.y * to_degree) == 90.0; };
-    // Longitude -180 is longitude 180: one value for both, so a region split at the antimeridian (RFC 7946) has
-    // its two sides' points projected to the same bits.
-    auto seam = [&](std::vector<Vec2>& pts) {
-      for (Vec2& p : pts)
-        if (p.x * to_degree == -180.0) p.x = 180.0 / to_degree;
-    };
-    for (Ring& r : region.rings) seam(r.points);
-    for (FeatureCurve& c : region.features) seam(c.points);
-    seam(region.feature_points);
-    for (BoundarySegment& b : region.boundary_segments) seam(b.line);
-    unite_antimeridian_parts(region, to_degree, notes);
-    auto collapse = [&](std::vector<Vec2>& pts, bool closed, int feature) {
-      std::vector<Vec2> kept;
-      for (std::size_t i = 0; i < pts.size(); ++i)
-        if (kept.empty() || !(at_pole(pts[i]) && at_pole(kept.back()) && pts[i].y == kept.back().y)) kept.push_back(pts[i]);
-      while (closed && kept.size() > 1 && at_pole(kept.front()) && at_pole(kept.back()) && kept.front().y == kept.back().y)
-        kept.pop_back();
-      if (kept.size() == pts.size()) return;
-      double pole = 90.0;
-      for (Vec2 p : kept)
-        if (at_pole(p)) {
-          pole = p.y * to_degree;
-          break;
-        }
-      notes.warnings.push_back(region.source + ": feature " + std::to_string(feature) + " runs along latitude " +
-                               number_text(pole) +
-                               ", which is one point (the pole): " + std::to_string(pts.size() - kept.size() + 1) +
-                               " vertices there are taken as one");
-      pts = std::move(kept);
-    };
-    for (Ring& r : region.rings) collapse(r.points, true, r.source_feature);
-    for (FeatureCurve& c : region.features) collapse(c.points, c.closed, c.source_feature);
-  }
-  auto project = [&](std::vector<Vec2>& pts, const std::string& what) {
-    std::vector<double> x(pts.size()), y(pts.size());
-    std::vector<int> ok(pts.size(), 0);
-    for (std::size_t i = 0; i < pts.size(); ++i) x[i] = pts[i].x, y[i] = pts[i].y;
-    if (!pts.empty()) transform->Transform(pts.size(), x.data(), y.data(), nullptr, nullptr, ok.data());
-    for (std::size_t i = 0; i < pts.size(); ++i) {
-      if (!ok[i] || !std::isfinite(x[i]) || !std::isfinite(y[i]))
-        throw InputError(region.source + ": " + what + ": the point " + point_text(pts[i]) + " cannot be projected to " + target_name);
-      pts[i] = {x[i], y[i]};
-    }
-  };
-  for (Ring& r : region.rings) project(r.points, "feature " + std::to_string(r.source_feature));
-  for (FeatureCurve& c : region.features) project(c.points, "feature " + std::to_string(c.source_feature));
-  project(region.feature_points, "feature points");
-  for (BoundarySegment& b : region.boundary_segments) project(b.line, "feature " + std::to_string(b.source_feature));
+  if (source.IsGeographic()) mend_seam_and_poles(region, source.GetAngularUnits() / (M_PI / 180.0), notes);
+  project_points(region, *transform, target_name);
   region.crs = target_name;
   region.units = units_of(target);
   notes.reprojected = true;

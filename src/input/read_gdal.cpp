@@ -247,6 +247,139 @@ std::vector<std::string> gdal_layer_names(const std::filesystem::path& path) {
   return names;
 }
 
+namespace {
+
+// Which role a layer's geometries take: forced by a layer option, else the attribute or the default.
+enum class Mode { skip, by_attribute, domain, feature, boundary };
+
+Mode layer_mode(const std::string& name, LayerRole default_role, const InputOptions& options) {
+  if (default_role == LayerRole::boundary) return Mode::boundary;
+  if (name == options.domain_layer && default_role == LayerRole::by_geometry) return Mode::domain;
+  if (contains(options.feature_layers, name)) return Mode::feature;
+  if (!options.feature_layers.empty() && (default_role == LayerRole::feature || !options.domain_layer.empty()))
+    return Mode::skip;
+  if (!options.domain_layer.empty()) return Mode::feature;
+  return Mode::by_attribute;
+}
+
+// The layer's CRS as it is meant: none for planar units, WGS 84 (in `wgs84`) for GeoPackage's undefined
+// geographic one.
+const OGRSpatialReference* defined_srs(GDALDataset& ds, OGRLayer& layer, const std::filesystem::path& path,
+                                       InputNotes& notes, OGRSpatialReference& wgs84) {
+  const std::string file = path.string(), name = layer.GetName();
+  const OGRSpatialReference* srs = layer_srs(ds, layer);
+  // A Shapefile whose .prj GDAL cannot read comes without a CRS: refused, not meshed as planar units (a lon/lat
+  // file would be meshed in degrees without a word).
+  if (!srs && EQUAL(ds.GetDriverName(), "ESRI Shapefile"))
+    for (const char* ext : {".prj", ".PRJ"})
+      if (std::filesystem::path prj = std::filesystem::path(path).replace_extension(ext); std::filesystem::exists(prj))
+        throw InputError(prj.string() + ": GDAL cannot read the CRS in it; correct it (ogr2ogr -a_srs EPSG:n writes "
+                         "one) or remove it to mesh the coordinates as planar units");
+  // GeoPackage's undefined CRSs: srs_id -1 (Cartesian) is planar units, as no CRS; srs_id 0 (geographic, datum
+  // unknown) is taken as WGS 84 longitude/latitude, said.
+  if (srs && srs->IsLocal()) {
+    const char* n = srs->GetName();
+    if (!n || std::string(n) != "Undefined Cartesian SRS")
+      notes.warnings.push_back(file + ", layer '" + name + "' is in a local engineering CRS" +
+                               (n ? " '" + std::string(n) + "'" : std::string()) + ": its coordinates are meshed as planar units");
+    srs = nullptr;
+  } else if (srs && srs->IsGeographic() && srs->GetName() && std::string(srs->GetName()) == "Undefined geographic SRS") {
+    wgs84.importFromEPSG(4326);
+    notes.warnings.push_back(file + ", layer '" + name + "' has an undefined geographic CRS (GeoPackage srs_id 0): "
+                             "its longitudes and latitudes are taken as WGS 84 (EPSG:4326; ogr2ogr -a_srs sets the right one)");
+    srs = &wgs84;
+  }
+  return srs;
+}
+
+// The transform from the layer's CRS to the region's (null when they agree or either has none); the first layer
+// with a CRS gives the region its CRS.
+std::unique_ptr<OGRCoordinateTransformation> to_region_srs(const OGRSpatialReference* srs, const std::string& where,
+                                                           Region& region, OGRSpatialReference& region_srs,
+                                                           bool& have_region_srs, InputNotes& notes) {
+  std::unique_ptr<OGRCoordinateTransformation> transform;
+  if (srs) {
+    OGRSpatialReference layer_srs_gis(*srs);
+    layer_srs_gis.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
+    if (!have_region_srs && region.rings.empty() && region.features.empty() && region.feature_points.empty()) {
+      region_srs = layer_srs_gis;
+      have_region_srs = true;
+      region.crs = crs_name(layer_srs_gis);
+    } else if (!have_region_srs) {
+      notes.warnings.push_back(where + " is in " + crs_name(layer_srs_gis) +
+                               " but what was read before names no CRS; its coordinates are taken as they are");
+    } else if (!layer_srs_gis.IsSame(&region_srs)) {
+      transform.reset(OGRCreateCoordinateTransformation(&layer_srs_gis, &region_srs));
+      if (!transform)
+        throw InputError(where + ": cannot transform from " + crs_name(layer_srs_gis) + " to " +
+                         region.crs + gdal_message());
+    }
+  }
+  return transform;
+}
+
+struct LayerSource {
+  std::string where;      // "file, layer 'name'"
+  bool shapefile = false; // outer rings clockwise
+};
+
+// Every feature of `layer` read into `region` in its role, with the layer's warnings (varying z, arcs).
+void read_layer(OGRLayer& layer, Mode mode, LayerRole default_role, const LayerSource& source,
+                OGRCoordinateTransformation* transform, Region& region, std::vector<std::string>& feature_names,
+                InputNotes& notes) {
+  const int role_field = layer.GetLayerDefn()->GetFieldIndex("role");
+  const int name_field = layer.GetLayerDefn()->GetFieldIndex("name");
+  const int kind_field = layer.GetLayerDefn()->GetFieldIndex("kind");
+  const int size_field = layer.GetLayerDefn()->GetFieldIndex("size");
+  CPLErrorReset();
+  layer.ResetReading();
+  std::size_t varying_z = 0, curved = 0;
+  std::string first_varying_z, first_curved;
+  for (auto& feature : layer) {
+    Reader reader{region, feature_names,
+                  source.where + ", FID " + std::to_string(feature->GetFID()),
+                  static_cast<int>(feature_names.size()), transform};
+    reader.clockwise_outer_rings = source.shapefile;
+    feature_names.push_back(reader.where);
+    if (name_field >= 0 && feature->IsFieldSetAndNotNull(name_field)) reader.name = feature->GetFieldAsString(name_field);
+    if (kind_field >= 0 && feature->IsFieldSetAndNotNull(kind_field)) reader.kind = feature->GetFieldAsString(kind_field);
+    reader.read_size(*feature, size_field);
+    const OGRGeometry* g = feature->GetGeometryRef();
+    if (!g)
+      reader.fail("the feature has no geometry (a row without a shape: delete it, or leave it out with --where)");
+    std::string role = mode == Mode::boundary ? "boundary"
+                       : mode == Mode::domain ? "domain"
+                       : mode == Mode::feature ? "feature"
+                                               : "";
+    if (mode == Mode::by_attribute && role_field >= 0 && feature->IsFieldSetAndNotNull(role_field))
+      role = feature->GetFieldAsString(role_field);
+    if (role.empty()) {
+      const OGRwkbGeometryType t = wkbFlatten(g->getGeometryType());
+      const bool polygon = t == wkbPolygon || t == wkbMultiPolygon || t == wkbCurvePolygon || t == wkbMultiSurface;
+      role = default_role == LayerRole::by_geometry && polygon ? "domain" : "feature";
+    }
+    if (role == "boundary") reader.add_boundary(*g);
+    else if (role == "domain" || role == "feature") reader.add(*g, role == "domain");
+    else reader.fail("unknown role \"" + role + "\" (expected \"domain\", \"feature\" or \"boundary\")");
+    if (reader.z_min < reader.z_max && varying_z++ == 0) first_varying_z = "FID " + std::to_string(feature->GetFID());
+    if (!reader.curved.empty() && curved++ == 0)
+      first_curved = "FID " + std::to_string(feature->GetFID()) + " (a " + reader.curved + ")";
+    if (reader.size > 0.0 && reader.size_unused_on)
+      notes.warnings.push_back(reader.where + ": its size is not used (sizes hold inside domain polygons and along "
+                               "feature lines and polygons, not on " + std::string(reader.size_unused_on) + ")");
+  }
+  if (varying_z > 0)
+    notes.warnings.push_back(source.where + ": " + first_varying_z +
+                             (varying_z > 1 ? " and " + std::to_string(varying_z - 1) + " more features have" : std::string(" has")) +
+                             " positions whose third coordinate (z) varies; the mesh is 2D and z is dropped");
+  if (curved > 0)
+    notes.warnings.push_back(source.where + ": " + first_curved +
+                             (curved > 1 ? " and " + std::to_string(curved - 1) + " more curved geometries are" : std::string(" is")) +
+                             " linearized: arcs become straight segments at GDAL's default step (4 degrees of arc)");
+}
+
+}  // namespace
+
 void read_gdal(const std::filesystem::path& path, LayerRole default_role, const InputOptions& options, Region& region,
                std::vector<std::string>& feature_names, InputNotes& notes) {
   QuietErrors quiet;
@@ -272,13 +405,7 @@ void read_gdal(const std::filesystem::path& path, LayerRole default_role, const 
   }
   for (OGRLayer* layer : ds->GetLayers()) {
     const std::string name = layer->GetName();
-    // Which role this layer's geometries take: forced by a layer option, else the attribute or the default.
-    enum class Mode { skip, by_attribute, domain, feature, boundary } mode = Mode::by_attribute;
-    if (default_role == LayerRole::boundary) mode = Mode::boundary;
-    else if (name == options.domain_layer && default_role == LayerRole::by_geometry) mode = Mode::domain;
-    else if (contains(options.feature_layers, name)) mode = Mode::feature;
-    else if (!options.feature_layers.empty() && (default_role == LayerRole::feature || !options.domain_layer.empty())) mode = Mode::skip;
-    else if (!options.domain_layer.empty()) mode = Mode::feature;
+    const Mode mode = layer_mode(name, default_role, options);
     if (mode == Mode::skip) continue;
 
     if (!options.where.empty() && layer->SetAttributeFilter(options.where.c_str()) != OGRERR_NONE)
@@ -295,96 +422,12 @@ void read_gdal(const std::filesystem::path& path, LayerRole default_role, const 
       notes.warnings.push_back(file + ", layer '" + name + "' has no geometry column (an attribute table): skipped");
       continue;
     }
-    const OGRSpatialReference* srs = layer_srs(*ds, *layer);
-    // A Shapefile whose .prj GDAL cannot read comes without a CRS: refused, not meshed as planar units (a lon/lat
-    // file would be meshed in degrees without a word).
-    if (!srs && EQUAL(ds->GetDriverName(), "ESRI Shapefile"))
-      for (const char* ext : {".prj", ".PRJ"})
-        if (std::filesystem::path prj = std::filesystem::path(path).replace_extension(ext); std::filesystem::exists(prj))
-          throw InputError(prj.string() + ": GDAL cannot read the CRS in it; correct it (ogr2ogr -a_srs EPSG:n writes "
-                           "one) or remove it to mesh the coordinates as planar units");
-    // GeoPackage's undefined CRSs: srs_id -1 (Cartesian) is planar units, as no CRS; srs_id 0 (geographic, datum
-    // unknown) is taken as WGS 84 longitude/latitude, said.
     OGRSpatialReference wgs84;
-    if (srs && srs->IsLocal()) {
-      const char* n = srs->GetName();
-      if (!n || std::string(n) != "Undefined Cartesian SRS")
-        notes.warnings.push_back(file + ", layer '" + name + "' is in a local engineering CRS" +
-                                 (n ? " '" + std::string(n) + "'" : std::string()) + ": its coordinates are meshed as planar units");
-      srs = nullptr;
-    } else if (srs && srs->IsGeographic() && srs->GetName() && std::string(srs->GetName()) == "Undefined geographic SRS") {
-      wgs84.importFromEPSG(4326);
-      notes.warnings.push_back(file + ", layer '" + name + "' has an undefined geographic CRS (GeoPackage srs_id 0): "
-                               "its longitudes and latitudes are taken as WGS 84 (EPSG:4326; ogr2ogr -a_srs sets the right one)");
-      srs = &wgs84;
-    }
-    std::unique_ptr<OGRCoordinateTransformation> transform;
-    if (srs) {
-      OGRSpatialReference layer_srs_gis(*srs);
-      layer_srs_gis.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
-      if (!have_region_srs && region.rings.empty() && region.features.empty() && region.feature_points.empty()) {
-        region_srs = layer_srs_gis;
-        have_region_srs = true;
-        region.crs = crs_name(layer_srs_gis);
-      } else if (!have_region_srs) {
-        notes.warnings.push_back(file + ", layer '" + name + "' is in " + crs_name(layer_srs_gis) +
-                                 " but what was read before names no CRS; its coordinates are taken as they are");
-      } else if (!layer_srs_gis.IsSame(&region_srs)) {
-        transform.reset(OGRCreateCoordinateTransformation(&layer_srs_gis, &region_srs));
-        if (!transform)
-          throw InputError(file + ", layer '" + name + "': cannot transform from " + crs_name(layer_srs_gis) + " to " +
-                           region.crs + gdal_message());
-      }
-    }
-    const int role_field = layer->GetLayerDefn()->GetFieldIndex("role");
-    const int name_field = layer->GetLayerDefn()->GetFieldIndex("name");
-    const int kind_field = layer->GetLayerDefn()->GetFieldIndex("kind");
-    const int size_field = layer->GetLayerDefn()->GetFieldIndex("size");
-    CPLErrorReset();
-    layer->ResetReading();
-    std::size_t varying_z = 0, curved = 0;
-    std::string first_varying_z, first_curved;
-    for (auto& feature : *layer) {
-      Reader reader{region, feature_names,
-                    file + ", layer '" + name + "', FID " + std::to_string(feature->GetFID()),
-                    static_cast<int>(feature_names.size()), transform.get()};
-      reader.clockwise_outer_rings = EQUAL(ds->GetDriverName(), "ESRI Shapefile");
-      feature_names.push_back(reader.where);
-      if (name_field >= 0 && feature->IsFieldSetAndNotNull(name_field)) reader.name = feature->GetFieldAsString(name_field);
-      if (kind_field >= 0 && feature->IsFieldSetAndNotNull(kind_field)) reader.kind = feature->GetFieldAsString(kind_field);
-      reader.read_size(*feature, size_field);
-      const OGRGeometry* g = feature->GetGeometryRef();
-      if (!g)
-        reader.fail("the feature has no geometry (a row without a shape: delete it, or leave it out with --where)");
-      std::string role = mode == Mode::boundary ? "boundary"
-                         : mode == Mode::domain ? "domain"
-                         : mode == Mode::feature ? "feature"
-                                                 : "";
-      if (mode == Mode::by_attribute && role_field >= 0 && feature->IsFieldSetAndNotNull(role_field))
-        role = feature->GetFieldAsString(role_field);
-      if (role.empty()) {
-        const OGRwkbGeometryType t = wkbFlatten(g->getGeometryType());
-        const bool polygon = t == wkbPolygon || t == wkbMultiPolygon || t == wkbCurvePolygon || t == wkbMultiSurface;
-        role = default_role == LayerRole::by_geometry && polygon ? "domain" : "feature";
-      }
-      if (role == "boundary") reader.add_boundary(*g);
-      else if (role == "domain" || role == "feature") reader.add(*g, role == "domain");
-      else reader.fail("unknown role \"" + role + "\" (expected \"domain\", \"feature\" or \"boundary\")");
-      if (reader.z_min < reader.z_max && varying_z++ == 0) first_varying_z = "FID " + std::to_string(feature->GetFID());
-      if (!reader.curved.empty() && curved++ == 0)
-        first_curved = "FID " + std::to_string(feature->GetFID()) + " (a " + reader.curved + ")";
-      if (reader.size > 0.0 && reader.size_unused_on)
-        notes.warnings.push_back(reader.where + ": its size is not used (sizes hold inside domain polygons and along "
-                                 "feature lines and polygons, not on " + std::string(reader.size_unused_on) + ")");
-    }
-    if (varying_z > 0)
-      notes.warnings.push_back(file + ", layer '" + name + "': " + first_varying_z +
-                               (varying_z > 1 ? " and " + std::to_string(varying_z - 1) + " more features have" : std::string(" has")) +
-                               " positions whose third coordinate (z) varies; the mesh is 2D and z is dropped");
-    if (curved > 0)
-      notes.warnings.push_back(file + ", layer '" + name + "': " + first_curved +
-                               (curved > 1 ? " and " + std::to_string(curved - 1) + " more curved geometries are" : std::string(" is")) +
-                               " linearized: arcs become straight segments at GDAL's default step (4 degrees of arc)");
+    const OGRSpatialReference* srs = defined_srs(*ds, *layer, path, notes, wgs84);
+    const std::unique_ptr<OGRCoordinateTransformation> transform =
+        to_region_srs(srs, file + ", layer '" + name + "'", region, region_srs, have_region_srs, notes);
+    read_layer(*layer, mode, default_role, LayerSource{file + ", layer '" + name + "'", EQUAL(ds->GetDriverName(), "ESRI Shapefile")},
+               transform.get(), region, feature_names, notes);
     // Some drivers (GeoPackage) only run the filter while reading and then stop early without a feature.
     if (CPLGetLastErrorType() == CE_Failure)
       throw InputError(file + ", layer '" + name + "': reading failed" +
