@@ -1392,10 +1392,8 @@ void snap_and_extract(PiecewiseMap& m) {
   });
 }
 
-// The element count of segment k of subregion p's quantized layout.
-long long segment_count(const PiecewiseMap& m, std::size_t p, int k) {
-  const Layout& layout = m.layouts[p];
-  const LayoutSegment& s = layout.segments[static_cast<std::size_t>(k)];
+// The element count of a segment of a quantized layout.
+long long segment_count(const Layout& layout, const LayoutSegment& s) {
   const auto a = layout.lattice[static_cast<std::size_t>(s.break_a)], b = layout.lattice[static_cast<std::size_t>(s.break_b)];
   return std::llabs(b[0] - a[0]) + std::llabs(b[1] - a[1]);
 }
@@ -1423,7 +1421,8 @@ void build_transitions(PiecewiseMap& m) {
     if (!c.transition) continue;
     const std::size_t a = c.layout_a, b = c.layout_b;
     if (!m.quantized[a] || !m.quantized[b] || !m.failure[a].empty() || !m.failure[b].empty()) continue;
-    const long long na = segment_count(m, a, c.segment_a), nb = segment_count(m, b, c.segment_b);
+    const long long na = segment_count(m.layouts[a], m.layouts[a].segments[static_cast<std::size_t>(c.segment_a)]),
+                    nb = segment_count(m.layouts[b], m.layouts[b].segments[static_cast<std::size_t>(c.segment_b)]);
     if (na == nb) continue;
     const std::size_t fine = na > nb ? a : b, coarse = na > nb ? b : a;
     const int coarse_segment = na > nb ? c.segment_b : c.segment_a;
@@ -1460,8 +1459,7 @@ void count_interface_sides(PiecewiseMap& m) {
     for (const LayoutSegment& s : m.layouts[p].segments) {
       const TriChain& ch = m.subs[p].mesh.chains[static_cast<std::size_t>(s.chain)];
       if (ch.interface < 0) continue;
-      const auto la = m.layouts[p].lattice[s.break_a], lb = m.layouts[p].lattice[s.break_b];
-      m.side_count[m.side_key(p, ch, s.first, s.count)] = std::llabs(lb[0] - la[0]) + std::llabs(lb[1] - la[1]);
+      m.side_count[m.side_key(p, ch, s.first, s.count)] = segment_count(m.layouts[p], s);
     }
   }
 }
