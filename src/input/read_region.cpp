@@ -143,9 +143,11 @@ void check_line_points(Region& region, const InputOptions& options, std::vector<
       throw InputError(ring_name(region, r) + " has fewer than 3 distinct points, at " + point_text(ring.points.front()));
     // A ring that turns back on itself (two consecutive edges along one line, the second going back over the
     // first) encloses a spike of no width there; the crossing test skips consecutive edges, so it is refused here
-    // (a lon/lat cap to a pole run there and back along one meridian is one, once projected).
+    // (a lon/lat cap to a pole run there and back along one meridian is one, once projected). A ring of no
+    // area at all is left to orient_rings, which says so.
     const std::vector<Vec2>& p = ring.points;
-    for (std::size_t i = 0; i < p.size() && !options.repair; ++i) {
+    const bool flat = ring_signed_area(p) == 0.0;
+    for (std::size_t i = 0; i < p.size() && !options.repair && !flat; ++i) {
       const Vec2 a = p[(i + p.size() - 1) % p.size()], b = p[i], c = p[(i + 1) % p.size()];
       if (orient2(a, b, c) == 0.0 && dot(b - a, c - b) < 0.0)
         throw InputError(ring_name(region, r) + " turns back on itself at " + point_text(b) +
