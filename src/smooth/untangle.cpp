@@ -30,8 +30,8 @@ void clip(const std::vector<Vec2>& poly, const HalfPlane& h, double t, std::vect
 }
 
 // The polygon of the points of `box` where every condition of hs is >= t, in `poly` (empty: none). `spare` is
-// scratch: the bisection below clips about 30 times per node move, and allocating two vectors per clip took as
-// long as the clipping (a star of 40 spikes: a third of its meshing time in this function).
+// scratch: the bisection below clips about 30 times per node move, and allocating a vector per clip cost about
+// two thirds as much again as the clipping (a star of 40 spikes: 91 -> 71 CPU seconds without it).
 void kernel(const std::vector<HalfPlane>& hs, const std::vector<Vec2>& box, double t, std::vector<Vec2>& poly,
             std::vector<Vec2>& spare) {
   poly.assign(box.begin(), box.end());
