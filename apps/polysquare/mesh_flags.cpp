@@ -1,11 +1,23 @@
 // The flags of `polysquare mesh`, by stage: each function below maps one stage's flags to the options structs
 // (MeshArgs, InputOptions, MeshOptions); `polysquare mesh --help` lists them in that order.
+#include <cmath>
+#include <cstdlib>
 #include <string>
 
 #include "mesh_command.h"
 
 namespace polysquare::cli {
 namespace {
+
+// A count given in exponent notation ("2e9" quads, as counts that large are written) as the integer it is, when it
+// is a whole number in range; any other text is left to the conversion, which refuses it.
+std::string whole_count(std::string text) {
+  if (text.find_first_of("eE.") == std::string::npos) return text;
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  if (end == text.c_str() || *end != '\0' || !(v >= 1.0 && v < 1e19) || v != std::floor(v)) return text;
+  return std::to_string(static_cast<unsigned long long>(v));
+}
 
 // Reading the input: files, layers, filter, CRS, repairs.
 void input_flags(CLI::App& t, MeshArgs& m) {
@@ -71,7 +83,10 @@ void size_flags(CLI::App& t, MeshArgs& m) {
                "graded mesh, with --bathymetry: at least N quads per M2 tidal wavelength, 44712 s * sqrt(9.81 m/s2 * "
                "depth) (0 = off)")
       ->capture_default_str();
-  t.add_option("--max-quads", m.options.size.max_quads, "refuse sizes that need more quads than this")
+  t.add_option("--max-quads", m.options.size.max_quads,
+               "refuse sizes that need more quads than this (sizes needing more memory than the machine has "
+               "available are refused too)")
+      ->transform(whole_count)
       ->check(CLI::PositiveNumber)
       ->capture_default_str();  // "-5" would otherwise wrap around to 2^64 - 5
 }

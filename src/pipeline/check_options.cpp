@@ -1,7 +1,10 @@
 #include "polysquare/pipeline/check_options.h"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <map>
 #include <sstream>
 
@@ -26,7 +29,43 @@ void require(bool ok, const char* flag, const char* field, double value, const c
 // `lo <= v <= hi`, false for NaN.
 bool within(double v, double lo, double hi) { return v >= lo && v <= hi; }
 
+// "350 GB", "1.2 MB": a memory size in messages.
+std::string memory_text(double bytes) {
+  const char* units[] = {"bytes", "kB", "MB", "GB", "TB", "PB"};
+  int u = 0;
+  while (bytes >= 1000.0 && u < 5) bytes /= 1000.0, ++u;
+  std::ostringstream os;
+  os.precision(3);
+  os << bytes << " " << units[u];
+  return os.str();
+}
+
 }  // namespace
+
+double available_memory_bytes() {
+  // MemAvailable counts the page cache the kernel would give back, which free memory alone does not; free swap
+  // is added (slow, but a run fitting there ends).
+  std::ifstream in("/proc/meminfo");
+  std::string key;
+  double kb = 0.0, total = 0.0;
+  bool found = false;
+  while (in >> key >> kb) {
+    if (key == "MemAvailable:" || key == "SwapFree:") total += kb * 1024.0, found = found || key == "MemAvailable:";
+    in.ignore(256, '\n');
+  }
+  if (found) return total;
+  const long pages = sysconf(_SC_AVPHYS_PAGES), page = sysconf(_SC_PAGESIZE);
+  return pages > 0 && page > 0 ? static_cast<double>(pages) * static_cast<double>(page) : 0.0;
+}
+
+void check_quad_memory(double estimated_quads, double available_bytes, const std::string& what) {
+  const double need = estimated_quads * kBytesPerQuad;
+  if (!(available_bytes > 0.0) || need <= available_bytes) return;
+  throw InputError(what + " would need about " + short_number(estimated_quads) + " quads and about " +
+                   memory_text(need) + " of memory to mesh them (" + short_number(kBytesPerQuad) +
+                   " bytes per quad at least), more than the " + memory_text(available_bytes) +
+                   " this machine has available; --max-quads does not lift this: give a larger size");
+}
 
 MeshOptions resolve_sizes(const MeshOptions& options) {
   MeshOptions o = options;
@@ -118,6 +157,8 @@ void check_mesh_size(const Region& region, const MeshOptions& options) {
     throw InputError(src + ": size " + short_number(o.size.h) + " would need about " + short_number(estimate) +
                      " quads (area " + short_number(area) + " / size^2), more than the limit of " +
                      std::to_string(o.size.max_quads) + " (raise --max-quads)");
+  if (!o.size.graded())
+    check_quad_memory(estimate, available_memory_bytes(), src + ": " + flag + short_number(o.size.h));
   // Far from the origin the region is meshed in a local frame, but the mesh is written back in the input's
   // coordinates, which there step by the spacing of doubles (ulp): 0.125 at 9e14, 1.2e-4 at 1e12. A size of
   // fewer than kMinSizeInSteps such steps would come back with its quads bent or folded (a 1 x 1 square at 9e14
@@ -138,6 +179,8 @@ void check_field_estimate(double estimated_quads, const MeshOptions& options, co
     throw InputError(source + ": the size field would need about " + short_number(estimated_quads) +
                      " quads, more than the limit of " + std::to_string(options.size.max_quads) +
                      " (raise --max-quads or --size-min)");
+  check_quad_memory(estimated_quads, available_memory_bytes(),
+                    source + ": the size field (--size-min " + short_number(options.size.field.size_min) + ")");
 }
 
 }  // namespace polysquare

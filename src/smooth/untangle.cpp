@@ -18,26 +18,28 @@ struct HalfPlane {
   double at(Vec2 v) const { return dot(n, v) + d; }
 };
 
-// The part of a convex polygon where h.at(v) >= t.
-std::vector<Vec2> clip(const std::vector<Vec2>& poly, const HalfPlane& h, double t) {
-  std::vector<Vec2> out;
-  out.reserve(poly.size() + 1);
+// The part of the convex polygon `poly` where h.at(v) >= t, into `out` (cleared first).
+void clip(const std::vector<Vec2>& poly, const HalfPlane& h, double t, std::vector<Vec2>& out) {
+  out.clear();
   for (std::size_t i = 0; i < poly.size(); ++i) {
     const Vec2 a = poly[i], b = poly[(i + 1) % poly.size()];
     const double fa = h.at(a) - t, fb = h.at(b) - t;
     if (fa >= 0) out.push_back(a);
     if ((fa >= 0) != (fb >= 0)) out.push_back(lerp(a, b, fa / (fa - fb)));
   }
-  return out;
 }
 
-std::vector<Vec2> kernel(const std::vector<HalfPlane>& hs, const std::vector<Vec2>& box, double t) {
-  std::vector<Vec2> poly = box;
+// The polygon of the points of `box` where every condition of hs is >= t, in `poly` (empty: none). `spare` is
+// scratch: the bisection below clips about 30 times per node move, and allocating a vector per clip cost about
+// two thirds as much again as the clipping (a star of 40 spikes: 91 -> 71 CPU seconds without it).
+void kernel(const std::vector<HalfPlane>& hs, const std::vector<Vec2>& box, double t, std::vector<Vec2>& poly,
+            std::vector<Vec2>& spare) {
+  poly.assign(box.begin(), box.end());
   for (const HalfPlane& h : hs) {
-    poly = clip(poly, h, t);
+    clip(poly, h, t, spare);
+    poly.swap(spare);
     if (poly.empty()) break;
   }
-  return poly;
 }
 
 Vec2 centroid(const std::vector<Vec2>& poly) {
@@ -125,15 +127,18 @@ std::optional<Vec2> kernel_place(const std::vector<HalfPlane>& hs, Vec2 lo, Vec2
   const double span = std::max(hi.x - lo.x, hi.y - lo.y);
   if (span <= 0.0) return std::nullopt;
   // Bisection for the largest t with a non-empty kernel {v : every condition >= t}; v itself has t = worst.
+  std::vector<Vec2> poly, spare;
+  poly.reserve(hs.size() + 4), spare.reserve(hs.size() + 4);  // a convex polygon gains at most a vertex per clip
   double t_lo = worst, t_hi = span;
   for (int it = 0; it < 40 && t_hi - t_lo > 1e-9 * span; ++it) {
     const double t = 0.5 * (t_lo + t_hi);
-    (kernel(hs, box, t).empty() ? t_hi : t_lo) = t;
+    kernel(hs, box, t, poly, spare);
+    (poly.empty() ? t_hi : t_lo) = t;
   }
   if (t_lo <= worst + 1e-9 * span) return std::nullopt;  // no better place
   // The centre of the kernel a little inside the best level, so that v is not pushed against one corner.
   const double t = t_lo > 0.0 ? 0.5 * t_lo : t_lo - 1e-6 * span;
-  std::vector<Vec2> poly = kernel(hs, box, std::max(t, worst));
+  kernel(hs, box, std::max(t, worst), poly, spare);
   if (poly.empty()) return std::nullopt;
   Vec2 best = centroid(poly);
   double best_worst = INFINITY;

@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -16,6 +17,7 @@
 
 #include "polysquare/io/atomic_file.h"
 #include "polysquare/io/mesh_io.h"
+#include "polysquare/pipeline/check_options.h"
 #include "polysquare/quality/quality.h"
 
 namespace fs = std::filesystem;
@@ -113,6 +115,33 @@ TEST(CliOutputs, LongOutputNamesAreWrittenWithShortTemporaries) {
   EXPECT_GT(fs::file_size(rep), 100u);
   EXPECT_EQ(dir.entries().size(), 2u);
   EXPECT_LT(polysquare::temporary_path(out).filename().string().size(), 50u);
+}
+
+// Issue 52: --max-quads 2e9 with a size giving 1e9 quads (300 GB at kBytesPerQuad) is refused at once, naming the
+// memory the mesh would need (it used to mesh until the machine killed it). A regression would grind for minutes:
+// `timeout` ends it, and the bound on the time is generous (the refusal takes a fraction of a second).
+TEST(CliOutputs, SizesBeyondTheAvailableMemoryAreRefusedAtOnce) {
+  if (1e9 * polysquare::kBytesPerQuad <= polysquare::available_memory_bytes())
+    GTEST_SKIP() << "this machine holds 1e9 quads";
+  TempDir dir("cli_memory");
+  const std::string d = dir.path.string();
+  const fs::path err = dir.path.parent_path() / ("polysquare_cli_memory_err_" + std::to_string(::getpid()));
+  const std::string cmd = "timeout 120 " + std::string(POLYSQUARE_CLI) + " mesh " + POLYSQUARE_TEST_DATA_DIR +
+                          "/round3_outputs/big_square.geojson --size 0.0316 --max-quads 2e9 -o " + d +
+                          "/m.msh --report " + d + "/r.json > /dev/null 2> " + err.string();
+  const auto start = std::chrono::steady_clock::now();
+  const int status = std::system(cmd.c_str());
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const std::string text = slurp(err);
+  fs::remove(err);
+  EXPECT_EQ(WEXITSTATUS(status), 2) << text;
+  EXPECT_LT(seconds, 10.0);
+  EXPECT_EQ(lines(text), 1u) << text;  // the refusal alone, before the "region ... gives about N quads" line
+  EXPECT_EQ(text.rfind("error: ", 0), 0u) << text;
+  EXPECT_NE(text.find("big_square.geojson: --size 0.0316 would need about 1.00144e+09 quads"), std::string::npos) << text;
+  EXPECT_NE(text.find("GB of memory"), std::string::npos) << text;
+  EXPECT_NE(text.find("--max-quads"), std::string::npos) << text;
+  EXPECT_TRUE(dir.entries().empty());
 }
 
 // Issue 52: a path longer than PATH_MAX (17 directory names of 250 letters), for -o or for --report, is refused

@@ -198,6 +198,40 @@ TEST(MeshOptionsCheck, SizeMessagesArePlainNumbers) {
   }
 }
 
+// Issue 52: a size whose quads --max-quads allows but the machine's memory cannot hold is refused with what it
+// would need; an unknown amount of memory (0) refuses nothing.
+TEST(MeshOptionsCheck, SizesBeyondTheAvailableMemoryAreRefused) {
+  try {
+    check_quad_memory(1e9, 21.7e9, "sea.geojson: --size 0.0316");
+    ADD_FAILURE() << "1e9 quads in 21.7 GB accepted";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_EQ(what.rfind("sea.geojson: --size 0.0316 would need about 1e+09 quads", 0), 0u) << what;
+    EXPECT_NE(what.find(std::to_string(static_cast<int>(kBytesPerQuad)) + " GB of memory"), std::string::npos) << what;
+    EXPECT_NE(what.find("21.7 GB this machine has available"), std::string::npos) << what;
+    EXPECT_NE(what.find("--max-quads"), std::string::npos) << what;
+  }
+  EXPECT_NO_THROW(check_quad_memory(1e6, 21.7e9, "sea.geojson: --size 1"));
+  EXPECT_NO_THROW(check_quad_memory(1e9, 0.0, "sea.geojson: --size 0.0316"));
+  const double available = available_memory_bytes();
+  EXPECT_GT(available, 1e6);  // /proc/meminfo read (this suite runs on Linux)
+  // check_mesh_size asks the machine: a square of 1e12 quads, allowed by max_quads, needs more than it has.
+  Region r;
+  r.source = "square.geojson";
+  r.rings.push_back(Ring{{{0, 0}, {1e6, 0}, {1e6, 1e6}, {0, 1e6}}});
+  MeshOptions o;
+  o.size.h = 1.0;
+  o.size.max_quads = 2'000'000'000'000;
+  if (1e12 * kBytesPerQuad <= available) GTEST_SKIP() << "this machine holds 1e12 quads";
+  try {
+    check_mesh_size(r, o);
+    ADD_FAILURE() << "1e12 quads accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("square.geojson: --size 1 would need about 1e+12 quads"), std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(LocalFrame, FarRegionsMoveExactlyAndNearOnesStay) {
   InputNotes notes;
   const Region far = read_input(adversarial("far_smile_1e11.geojson"), {}, notes);
