@@ -94,7 +94,9 @@ TriangulationOptions split_triangulation_options(const SplitOptions& options) {
   topt.boundary_edge = 2.0 * options.size;
   // CGAL bounds the longest edge: 3.5 h gives quads of mean area h^2 once pairs are split in four and the other
   // triangles in three (delta_water at 100 m: 1.00 h^2, median edge 1.02 h; 4 h gave 1.24 h^2, 3 h 0.77 h^2).
-  topt.max_edge = 3.5 * options.size;
+  // Graded: the mesher grows its triangles from the curves' edges up to the largest size, as its own grading
+  // allows (a fallback of 608k quads where the field asked for 99k on a graded delta_box).
+  topt.max_edge = 3.5 * std::max(options.size, options.max_size);
   topt.shape_bound = options.shape_bound;
   topt.max_triangles = options.max_triangles;
   topt.split_constrained_edges = false;  // corner ears are fine here: nothing is straightened

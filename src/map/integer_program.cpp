@@ -171,6 +171,34 @@ std::optional<std::vector<double>> IntegerProgram::solve(double seconds, double 
     const double* x = lp->getColSolution();
     return std::vector<double>(x, x + n);
   }
+  // Fan columns (coefficient 2) rounded and fixed first: the rest is then a network program with integral
+  // right-hand sides, mostly integral at once. Dived with them free, the dive met parity dead ends (a column
+  // infeasible on both sides) and branch-and-cut ran to the time limit per solve, minutes on a graded delta_box;
+  // where the rounded values have no solution, the fallback values (no fans) are the program without them.
+  const double bound = lp->objectiveValue();
+  int keep = 1;  // Clp's startFinishOptions for the next solve: 1 keep the factorization after, 2 start from it
+  bool any_round_first = false;
+  for (const auto& [c, fallback] : round_first_) {
+    const double v = lp->getColSolution()[c];
+    any_round_first |= std::abs(v - std::round(v)) > 1e-9;
+  }
+  if (any_round_first) {
+    double* lo = lp->columnLower();
+    double* hi = lp->columnUpper();
+    std::vector<double> rounded;
+    for (const auto& [c, fallback] : round_first_) rounded.push_back(std::ceil(lp->getColSolution()[c] - 0.5 - 1e-9));
+    for (int attempt = 0; attempt < 3; ++attempt) {
+      for (std::size_t i = 0; i < round_first_.size(); ++i) {
+        const auto c = static_cast<std::size_t>(round_first_[i].first);
+        const double v = attempt == 0 ? std::clamp(rounded[i], col_lo_[c], col_hi_[c]) : round_first_[i].second;
+        lo[c] = attempt == 2 ? col_lo_[c] : v;
+        hi[c] = attempt == 2 ? col_hi_[c] : v;
+      }
+      lp->dual(0, keep);
+      keep = 1 | 2;
+      if (lp->status() == 0) break;
+    }
+  }
   // A dive: the quantization's coupled programs are network programs but for a few rows, and fixing one
   // fractional column (to its nearest integer, else the other side) and re-solving by the dual simplex from the
   // last basis mostly makes the whole solution integral within a few steps, at a cost near the LP's; a fraction
@@ -182,9 +210,7 @@ std::optional<std::vector<double>> IntegerProgram::solve(double seconds, double 
   // In a large program the fractional columns are mostly independent halves (a coast's parity choices, each
   // fixed alone took a re-solve of its own: 20-40 steps per dive), so a step first fixes them all, each to its
   // nearest integer, and falls back to the one column when that has no solution.
-  const double bound = lp->objectiveValue();
   std::optional<std::vector<double>> dived;
-  int keep = 1;
   std::vector<int> all_fractional;
   for (int c; (c = fractional(large ? &all_fractional : nullptr)) >= 0;) {
     double* lo = lp->columnLower();

@@ -22,6 +22,11 @@ class IntegerProgram {
   void add_row(std::initializer_list<std::pair<int, double>> terms, double lo, double hi);
   void add_row(const std::vector<std::pair<int, double>>& terms, double lo, double hi);
 
+  /// Marks an integer column whose coefficients make the program leave network form (a 2 in a coupling row):
+  /// when the relaxation leaves such columns fractional, solve() first fixes them all at their rounded values
+  /// (halves down) and solves again; should that have no solution, at `fallback` (see solve()).
+  void round_first(int column, double fallback) { round_first_.push_back({column, fallback}); }
+
   int columns() const { return static_cast<int>(cost_.size()); }
   int rows() const { return static_cast<int>(row_lo_.size()); }
 
@@ -31,6 +36,9 @@ class IntegerProgram {
   /// from the dive's point, which stops at a point whose cost is within `gap` of the best bound (or at its best
   /// feasible point when stopped by the time limit); nullopt when the program is infeasible or no feasible point
   /// was found within `seconds` (per solve).
+  /// Columns marked round_first() are rounded and fixed before the dive when one of them is fractional; should
+  /// that leave no solution, they are fixed at their fallback values instead, and released when that has none
+  /// either.
   /// Solving again after rows were added starts from the last solve's LP basis (the dual simplex).
   /// `large`: the relaxation is solved from scratch by the dual simplex instead of the primal, and each step of
   /// the dive fixes every fractional column at once (one at a time only when that is infeasible).
@@ -47,6 +55,7 @@ class IntegerProgram {
   std::unique_ptr<Lp> lp_;
   std::vector<double> col_lo_, col_hi_, cost_;
   std::vector<char> integer_;
+  std::vector<std::pair<int, double>> round_first_;  // column, fallback value
   std::vector<double> row_lo_, row_hi_;
   std::vector<int> entry_row_, entry_col_;
   std::vector<double> entry_value_;

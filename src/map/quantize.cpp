@@ -170,6 +170,7 @@ IntegerProgram joint_program(JointProblem& jp, const std::vector<SegmentCoupling
       // n_a - n_b = 2 (fans on b's side - fans on a's side); a fan costs as a relative deviation of the target.
       const double t_c = std::max(target[c.layout_a][static_cast<std::size_t>(c.segment_a)], 1.0);
       const int f = P.add_columns(2, 0.0, inf, options.transition_cost / t_c, true);
+      P.round_first(f, 0.0), P.round_first(f + 1, 0.0);
       row.insert(row.end(), {{f, -2.0}, {f + 1, 2.0}});
     }
     P.add_row(row, 0.0, 0.0);

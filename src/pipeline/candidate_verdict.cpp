@@ -30,7 +30,9 @@ void find_bad_quads(const FinishWork& w, const std::vector<std::uint8_t>& cracke
     if (folded && v.first_folded == metrics.sj.size()) v.first_folded = q;
     const int s = subregion_of(w, q);
     if (cracked[q] && s >= 0) v.cracked_subregion.insert(s);
-    if (cracked[q] && s >= 0) v.bad.emplace(s, "its quads do not share their nodes with a neighbour's (a crack) at " + at_text(r.mesh.nodes[r.mesh.quads[q][0]]));
+    if (cracked[q] && s >= 0)
+      v.bad.emplace(s, (cracked[q] == 2 ? "its quads overlap others at " : "its quads do not share their nodes with a neighbour's (a crack) at ") +
+                           at_text(r.mesh.nodes[r.mesh.quads[q][0]]));
     if (!w.poor[q]) continue;
     // Far outside a gate (severe) counts as folded outside large maps: the budget is for quads just outside,
     // not for near-degenerate ones a patch can mend. A patch is not rebuilt for a valid quad however poor:
@@ -97,8 +99,11 @@ RoundVerdict judge_round(FinishWork& w) {
   RoundVerdict v;
   // Quads beside a crack (pieces that do not share their nodes) count as folded: their subregions are meshed
   // again, instead of the whole candidate failing the invariants after the last round.
-  const std::vector<std::uint8_t> cracked = quads_beside_cracks(w.r.mesh);
-  v.cracks = static_cast<std::size_t>(std::count(cracked.begin(), cracked.end(), std::uint8_t{1}));
+  std::vector<std::uint8_t> cracked = quads_beside_cracks(w.r.mesh);
+  // So do valid quads that overlap others (2), as a transition row or a patch beside a concave interface can
+  // leave them: 40 such pairs sent a graded delta_box whole to the unstructured fallback.
+  for (std::uint32_t q : find_overlapping_quads(w.r.mesh).quads) cracked[q] = 2;
+  v.cracks = cracked.size() - static_cast<std::size_t>(std::count(cracked.begin(), cracked.end(), std::uint8_t{0}));
   // Subregions still holding a folded quad are meshed again (a mapped one as a patch, a patch by the matching
   // construction); the rest of the part keeps its maps. Valid quads outside the gates cost a subregion its map
   // only beyond the max_poor_fraction budget, worst subregion first: a 400-quad map is not traded for a

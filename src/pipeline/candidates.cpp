@@ -282,7 +282,18 @@ Candidate try_candidate(const Region& region, const RegionPart& part, const Poly
     summary.split_rounds = map.split_rounds;
   }
   RepairedMaps maps(region, part, map);
-  return finish_candidate(region, part, options, std::move(summary), std::ref(maps));
+  Candidate c = finish_candidate(region, part, options, summary, std::ref(maps));
+  // Graded: a candidate whose transition rows left what its repair rounds could not mend (cracks and
+  // overlapping quads on a graded delta_box, round after round, then the unstructured fallback for the whole
+  // part) is made again without them, from its first round.
+  const auto& rounds = c.summary.repair_rounds;
+  const bool cracked = rounds && std::any_of(rounds->begin(), rounds->end(), [](const RepairRoundReport& r) { return r.beside_cracks > 0; });
+  if (c.error.empty() || !cracked || !map.size_field || map.quantize.transition_cost <= 0.0) return c;
+  PolysquareMapOptions plain = map;
+  plain.quantize.transition_cost = 0.0;
+  summary.with_transitions_error = c.error;
+  RepairedMaps again(region, part, plain);
+  return finish_candidate(region, part, options, std::move(summary), std::ref(again));
 }
 
 // The last resort for a part no poly-square candidate meshes: triangles split into quads (unstructured).
@@ -293,6 +304,7 @@ Candidate try_split_fallback(const Region& region, const RegionPart& part, const
   return finish_candidate(region, part, options, std::move(summary), [&](const Repairs&) {
     SplitOptions so;
     so.size = options.size.h;
+    if (options.size.graded()) so.max_size = options.size.field.size_max;
     so.corner_threshold_deg = options.curves.corner_threshold_deg;
     PartMapResult r;
     r.stats.part = part.part;

@@ -85,7 +85,7 @@ struct RoundVerdict {
   std::set<int> cracked_subregion;
   std::size_t first_folded = 0;  // the first folded quad, #quads when none is
   std::size_t poor_valid = 0;    // valid quads outside the gates that are kept
-  std::size_t cracks = 0;        // quads beside a crack
+  std::size_t cracks = 0;        // quads beside a crack or overlapping another
 };
 
 // Judges the round's mesh and records it in the summary's `repair_rounds` (candidate_verdict.cpp).

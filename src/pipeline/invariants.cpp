@@ -234,8 +234,10 @@ bool quad_grid(const QuadMesh& mesh, QuadGrid& g) {
 struct Overlaps {
   std::size_t pairs = 0;
   std::uint32_t a = std::numeric_limits<std::uint32_t>::max(), b = 0;
+  std::vector<std::uint32_t> quads;  // of every pair, in the order found
   static Overlaps reduce(Overlaps x, const Overlaps& y) {
     x.pairs += y.pairs;
+    x.quads.insert(x.quads.end(), y.quads.begin(), y.quads.end());
     if (y.pairs && (y.a < x.a || (y.a == x.a && y.b < x.b))) { x.a = y.a; x.b = y.b; }
     return x;
   }
@@ -268,6 +270,7 @@ void overlaps_in_cell(const QuadMesh& mesh, const QuadGrid& g, std::size_t c, st
       one.pairs = 1;
       one.a = std::min(shapes[i].q, shapes[j].q);
       one.b = std::max(shapes[i].q, shapes[j].q);
+      one.quads = {one.a, one.b};
       acc = Overlaps::reduce(acc, one);
     }
 }
@@ -289,6 +292,9 @@ QuadOverlaps find_overlapping_quads(const QuadMesh& mesh) {
       },
       Overlaps::reduce);
   result.pairs = found.pairs;
+  result.quads = found.quads;
+  std::sort(result.quads.begin(), result.quads.end());
+  result.quads.erase(std::unique(result.quads.begin(), result.quads.end()), result.quads.end());
   if (found.pairs) {
     result.first_a = found.a;
     result.first_b = found.b;

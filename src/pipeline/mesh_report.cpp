@@ -180,6 +180,7 @@ void candidate_keys(Json& j, Candidate& c, Each&& each) {
   each(j, "local_patches", c.local_patches);
   each(j, "poor_quads", c.poor_quads);
   each(j, "error", c.error);
+  each(j, "with_transitions_error", c.with_transitions_error);
 }
 
 void to_json(json& j, const CandidateReport& c) {

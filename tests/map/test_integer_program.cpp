@@ -161,3 +161,43 @@ TEST(IntegerProgram, ALargeProgramDivesFromItsDualSolutionToTheOptimum) {
   EXPECT_NEAR(sum_large, copies, 1e-9);
   EXPECT_NEAR(sum_one, copies, 1e-9);
 }
+
+namespace {
+
+// Two counts pulled towards 7 and 4 whose difference is twice an integer column f (a transition coupling's
+// fans), f marked round_first with fallback `fallback`; `row_lo` <= na - nb <= `row_hi`. Columns: na, nb, f.
+IntegerProgram fan_program(double fallback, double row_lo, double row_hi) {
+  IntegerProgram p;
+  const int n = p.add_columns(2, 1.0, 100.0, 0.0, true);
+  const int f = p.add_columns(1, 0.0, IntegerProgram::inf, 0.1, true);
+  p.round_first(f, fallback);
+  const int u = p.add_columns(2, 0.0, IntegerProgram::inf, 1.0);
+  const double target[2] = {7.0, 4.0};
+  for (int k = 0; k < 2; ++k) {  // u_k >= |n_k - target_k|
+    p.add_row({{u + k, 1.0}, {n + k, -1.0}}, -target[k], IntegerProgram::inf);
+    p.add_row({{u + k, 1.0}, {n + k, 1.0}}, target[k], IntegerProgram::inf);
+  }
+  p.add_row({{n, 1.0}, {n + 1, -1.0}, {f, -2.0}}, 0.0, 0.0);
+  p.add_row({{n, 1.0}, {n + 1, -1.0}}, row_lo, row_hi);
+  return p;
+}
+
+}  // namespace
+
+TEST(IntegerProgram, RoundFirstColumnsAreRoundedHalvesDownThenTheRestSolved) {
+  // The relaxation keeps both targets with f = 1.5; rounded down, the counts differ by 2, one of them a step off.
+  const auto s = fan_program(0.0, -100.0, 100.0).solve(10.0);
+  ASSERT_TRUE(s);
+  for (double v : *s) EXPECT_NEAR(v, std::round(v), 1e-9);
+  EXPECT_NEAR((*s)[2], 1.0, 1e-9);
+  EXPECT_NEAR((*s)[0] - (*s)[1], 2.0, 1e-9);
+  EXPECT_NEAR(std::abs((*s)[0] - 7.0) + std::abs((*s)[1] - 4.0), 1.0, 1e-9);
+}
+
+TEST(IntegerProgram, RoundFirstColumnsTakeTheirFallbackWhenTheRoundedValuesHaveNoSolution) {
+  // na - nb in [3, 4]: f = 1 (difference 2) has no solution, the fallback f = 2 (difference 4) has.
+  const auto s = fan_program(2.0, 3.0, 4.0).solve(10.0);
+  ASSERT_TRUE(s);
+  EXPECT_NEAR((*s)[2], 2.0, 1e-9);
+  EXPECT_NEAR((*s)[0] - (*s)[1], 4.0, 1e-9);
+}

@@ -18,6 +18,8 @@ namespace polysquare {
 
 struct SplitOptions {
   double size = 1.0;                 ///< target quad edge length h (region units); must be set by the caller
+  double max_size = 0.0;             ///< graded meshes: the largest size, which interior triangles may grow to
+                                     ///< from `size` at the curves (0 = `size` throughout)
   double corner_threshold_deg = 30;  ///< input vertices turning by more than this become corner nodes
   double shape_bound = 0.125;        ///< CGAL shape bound of the triangulation (0.125 = 20.7 degrees minimum
                                      ///< angle; the worst quad corner is the worst triangle angle; tighter bounds
@@ -29,7 +31,8 @@ struct SplitOptions {
                                      ///< cells instead of six. > 1 = no pairs (every triangle split in three)
 };
 
-/// The triangulation the fallback splits: curves at 2 h, interior edges up to 3.5 h, SplitOptions' shape bound.
+/// The triangulation the fallback splits: curves at 2 h, interior edges up to 3.5 h (3.5 max_size when graded),
+/// SplitOptions' shape bound.
 TriangulationOptions split_triangulation_options(const SplitOptions& options);
 
 /// The counter-clockwise quad made of triangle t of `tri` and its neighbour u across their shared edge

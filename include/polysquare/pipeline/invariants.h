@@ -32,6 +32,7 @@ struct QuadOverlaps {
   std::size_t pairs = 0;  ///< pairs of quads whose interiors intersect
   std::int64_t first_a = -1, first_b = -1;  ///< the pair with the lowest indices (first_a < first_b), -1 when none
   Vec2 at{};                                ///< a point inside both quads of that pair
+  std::vector<std::uint32_t> quads;         ///< every quad of some pair, ascending
 };
 /// Pairs of quads of `mesh` whose interiors intersect: quads that share nodes or edges and only touch are not
 /// counted, two quads on the same place with different nodes are. Exact orientation tests (CGAL's filtered

@@ -137,7 +137,7 @@ struct RelaxReport {
 
 /// `candidates[][].repair_rounds[]`: what one round left.
 struct RepairRoundReport {
-  std::size_t folded = 0, beside_cracks = 0, poor_kept = 0;
+  std::size_t folded = 0, beside_cracks = 0, poor_kept = 0;  ///< beside_cracks: or overlapping another quad
   std::vector<int> remeshed;  ///< subregions meshed again in the next round
 };
 
@@ -222,6 +222,8 @@ struct CandidateReport {
   std::optional<PinnedReport> pinned;
   std::optional<PoorQuadsReport> poor_quads;
   std::optional<std::string> error;
+  std::optional<std::string> with_transitions_error;  ///< graded: why the candidate with transition rows failed;
+                                                      ///< this one was made without them
   double seconds = 0.0;
   bool chosen = false;  ///< written only when true
 };
