@@ -92,15 +92,6 @@ std::string failure_message(const CandidateSearch& search) {
   return all;
 }
 
-// Whether a candidate's unstructured quads are local patches alone (every subregion mapped). The later rounds
-// (bendable interfaces, a finer background) are for subregions whose map failed; local patches mend quads at sharp
-// input corners and narrow spikes, which every candidate meets again: a star of 40 spikes at size 1 (157 quads)
-// meshed 23 candidates in 90 CPU seconds for a best one 3 % more structured than the first round's.
-bool every_subregion_mapped(const Candidate& c) {
-  return c.result && std::all_of(c.result->stats.subregions.begin(), c.result->stats.subregions.end(),
-                                 [](const SubregionStats& s) { return s.mapped; });
-}
-
 // One part: its candidates round by round, the split-triangle fallback when none meshed it, and the best kept.
 PartOutcome mesh_part(const Region& work, const RegionPart& part, const PolysquareMapOptions& map,
                       const MeshOptions& options) {
@@ -113,8 +104,7 @@ PartOutcome mesh_part(const Region& work, const RegionPart& part, const Polysqua
     // A later round is meshed while the best mesh so far holds unstructured patches nobody asked for; the
     // best of all wins.
     const Candidate& b = search.cands[static_cast<std::size_t>(std::max(search.best, 0))];
-    if (search.best >= 0 && b.poor_quads == 0 &&
-        (b.structured >= 1.0 || !options.map.patch_subregions.empty() || every_subregion_mapped(b)))
+    if (search.best >= 0 && b.poor_quads == 0 && (b.structured >= 1.0 || !options.map.patch_subregions.empty()))
       break;
   }
   if (search.best < 0 && options.repair.split_fallback) {
