@@ -134,6 +134,87 @@ bool IntegerProgram::solve_relaxation(double seconds, bool large) {
   return model->status() == 0;  // 0: optimal
 }
 
+// The integer column nearest an integer without being one in the relaxation's solution, or -1; with `all`,
+// every such column into it.
+int IntegerProgram::fractional_column(std::vector<int>* all) const {
+  const double* x = lp_->model->getColSolution();
+  int best = -1;
+  double off_best = 1.0;
+  if (all) all->clear();
+  for (std::size_t c = 0; c < cost_.size(); ++c) {
+    if (!integer_[c]) continue;
+    const double off = std::abs(x[c] - std::round(x[c]));
+    if (off <= 1e-9) continue;
+    if (all) all->push_back(static_cast<int>(c));
+    if (off < off_best) {
+      off_best = off;
+      best = static_cast<int>(c);
+    }
+  }
+  return best;
+}
+
+// Fan columns (coefficient 2) rounded and fixed first: the rest is then a network program with integral
+// right-hand sides, mostly integral at once. Dived with them free, the dive met parity dead ends (a column
+// infeasible on both sides) and branch-and-cut ran to the time limit per solve, minutes on a graded delta_box;
+// where the rounded values have no solution, the fallback values (no fans) are the program without them, and
+// where those have none either, the columns are released. `keep`: Clp's startFinishOptions for the next solve.
+void IntegerProgram::fix_round_first(int& keep) {
+  ClpSimplex* const lp = lp_->model.get();
+  const double* x = lp->getColSolution();
+  if (std::none_of(round_first_.begin(), round_first_.end(),
+                   [&](const auto& rf) { return std::abs(x[rf.first] - std::round(x[rf.first])) > 1e-9; }))
+    return;
+  std::vector<double> rounded;
+  for (const auto& [c, fallback] : round_first_) rounded.push_back(std::ceil(x[c] - 0.5 - 1e-9));
+  double* lo = lp->columnLower();
+  double* hi = lp->columnUpper();
+  for (int attempt = 0; attempt < 3; ++attempt) {  // rounded, fallback, released
+    for (std::size_t i = 0; i < round_first_.size(); ++i) {
+      const auto c = static_cast<std::size_t>(round_first_[i].first);
+      const double v = attempt == 0 ? std::clamp(rounded[i], col_lo_[c], col_hi_[c]) : round_first_[i].second;
+      lo[c] = attempt == 2 ? col_lo_[c] : v;
+      hi[c] = attempt == 2 ? col_hi_[c] : v;
+    }
+    lp->dual(0, keep);
+    keep = 1 | 2;
+    if (lp->status() == 0) return;
+  }
+}
+
+// Branch-and-cut from the dive's point (if any): its optimum, else its best point at the time limit, else the
+// dive's.
+std::optional<std::vector<double>> IntegerProgram::branch_and_cut(double seconds, double gap,
+                                                                  const std::optional<std::vector<double>>& dived) {
+  const std::size_t n = cost_.size();
+  const Csc m = compress(columns(), entry_row_, entry_col_, entry_value_);
+  const std::lock_guard<std::mutex> lock(cbc_mutex);
+  std::unique_ptr<Cbc_Model, void (*)(Cbc_Model*)> mip(Cbc_newModel(), Cbc_deleteModel);
+  Cbc_Model* P = mip.get();
+  Cbc_loadProblem(P, columns(), rows(), m.start.data(), m.index.data(), m.value.data(), col_lo_.data(), col_hi_.data(),
+                  cost_.data(), row_lo_.data(), row_hi_.data());
+  for (std::size_t c = 0; c < n; ++c)
+    if (integer_[c]) Cbc_setInteger(P, static_cast<int>(c));
+  if (dived) {
+    std::vector<int> all(n);
+    std::iota(all.begin(), all.end(), 0);
+    Cbc_setMIPStartI(P, static_cast<int>(n), all.data(), dived->data());
+  }
+  Cbc_setLogLevel(P, 0);
+  Cbc_setMaximumSeconds(P, seconds);
+  Cbc_setAllowableGap(P, gap);
+  Cbc_solve(P);
+  if (Cbc_isProvenOptimal(P)) {
+    const double* x = Cbc_getColSolution(P);
+    return std::vector<double>(x, x + n);
+  }
+  if (!Cbc_isProvenInfeasible(P) && Cbc_numberSavedSolutions(P) > 0 && Cbc_bestSolution(P) != nullptr) {
+    const double* x = Cbc_bestSolution(P);
+    return std::vector<double>(x, x + n);
+  }
+  return dived;
+}
+
 std::optional<std::vector<double>> IntegerProgram::solve(double seconds, double gap, double dive_gap, bool large) {
   const std::size_t n = cost_.size();
   // The LP relaxation first: the quantization's matrices are network matrices apart from a few coupling and
@@ -149,56 +230,15 @@ std::optional<std::vector<double>> IntegerProgram::solve(double seconds, double 
     if (!solve_relaxation(seconds, large)) return std::nullopt;
   }
   ClpSimplex* const lp = lp_->model.get();
-  // The integer column nearest an integer without being one, or -1; with `all`, every such column into it.
-  auto fractional = [&](std::vector<int>* all = nullptr) {
-    const double* x = lp->getColSolution();
-    int best = -1;
-    double off_best = 1.0;
-    if (all) all->clear();
-    for (std::size_t c = 0; c < n; ++c) {
-      if (!integer_[c]) continue;
-      const double off = std::abs(x[c] - std::round(x[c]));
-      if (off <= 1e-9) continue;
-      if (all) all->push_back(static_cast<int>(c));
-      if (off < off_best) {
-        off_best = off;
-        best = static_cast<int>(c);
-      }
-    }
-    return best;
-  };
+  auto fractional = [&](std::vector<int>* all = nullptr) { return fractional_column(all); };
   if (fractional() < 0) {
     const double* x = lp->getColSolution();
     return std::vector<double>(x, x + n);
   }
-  // Fan columns (coefficient 2) rounded and fixed first: the rest is then a network program with integral
-  // right-hand sides, mostly integral at once. Dived with them free, the dive met parity dead ends (a column
-  // infeasible on both sides) and branch-and-cut ran to the time limit per solve, minutes on a graded delta_box;
-  // where the rounded values have no solution, the fallback values (no fans) are the program without them.
+  // Fan columns first (fix_round_first), then the dive, then branch-and-cut.
   const double bound = lp->objectiveValue();
   int keep = 1;  // Clp's startFinishOptions for the next solve: 1 keep the factorization after, 2 start from it
-  bool any_round_first = false;
-  for (const auto& [c, fallback] : round_first_) {
-    const double v = lp->getColSolution()[c];
-    any_round_first |= std::abs(v - std::round(v)) > 1e-9;
-  }
-  if (any_round_first) {
-    double* lo = lp->columnLower();
-    double* hi = lp->columnUpper();
-    std::vector<double> rounded;
-    for (const auto& [c, fallback] : round_first_) rounded.push_back(std::ceil(lp->getColSolution()[c] - 0.5 - 1e-9));
-    for (int attempt = 0; attempt < 3; ++attempt) {
-      for (std::size_t i = 0; i < round_first_.size(); ++i) {
-        const auto c = static_cast<std::size_t>(round_first_[i].first);
-        const double v = attempt == 0 ? std::clamp(rounded[i], col_lo_[c], col_hi_[c]) : round_first_[i].second;
-        lo[c] = attempt == 2 ? col_lo_[c] : v;
-        hi[c] = attempt == 2 ? col_hi_[c] : v;
-      }
-      lp->dual(0, keep);
-      keep = 1 | 2;
-      if (lp->status() == 0) break;
-    }
-  }
+  fix_round_first(keep);
   // A dive: the quantization's coupled programs are network programs but for a few rows, and fixing one
   // fractional column (to its nearest integer, else the other side) and re-solving by the dual simplex from the
   // last basis mostly makes the whole solution integral within a few steps, at a cost near the LP's; a fraction
@@ -241,32 +281,7 @@ std::optional<std::vector<double>> IntegerProgram::solve(double seconds, double 
     dived = std::vector<double>(x, x + n);
     if (lp->objectiveValue() <= bound + dive_gap) return dived;
   }
-  const Csc m = compress(columns(), entry_row_, entry_col_, entry_value_);
-  const std::lock_guard<std::mutex> lock(cbc_mutex);
-  std::unique_ptr<Cbc_Model, void (*)(Cbc_Model*)> mip(Cbc_newModel(), Cbc_deleteModel);
-  Cbc_Model* P = mip.get();
-  Cbc_loadProblem(P, columns(), rows(), m.start.data(), m.index.data(), m.value.data(), col_lo_.data(), col_hi_.data(),
-                  cost_.data(), row_lo_.data(), row_hi_.data());
-  for (std::size_t c = 0; c < n; ++c)
-    if (integer_[c]) Cbc_setInteger(P, static_cast<int>(c));
-  if (dived) {
-    std::vector<int> all(n);
-    std::iota(all.begin(), all.end(), 0);
-    Cbc_setMIPStartI(P, static_cast<int>(n), all.data(), dived->data());
-  }
-  Cbc_setLogLevel(P, 0);
-  Cbc_setMaximumSeconds(P, seconds);
-  Cbc_setAllowableGap(P, gap);
-  Cbc_solve(P);
-  if (Cbc_isProvenOptimal(P)) {
-    const double* x = Cbc_getColSolution(P);
-    return std::vector<double>(x, x + n);
-  }
-  if (!Cbc_isProvenInfeasible(P) && Cbc_numberSavedSolutions(P) > 0 && Cbc_bestSolution(P) != nullptr) {
-    const double* x = Cbc_bestSolution(P);
-    return std::vector<double>(x, x + n);
-  }
-  return dived;
+  return branch_and_cut(seconds, gap, dived);
 }
 
 }  // namespace polysquare

@@ -52,6 +52,10 @@ class IntegerProgram {
  private:
   struct Lp;  // the LP relaxation's model as the last solve left it
   bool solve_relaxation(double seconds, bool large);
+  int fractional_column(std::vector<int>* all) const;
+  void fix_round_first(int& keep);
+  std::optional<std::vector<double>> branch_and_cut(double seconds, double gap,
+                                                    const std::optional<std::vector<double>>& dived);
   std::unique_ptr<Lp> lp_;
   std::vector<double> col_lo_, col_hi_, cost_;
   std::vector<char> integer_;
