@@ -130,6 +130,7 @@ IntegerProgram joint_program(JointProblem& jp, const std::vector<SegmentCoupling
       const double t = std::max(std::round(target_k), 1.0);
       // n = sg (X_b - X_a) >= 1 ; u >= |n - t| ; w >= n - hi, w >= lo - n. The band is soft: a layout that only
       // closes with a stretched side still gets counts, and the quality checks downstream judge the result.
+      const double fewer = options.graded ? options.graded_fewer_weight : 1.0;
       const double lo = std::max(1.0, std::ceil(t / options.max_side_change));
       const double hi = std::max(lo, std::floor(t * options.max_side_change));
       if (compact) {
@@ -139,20 +140,24 @@ IntegerProgram joint_program(JointProblem& jp, const std::vector<SegmentCoupling
         const double beyond = unit * (1.0 + options.outside_band_weight);
         const int d = P.add_columns(1, 0.0, hi - t, unit);
         P.add_columns(1, 0.0, inf, beyond);
-        P.add_columns(1, 0.0, t - lo, unit);
-        P.add_columns(1, 0.0, lo - 1.0, beyond);
+        P.add_columns(1, 0.0, t - lo, fewer * unit);
+        P.add_columns(1, 0.0, lo - 1.0, fewer * beyond);
         P.add_row({{xb, sg}, {xa, -sg}, {d, -1.0}, {d + 1, -1.0}, {d + 2, 1.0}, {d + 3, 1.0}}, t, t);
         continue;
       }
-      // u: deviation from t; w: deviation beyond the band [lo, hi]
+      // u: deviation from t; w: deviation beyond the band [lo, hi]. Graded: the deviations below take columns
+      // of their own (a weighted row would cost the matrix its total unimodularity).
       const int u = P.add_columns(1, 0.0, inf, unit);
       // Divided, not `* unit`: bit for bit the cost the small cases' meshes were made with.
       const int w = P.add_columns(1, 0.0, inf, options.outside_band_weight / std::max(target_k, 1.0));
+      const int u_below = fewer == 1.0 ? u : P.add_columns(1, 0.0, inf, fewer * unit);
+      const int w_below =
+          fewer == 1.0 ? w : P.add_columns(1, 0.0, inf, fewer * options.outside_band_weight / std::max(target_k, 1.0));
       P.add_row({{xb, sg}, {xa, -sg}}, 1.0, inf);
       P.add_row({{u, 1.0}, {xb, -sg}, {xa, sg}}, -t, inf);
-      P.add_row({{u, 1.0}, {xb, sg}, {xa, -sg}}, t, inf);
+      P.add_row({{u_below, 1.0}, {xb, sg}, {xa, -sg}}, t, inf);
       P.add_row({{w, 1.0}, {xb, -sg}, {xa, sg}}, -hi, inf);
-      P.add_row({{w, 1.0}, {xb, sg}, {xa, -sg}}, lo, inf);
+      P.add_row({{w_below, 1.0}, {xb, sg}, {xa, -sg}}, lo, inf);
     }
   }
   for (const SegmentCoupling& c : couplings) {
@@ -329,7 +334,8 @@ std::array<std::uint64_t, 2> alone_key(const Layout& layout, const std::vector<V
   Digest d;
   auto integer = [&](long long v) { d.word(static_cast<std::uint64_t>(v)); };
   d.text(part_name);
-  for (double v : {o.position_weight, o.max_side_change, o.outside_band_weight, o.gap, o.dive_gap, o.broken_coupling_cost})
+  for (double v : {o.position_weight, o.max_side_change, o.outside_band_weight, o.gap, o.dive_gap, o.broken_coupling_cost,
+                   o.graded ? o.graded_fewer_weight : 1.0})
     d.real(v);
   for (long long v : {static_cast<long long>(o.max_separation_rounds), static_cast<long long>(o.time_limit_ms),
                       static_cast<long long>(o.large_program_columns), static_cast<long long>(o.screen_separations)})

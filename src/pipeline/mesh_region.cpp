@@ -72,6 +72,7 @@ PolysquareMapOptions run_map_options(const MeshOptions& options, const SizedRegi
   map.partition.size_ref = options.size.h;
   map.deform.memo = std::make_shared<DeformMemo>();  // this run's solved deformations (repair rounds repeat them)
   map.quantize.memo = std::make_shared<QuantizeMemo>();  // and its layouts quantized alone
+  map.quantize.graded = sized.field != nullptr;
   map.size = options.size.h;
   map.layout.corner_threshold_deg = options.curves.corner_threshold_deg;
   map.keep_partition = options.run.keep_partition;

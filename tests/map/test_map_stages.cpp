@@ -301,3 +301,33 @@ TEST(Quantization, TheCompactFormOfALargeProgramHasTheSameOptimum) {
     EXPECT_EQ(count(compact), count(inequality));
   }
 }
+
+TEST(Quantization, GradedSidesRatherTakeAnElementMoreThanOneFewer) {
+  // A rectangle whose -X side wants 5 elements and +X side 3 (a subregion widening towards coarser quads): one
+  // count serves both. Uniform: 3 (costs 2/5, against 2/3 for 5). Graded, an element fewer costs
+  // graded_fewer_weight = 2 times one more: 5 (2/3, against 4/5 for 3 and 1/3 + 2/5 for 4), in both forms.
+  for (const bool large : {false, true}) {
+    for (const bool graded : {false, true}) {
+      Layout L;
+      const std::vector<Vec2> deformed = {{0, 0}, {3, 0}, {4, 2}, {-1, 2}};
+      const int labels[4] = {0, 1, 2, 3};
+      const double targets[4] = {3.0, 2.0, 5.0, 2.0};
+      for (int i = 0; i < 4; ++i) {
+        L.break_vertex.push_back(i);
+        L.break_is_corner.push_back(1);
+        LayoutSegment s;
+        s.chain = 0; s.first = i; s.count = 1; s.label = labels[i];
+        s.break_a = i; s.break_b = (i + 1) % 4;
+        s.target = targets[i];
+        L.segments.push_back(s);
+      }
+      L.vertex_break = {0, 1, 2, 3};
+      QuantizeOptions o;
+      o.graded = graded;
+      if (large) o.large_program_columns = 0;
+      quantize_layout(L, deformed, o, "test");
+      ASSERT_EQ(check_layout(L), "");
+      EXPECT_EQ(L.lattice[1][0] - L.lattice[0][0], graded ? 5 : 3) << (large ? "compact" : "inequality") << " form";
+    }
+  }
+}

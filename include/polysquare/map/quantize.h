@@ -39,6 +39,10 @@ struct QuantizeOptions {
   double transition_cost = 2.0;  ///< graded PPM: cost of one transition fan on a coupling marked `transition`
                                  ///< (two elements of mismatch, two singular nodes), relative to the coupled
                                  ///< target as the sides' deviations are; 0 = no coupling is marked
+  double graded_fewer_weight = 2.0;  ///< graded meshes (`graded`): an element fewer than a side's target costs this
+                                     ///< many times an element more, inside and beyond the band (the field is the
+                                     ///< largest size wanted, so a side would rather have quads smaller than it)
+  bool graded = false;  ///< the layouts' targets are in units of a size field's local size (the pipeline sets it)
   bool screen_separations = true;  ///< each round's separations are tried on their layout alone before they join
                                    ///< the program; those that contradict its sides or each other give way to the
                                    ///< next choice for their conflict (false: added as found, and the solve fails)
