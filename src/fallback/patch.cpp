@@ -48,12 +48,13 @@ struct SegmentGrid {
     for (long long i = i0; i <= i1; ++i)
       for (long long j = j0; j <= j1; ++j) buckets[key(i, j)].push_back({a, b});
   }
-  // Distance below cell: checks the 3 x 3 cells around p.
+  // No segment within r of p: checks the cells around p out to r (3 x 3 up to r = cell).
   bool clear_of(Vec2 p, double r) const {
     const long long i = static_cast<long long>(std::floor(p.x / cell));
     const long long j = static_cast<long long>(std::floor(p.y / cell));
-    for (long long di = -1; di <= 1; ++di)
-      for (long long dj = -1; dj <= 1; ++dj) {
+    const long long ring = std::max(1LL, static_cast<long long>(std::ceil(r / cell)));
+    for (long long di = -ring; di <= ring; ++di)
+      for (long long dj = -ring; dj <= ring; ++dj) {
         auto it = buckets.find(key(i + di, j + dj));
         if (it == buckets.end()) continue;
         for (const auto& [a, b] : it->second)
@@ -82,8 +83,28 @@ bool inside_loops(const std::vector<std::vector<Vec2>>& loops, Vec2 p) {
 }
 
 // Interior vertices: a hexagonal lattice of `spacing` inside the loops and `clearance` away from every segment.
+// The coarsest of the nested triangular lattices of spacing 2^k (k <= kMaxLatticeLevel) that point (i, j) of the
+// finest one belongs to: rows j divisible by 2^k, every 2^k-th point of a row, alternate rows shifted by half.
+constexpr int kMaxLatticeLevel = 8;
+int lattice_level(long long i, long long j) {
+  int k = 0;
+  while (k < kMaxLatticeLevel) {
+    const long long step = 1LL << (k + 1), half = 1LL << k;
+    if (j % step != 0) break;
+    const long long shift = (j / step) % 2 != 0 ? half : 0;
+    if (((i - shift) % step + step) % step != 0) break;
+    ++k;
+  }
+  return k;
+}
+
+// Interior vertices on a triangular lattice of `spacing`, `clearance` from the curves. Graded (`field` given;
+// `spacing` stands for the field's `least` size): a point stays where the coarsest lattice it belongs to is no
+// coarser than the field asks there, so the spacing doubles in steps towards coarse sizes, and its clearance
+// grows with it.
 std::vector<Vec2> lattice_points(const std::vector<std::vector<Vec2>>& loops, const SegmentGrid& grid, double spacing,
-                                 double clearance, Vec2 offset = {}) {
+                                 double clearance, Vec2 offset = {}, const SizeField* field = nullptr,
+                                 double least = 1.0) {
   Box2 box;
   for (const auto& l : loops)
     for (Vec2 p : l) box.add(p);
@@ -94,7 +115,13 @@ std::vector<Vec2> lattice_points(const std::vector<std::vector<Vec2>>& loops, co
       const Vec2 p{box.lo.x + offset.x + (static_cast<double>(i) + 0.5 * static_cast<double>(j % 2)) * spacing,
                    box.lo.y + offset.y + static_cast<double>(j) * dy};
       if (p.x > box.hi.x) break;
-      if (inside_loops(loops, p) && grid.clear_of(p, clearance)) out.push_back(p);
+      double scale = 1.0;
+      if (field) {
+        const int wanted = std::clamp(static_cast<int>(std::floor(std::log2(field->at(p) / least))), 0, kMaxLatticeLevel);
+        if (lattice_level(i, j) < wanted) continue;
+        scale = static_cast<double>(1LL << wanted);
+      }
+      if (inside_loops(loops, p) && grid.clear_of(p, scale * clearance)) out.push_back(p);
     }
   return out;
 }
@@ -488,7 +515,7 @@ QuadMesh split_patch(const PatchInput& in, const PatchOptions& options) {
   for (std::int32_t v : in.points) idx.vertex(v);
   TriMesh tri;
   tri.vertices = in.nodes;
-  tri.triangles = idx.triangles(lattice_points(loops, grid, 2.0 * h, 1.2 * h), tri.vertices);
+  tri.triangles = idx.triangles(lattice_points(loops, grid, 2.0 * h, 1.2 * h, {}, options.size_field.get(), h), tri.vertices);
   std::unordered_set<std::uint64_t> coarse_edges;
   std::unordered_map<std::uint64_t, std::int32_t> coarse_midpoint;
   for (const CoarseCurves::Edge& e : coarse) {
@@ -541,7 +568,7 @@ QuadMesh matched_patch_once(const PatchInput& in, const PatchOptions& options, V
   for (std::int32_t v : in.points) idx.vertex(v);
   TriMesh tri;
   tri.vertices = in.nodes;
-  tri.triangles = idx.triangles(lattice_points(loops, grid, h, 0.6 * h, offset), tri.vertices);
+  tri.triangles = idx.triangles(lattice_points(loops, grid, h, 0.6 * h, offset, options.size_field.get(), h), tri.vertices);
   break_ears(idx, tri, curve_edge);
   if (tri.triangles.size() % 2 != 0)
     throw MeshingError("patch: an odd number of triangles near " + at_text(in.nodes.front()) + " cannot pair into quads");

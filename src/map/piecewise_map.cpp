@@ -1472,6 +1472,7 @@ void build_patch(PiecewiseMap& m, std::size_t p, const Subregion& sub, const std
                                     m.options.layout.corner_threshold_deg, m.sub_name(p));
   PatchOptions po;
   po.size = size;
+  po.size_field = m.options.size_field;
   po.method = method;
   try {
     m.meshes[p] = mesh_patch(in, po);

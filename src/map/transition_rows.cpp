@@ -40,6 +40,7 @@ struct Row {
   std::vector<std::size_t> quads;
   std::vector<std::int32_t> w;
   bool forward = true;
+  bool taken_front = false, taken_back = false;  // the end quad is an earlier row's (a corner of both)
 };
 
 Row find_row(const QuadMesh& mesh, const std::vector<std::int32_t>& u, const std::vector<std::uint8_t>& in_row) {
@@ -53,7 +54,9 @@ Row find_row(const QuadMesh& mesh, const std::vector<std::int32_t>& u, const std
     const auto it = owner.find(edge_key(u[i], u[i + 1]));
     if (it == owner.end() || it->second.size() != 1) throw MeshingError("its interface edges are not one row's");
     const auto [q, k] = it->second.front();
-    if (in_row[q]) throw MeshingError("a corner quad would join two transition rows");
+    if (in_row[q] && i == 0 && n > 1) row.taken_front = true;
+    else if (in_row[q] && i + 1 == n && n > (row.taken_front ? 2u : 1u)) row.taken_back = true;
+    else if (in_row[q]) throw MeshingError("a corner quad would join two transition rows");
     const auto& quad = mesh.quads[q];
     const bool forward = quad[static_cast<std::size_t>(k)] == u[i];
     if (i > 0 && forward != row.forward) throw MeshingError("its row turns over");
@@ -96,18 +99,34 @@ std::vector<std::array<std::int32_t, 4>> row_quads(const std::vector<std::int32_
 }  // namespace
 
 void replace_with_transition_row(QuadMesh& coarse, std::size_t& side_nodes, std::vector<std::uint8_t>& in_row,
-                                 const std::vector<Vec2>& line, const std::vector<Vec2>& top,
-                                 const std::vector<NodeKind>& top_kind, double tolerance) {
-  const std::vector<std::int32_t> u = nodes_along(coarse, side_nodes, line, tolerance);
+                                 const std::vector<Vec2>& line, const std::vector<Vec2>& top_in,
+                                 const std::vector<NodeKind>& top_kind_in, double tolerance) {
+  std::vector<std::int32_t> u = nodes_along(coarse, side_nodes, line, tolerance);
   if (u.size() < 2) throw MeshingError("it has no nodes on the interface");
-  const std::size_t n = u.size() - 1;
-  if (top.size() <= n + 1 || (top.size() - 1 - n) % 2 != 0)
-    throw MeshingError("the finer side's " + std::to_string(top.size() - 1) + " edges do not exceed its " +
+  std::size_t n = u.size() - 1;
+  if (top_in.size() <= n + 1 || (top_in.size() - 1 - n) % 2 != 0)
+    throw MeshingError("the finer side's " + std::to_string(top_in.size() - 1) + " edges do not exceed its " +
                        std::to_string(n) + " by an even number");
-  if (distance(coarse.nodes[static_cast<std::size_t>(u.front())], top.front()) > tolerance ||
-      distance(coarse.nodes[static_cast<std::size_t>(u.back())], top.back()) > tolerance)
+  if (distance(coarse.nodes[static_cast<std::size_t>(u.front())], top_in.front()) > tolerance ||
+      distance(coarse.nodes[static_cast<std::size_t>(u.back())], top_in.back()) > tolerance)
     throw MeshingError("the two sides' end nodes differ");
-  const Row row = find_row(coarse, u, in_row);
+  Row row = find_row(coarse, u, in_row);
+  // A corner quad an earlier row took stays out of this one: its edge on the line meets the finer side's end
+  // edge, its inner node sliding along the line onto the finer side's node; the row is one edge shorter on both
+  // sides, so its fans are as many.
+  std::vector<Vec2> top = top_in;
+  std::vector<NodeKind> top_kind = top_kind_in;
+  if (row.taken_front) {
+    u.erase(u.begin()), top.erase(top.begin()), top_kind.erase(top_kind.begin());
+    row.quads.erase(row.quads.begin()), row.w.erase(row.w.begin());
+    coarse.nodes[static_cast<std::size_t>(u.front())] = top.front();
+  }
+  if (row.taken_back) {
+    u.pop_back(), top.pop_back(), top_kind.pop_back();
+    row.quads.pop_back(), row.w.pop_back();
+    coarse.nodes[static_cast<std::size_t>(u.back())] = top.back();
+  }
+  n = u.size() - 1;
 
   // New numbering: side nodes but the interface's inner ones, the finer side's inner ones, the other nodes.
   const std::size_t old_count = coarse.nodes.size();

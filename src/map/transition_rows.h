@@ -20,7 +20,9 @@ std::vector<std::int32_t> nodes_along(const QuadMesh& mesh, std::size_t side_nod
 /// take the rest, each fan leaving its middle top node with valence 3 and its bottom node with valence 5.
 /// coarse's nodes on the line give way to top's, kept among its first `side_nodes` (updated) so that stitching
 /// merges them with the finer side's. `in_row` (#quads of coarse, kept in step) marks quads of earlier rows,
-/// which a row may not take again. Throws MeshingError saying why when the quads along the line are no row.
+/// which a row may not take again but at an end of the line (a corner quad of two rows): there the row leaves
+/// that quad out, and the quad's node on the line moves onto the finer side's next node. Throws MeshingError
+/// saying why when the quads along the line are no row.
 void replace_with_transition_row(QuadMesh& coarse, std::size_t& side_nodes, std::vector<std::uint8_t>& in_row,
                                  const std::vector<Vec2>& line, const std::vector<Vec2>& top,
                                  const std::vector<NodeKind>& top_kind, double tolerance);

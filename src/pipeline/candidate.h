@@ -86,9 +86,10 @@ struct Repairs {
 // Makes a candidate's mesh (a map of the part, or the fallback) with the repairs asked for so far.
 using MakeMesh = std::function<PartMapResult(const Repairs&)>;
 
-// Meshes a part with `make_mesh` (a map candidate or the fallback), then smooths, checks and measures it.
+// Meshes a part with `make_mesh` (a map candidate or the fallback), then smooths, checks and measures it; patches
+// follow `field` (graded runs; null: uniform).
 Candidate finish_candidate(const Region& region, const RegionPart& part, const MeshOptions& options,
-                           CandidateReport summary, const MakeMesh& make_mesh);
+                           std::shared_ptr<const SizeField> field, CandidateReport summary, const MakeMesh& make_mesh);
 
 // The candidate of `map` (its partition.parts subregions), finished.
 Candidate try_candidate(const Region& region, const RegionPart& part, const PolysquareMapOptions& map,

@@ -100,10 +100,11 @@ RoundVerdict judge_round(FinishWork& w) {
   // Quads beside a crack (pieces that do not share their nodes) count as folded: their subregions are meshed
   // again, instead of the whole candidate failing the invariants after the last round.
   std::vector<std::uint8_t> cracked = quads_beside_cracks(w.r.mesh);
-  // So do valid quads that overlap others (2) where transition rows were built: 40 such pairs sent a graded
-  // delta_box whole to the unstructured fallback. Elsewhere a round's overlaps are left to the final checks:
-  // marked in every round, they sent subregions of a uniform coast to patches that local patches mend in place.
-  if (w.r.stats.transition_rows > 0)
+  // So do valid quads that overlap others (2) in graded meshes: 40 such pairs with transition rows, 132 without,
+  // sent a graded delta_box whole to the unstructured fallback. In uniform meshes a round's overlaps are left to
+  // the final checks: marked in every round, they sent subregions of a uniform coast to patches that local
+  // patches mend in place.
+  if (w.options.size.graded())
     for (std::uint32_t q : find_overlapping_quads(w.r.mesh).quads) cracked[q] = 2;
   v.cracks = cracked.size() - static_cast<std::size_t>(std::count(cracked.begin(), cracked.end(), std::uint8_t{0}));
   // Subregions still holding a folded quad are meshed again (a mapped one as a patch, a patch by the matching

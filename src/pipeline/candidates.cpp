@@ -282,7 +282,7 @@ Candidate try_candidate(const Region& region, const RegionPart& part, const Poly
     summary.split_rounds = map.split_rounds;
   }
   RepairedMaps maps(region, part, map);
-  Candidate c = finish_candidate(region, part, options, summary, std::ref(maps));
+  Candidate c = finish_candidate(region, part, options, map.size_field, summary, std::ref(maps));
   // Graded: a candidate whose transition rows left what its repair rounds could not mend (cracks and
   // overlapping quads on a graded delta_box, round after round, then the unstructured fallback for the whole
   // part) is made again without them, from its first round.
@@ -293,7 +293,7 @@ Candidate try_candidate(const Region& region, const RegionPart& part, const Poly
   plain.quantize.transition_cost = 0.0;
   summary.with_transitions_error = c.error;
   RepairedMaps again(region, part, plain);
-  return finish_candidate(region, part, options, std::move(summary), std::ref(again));
+  return finish_candidate(region, part, options, map.size_field, std::move(summary), std::ref(again));
 }
 
 // The last resort for a part no poly-square candidate meshes: triangles split into quads (unstructured).
@@ -301,7 +301,7 @@ Candidate try_split_fallback(const Region& region, const RegionPart& part, const
   CandidateReport summary;
   summary.part = part.part;
   summary.fallback = "split_triangles";
-  return finish_candidate(region, part, options, std::move(summary), [&](const Repairs&) {
+  return finish_candidate(region, part, options, nullptr, std::move(summary), [&](const Repairs&) {
     SplitOptions so;
     so.size = options.size.h;
     if (options.size.graded()) so.max_size = options.size.field.size_max;

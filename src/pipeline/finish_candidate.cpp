@@ -45,7 +45,7 @@ Scope patch_in_place(FinishWork& w, std::map<int, std::string>& in_place) {
   Scope scope;
   if (in_place.empty()) return scope;
   bool done = false;
-  timed(w.times.repair_patches, [&] { done = patch_subregions_in_place(w.r.mesh, in_place, w.options, w.local_patched); });
+  timed(w.times.repair_patches, [&] { done = patch_subregions_in_place(w.r.mesh, in_place, w.options, w.field, w.local_patched); });
   if (done) {
     for (const auto& [s, why] : in_place) {
       SubregionStats& sr = w.r.stats.subregions[static_cast<std::size_t>(s)];
@@ -225,6 +225,7 @@ bool measure(FinishWork& w) {
 bool patch_locally(FinishWork& w, const std::vector<std::uint8_t>& flagged, int rings, std::size_t max_quads) {
   LocalPatchOptions lp = w.options.local_patch;
   lp.size = w.options.size.h;
+  lp.size_field = w.field;
   lp.max_rings = rings;
   lp.max_quads = max_quads;
   LocalPatchStats done;
@@ -254,13 +255,13 @@ bool in_large_map(const FinishWork& w, std::size_t q) {
 }
 
 Candidate finish_candidate(const Region& region, const RegionPart& part, const MeshOptions& options,
-                           CandidateReport summary, const MakeMesh& make_mesh) {
+                           std::shared_ptr<const SizeField> field, CandidateReport summary, const MakeMesh& make_mesh) {
   Candidate c;
   c.summary = std::move(summary);
   // Wall time of the candidate, map to gates, so the report shows where a part's search spent its time.
   const auto t_start = std::chrono::steady_clock::now();
   try {
-    FinishWork w(region, part, options, c);
+    FinishWork w(region, part, options, std::move(field), c);
     run_rounds(w, make_mesh);
     c.summary.stage_seconds = w.times.report();
     measure_finished(w);

@@ -36,13 +36,16 @@ void timed(double& total, F&& f) {
 
 // A candidate being finished: its mesh and what the steps know of it, carried through the repair rounds.
 struct FinishWork {
-  FinishWork(const Region& region, const RegionPart& part, const MeshOptions& options, Candidate& c)
-      : region(region), options(options), c(c), name(name_of(region, part)), smooth(options.smooth) {
+  FinishWork(const Region& region, const RegionPart& part, const MeshOptions& options,
+             std::shared_ptr<const SizeField> field, Candidate& c)
+      : region(region), options(options), field(std::move(field)), c(c), name(name_of(region, part)),
+        smooth(options.smooth) {
     smooth.feature_tolerance = options.gates.feature_tolerance * options.size.h;
   }
 
   const Region& region;
   const MeshOptions& options;
+  std::shared_ptr<const SizeField> field;  // graded runs: the size field, which patches follow (null: uniform)
   Candidate& c;  // its summary and smoothing figures are written as the steps go
   std::string name;
   SmoothOptions smooth;
@@ -102,7 +105,7 @@ void measure_finished(FinishWork& w);
 // Cuts the quads of the subregions `cut` out of a finished part mesh and meshes each hole again as one patch
 // (patch_in_place.cpp); false when a subregion keeps some of its quads.
 bool patch_subregions_in_place(QuadMesh& mesh, const std::map<int, std::string>& cut, const MeshOptions& options,
-                               std::vector<std::uint8_t>& local_patched);
+                               const std::shared_ptr<const SizeField>& field, std::vector<std::uint8_t>& local_patched);
 
 // #nodes: 1 for the nodes of the quads `changed(q)` and of `rings` rings of quads around them.
 template <typename Changed>

@@ -28,7 +28,7 @@ bool Repairs::add(const std::map<int, std::string>& bad, const PartMapStats& sta
 // (delta_box 10 m: 350 s a round). `local_patched` (#quads) is carried; the new quads are the subregions' own.
 // False when a subregion keeps some of its quads (the mesh may have changed: the caller maps the part again).
 bool patch_subregions_in_place(QuadMesh& mesh, const std::map<int, std::string>& cut, const MeshOptions& options,
-                               std::vector<std::uint8_t>& local_patched) {
+                               const std::shared_ptr<const SizeField>& field, std::vector<std::uint8_t>& local_patched) {
   if (mesh.quad_part.size() != mesh.quads.size()) return false;
   const std::size_t nq = mesh.quads.size();
   std::vector<std::int32_t> region(nq, -1);
@@ -39,6 +39,7 @@ bool patch_subregions_in_place(QuadMesh& mesh, const std::map<int, std::string>&
   }
   LocalPatchOptions lp = options.local_patch;
   lp.size = options.size.h;
+  lp.size_field = field;
   lp.min_rings = 0;
   lp.holes = true;           // a subregion around an island
   lp.inner_features = true;  // a subregion a feature runs into

@@ -300,12 +300,13 @@ class Cutter {
 };
 
 // The better of the two patch constructions on `in`, or nothing when neither builds without a folded quad.
-bool best_patch(const PatchInput& in, double size, QuadMesh& out) {
+bool best_patch(const PatchInput& in, const LocalPatchOptions& options, QuadMesh& out) {
   double best = 0.0;
   bool found = false;
   for (PatchMethod method : {PatchMethod::split, PatchMethod::matching}) {
     PatchOptions po;
-    po.size = size;
+    po.size = options.size;
+    po.size_field = options.size_field;
     po.method = method;
     try {
       QuadMesh p = mesh_patch(in, po);
@@ -380,7 +381,7 @@ std::optional<RegionPatch> search_cluster(const ClusterSearch& cs, const std::ve
     QuadRegion r;
     if (!cs.cutter.cut(quads, in, options.holes, options.inner_features, r)) continue;
     QuadMesh patch;
-    if (!best_patch(cs.cutter.patch_input(r), options.size, patch)) continue;
+    if (!best_patch(cs.cutter.patch_input(r), options, patch)) continue;
     const double worst = worst_corner(patch);
     if ((best || mend_only) && worst <= best_worst) continue;
     const std::int32_t part = majority_part(mesh, r.quads);

@@ -2,6 +2,7 @@
 // the finer side's nodes, checked on a small grid where every count is known.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <map>
 
 #include "map/transition_rows.h"
@@ -83,6 +84,44 @@ TEST(TransitionRows, RefusesCountsARowCannotJoin) {
                                              std::vector<NodeKind>(top.size(), NodeKind::interior), 1e-9),
                  MeshingError) << fine;
     EXPECT_EQ(m.quads.size(), 6u);  // left as it was
+  }
+}
+
+TEST(TransitionRows, TwoRowsMeetAtACornerQuad) {
+  // A 4 x 4 grid with a row onto 6 nodes along its top, then one onto 6 along its right side, traversed either
+  // way: the corner quad is the top row's, so the right row leaves it out (its node at (4, 3) slides up onto the
+  // finer side's (4, 10/3)) and fans the other three edges onto five.
+  for (const bool upwards : {true, false}) {
+    QuadMesh m = grid(4, 4);
+    std::size_t side_nodes = m.nodes.size();
+    std::vector<std::uint8_t> in_row(m.quads.size(), 0);
+    const std::vector<Vec2> top_line{{0, 4}, {4, 4}}, top = top_nodes(6, 4.0, 4.0);
+    replace_with_transition_row(m, side_nodes, in_row, top_line, top, std::vector<NodeKind>(7, NodeKind::interior), 1e-9);
+    std::vector<Vec2> right_line{{4, 0}, {4, 4}}, right;
+    for (int i = 0; i <= 6; ++i) right.push_back({4.0, 4.0 * i / 6});
+    if (!upwards) {
+      std::reverse(right_line.begin(), right_line.end());
+      std::reverse(right.begin(), right.end());
+    }
+    replace_with_transition_row(m, side_nodes, in_row, right_line, right, std::vector<NodeKind>(7, NodeKind::interior), 1e-9);
+    double area = 0.0;
+    for (const auto& q : m.quads) {
+      EXPECT_GT(signed_area(m, q), 0.0) << upwards;
+      area += signed_area(m, q);
+    }
+    EXPECT_NEAR(area, 16.0, 1e-12);
+    std::map<std::pair<int, int>, int> uses;
+    for (const auto& q : m.quads)
+      for (int k = 0; k < 4; ++k) ++uses[{std::min(q[k], q[(k + 1) % 4]), std::max(q[k], q[(k + 1) % 4])}];
+    int top_edges = 0, right_edges = 0;
+    for (const auto& [e, n] : uses) {
+      EXPECT_LE(n, 2);
+      if (m.nodes[e.first].y == 4.0 && m.nodes[e.second].y == 4.0) ++top_edges;
+      if (m.nodes[e.first].x == 4.0 && m.nodes[e.second].x == 4.0) ++right_edges;
+    }
+    EXPECT_EQ(top_edges, 6);
+    EXPECT_EQ(right_edges, 6);
+    EXPECT_EQ(nodes_along(m, side_nodes, {{4, 0}, {4, 4}}, 1e-9).size(), 7u);
   }
 }
 

@@ -8,6 +8,7 @@
 #include <fstream>
 #include <limits>
 #include <map>
+#include <memory>
 #include <set>
 #include <string>
 
@@ -533,4 +534,62 @@ TEST(LocalRepair, ARepairRoundPatchesItsSubregionsInPlaceWithoutMappingAgain) {
   }
   // The quads the summary counts are the mesh's, patches included.
   EXPECT_EQ(in_place.report.summary.quads, in_place.mesh.quads.size());
+}
+
+TEST(Patch, GradedPatchesFollowTheirSizeField) {
+  // A 64 x 64 square under a field from 2 at x = 0 to 18 at x = 64, its given nodes graded as graded neighbours
+  // make them (32 edges on the left side, 4 on the right, 9 along the others at x = 8 (9^(k/9) - 1)): the
+  // interior vertices thin out towards the coarse side (lattices of spacing 2^k h), so the quads there are larger
+  // and fewer in all; without the field they are the finest size everywhere.
+  PatchInput in;
+  {
+    PatchCurve c;
+    c.closed = c.loop = true;
+    std::vector<Vec2> ring;
+    for (int k = 0; k < 9; ++k) ring.push_back({8.0 * (std::pow(9.0, k / 9.0) - 1.0), 0.0});
+    for (int k = 0; k < 4; ++k) ring.push_back({64.0, 16.0 * k});
+    for (int k = 9; k > 0; --k) ring.push_back({8.0 * (std::pow(9.0, k / 9.0) - 1.0), 64.0});
+    for (int k = 32; k > 0; --k) ring.push_back({0.0, 2.0 * k});
+    for (std::size_t v = 0; v < ring.size(); ++v) {
+      c.nodes.push_back(static_cast<std::int32_t>(v));
+      in.nodes.push_back(ring[v]);
+      in.kind.push_back(v == 0 || v == 9 || v == 13 || v == 22 ? NodeKind::corner : NodeKind::boundary);
+      c.role.push_back(PatchEdgeRole::boundary);
+      c.tag.push_back(0);
+    }
+    in.curves.push_back(c);
+  }
+  std::vector<double> h;
+  const int n = 17;
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) h.push_back(2.0 + 0.25 * 4.0 * i);
+  const auto field = std::make_shared<const SizeField>(Vec2{0.0, 0.0}, 4.0, n, n, h);
+  for (const PatchMethod method : {PatchMethod::split, PatchMethod::matching}) {
+    auto mean_sizes = [&](bool graded, std::size_t& quads) {
+      PatchOptions o;
+      o.size = 2.0;
+      o.method = method;
+      if (graded) o.size_field = field;
+      const QuadMesh m = mesh_patch(in, o);
+      const InvariantReport inv = check_invariants(m);
+      EXPECT_TRUE(inv.ok()) << inv.first_problem;
+      EXPECT_EQ(compute_quality(m).inverted, 0u);
+      quads = m.quads.size();
+      double fine = 0, coarse = 0;
+      int nf = 0, nc = 0;
+      for (const auto& x : m.quads) {
+        const Vec2 c = 0.25 * (m.nodes[x[0]] + m.nodes[x[1]] + m.nodes[x[2]] + m.nodes[x[3]]);
+        const double s = std::sqrt(0.5 * std::abs(cross(m.nodes[x[2]] - m.nodes[x[0]], m.nodes[x[3]] - m.nodes[x[1]])));
+        if (c.x < 16.0 && c.y > 8.0 && c.y < 56.0) { fine += s; ++nf; }
+        if (c.x > 40.0 && c.y > 8.0 && c.y < 56.0) { coarse += s; ++nc; }
+      }
+      return std::pair{nf ? fine / nf : 0.0, nc ? coarse / nc : 0.0};
+    };
+    std::size_t uniform_quads = 0, graded_quads = 0;
+    const auto [uf, uc] = mean_sizes(false, uniform_quads);
+    const auto [gf, gc] = mean_sizes(true, graded_quads);
+    EXPECT_LT(uc, 1.5 * uf) << "uniform";
+    EXPECT_GT(gc, 2.0 * gf) << "graded: the coarse side's quads";
+    EXPECT_LT(2 * graded_quads, uniform_quads);
+  }
 }

@@ -6,9 +6,11 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "polysquare/core/quad_mesh.h"
+#include "polysquare/size/size_field.h"
 #include "polysquare/smooth/untangle.h"
 
 namespace polysquare {
@@ -50,6 +52,8 @@ struct PatchOptions {
   int matching_attempts = 8;   ///< matching: interior lattices (shifted) tried before giving up
   int matching_repairs = 8;    ///< matching: times the triangles left unmatched get a centre vertex, per lattice
   double size = 1.0;           ///< target quad edge length h; interior triangle vertices are 2 h apart
+  std::shared_ptr<const SizeField> size_field;  ///< graded meshes: the interior vertices' spacing follows this
+                                                ///< field (at least `size`, doubling in steps); null = uniform
   double pair_min_sj = 0.3;    ///< triangle pairs merged first when their quad's worst corner reaches this
   bool refuse_folded = false;  ///< throw when a quad is still folded after the sweeps (else the mesh's smoothing
                                ///< and invariant check decide)

@@ -7,15 +7,19 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "polysquare/core/quad_mesh.h"
+#include "polysquare/size/size_field.h"
 
 namespace polysquare {
 
 struct LocalPatchOptions {
   bool enabled = true;          ///< false: poor quads are left to the coarser repairs (whole subregions as patches)
   double size = 1.0;            ///< target quad edge length h (patch interior vertices follow it)
+  std::shared_ptr<const SizeField> size_field;  ///< graded meshes: patch interiors follow this field from `size`
+                                                ///< up (PatchOptions::size_field); null = uniform
   int max_rings = 3;            ///< rings of quads grown around a cluster, one at a time, until its patch builds
   /// Rings grown before the first patch is tried: 0 tries the flagged quads alone first (a whole subregion cut
   /// out of a finished mesh), 1 never does (a poor quad's own corners are usually what a patch must move).
