@@ -215,6 +215,9 @@ std::optional<std::vector<double>> IntegerProgram::branch_and_cut(double seconds
   return dived;
 }
 
+// Restarts of a large program's dive after a dead end (see solve).
+constexpr int kDiveRestarts = 3;
+
 std::optional<std::vector<double>> IntegerProgram::solve(double seconds, double gap, double dive_gap, bool large) {
   const std::size_t n = cost_.size();
   // The LP relaxation first: the quantization's matrices are network matrices apart from a few coupling and
@@ -250,8 +253,14 @@ std::optional<std::vector<double>> IntegerProgram::solve(double seconds, double 
   // In a large program the fractional columns are mostly independent halves (a coast's parity choices, each
   // fixed alone took a re-solve of its own: 20-40 steps per dive), so a step first fixes them all, each to its
   // nearest integer, and falls back to the one column when that has no solution.
+  // A column infeasible on both sides is a dead end of the columns fixed before it: in a large program the dive
+  // starts again with every column free but that one, at its nearest value (a few times; then branch-and-cut,
+  // which ran to its time limit on such programs of a graded delta_box, 20-40 s a solve).
   std::optional<std::vector<double>> dived;
-  std::vector<int> all_fractional;
+  std::vector<int> all_fractional, fixed;
+  std::vector<std::uint8_t> fan(n, 0);
+  for (const auto& rf : round_first_) fan[static_cast<std::size_t>(rf.first)] = 1;
+  int restarts = 0;
   for (int c; (c = fractional(large ? &all_fractional : nullptr)) >= 0;) {
     double* lo = lp->columnLower();
     double* hi = lp->columnUpper();
@@ -261,17 +270,31 @@ std::optional<std::vector<double>> IntegerProgram::solve(double seconds, double 
       for (int k : all_fractional) lo[k] = hi[k] = std::round(x[k]);
       lp->dual(0, keep);
       keep = 1 | 2;
-      if (lp->status() == 0) continue;
+      if (lp->status() == 0) {
+        fixed.insert(fixed.end(), all_fractional.begin(), all_fractional.end());
+        continue;
+      }
       for (int k : all_fractional) {
         lo[k] = col_lo_[static_cast<std::size_t>(k)];
         hi[k] = col_hi_[static_cast<std::size_t>(k)];
       }
     }
+    fixed.push_back(c);
     lo[c] = hi[c] = near;
     lp->dual(0, keep);
     keep = 1 | 2;
     if (lp->status() == 0) continue;
     lo[c] = hi[c] = v > near ? near + 1.0 : near - 1.0;
+    lp->dual(0, keep);
+    if (lp->status() == 0) continue;
+    if (!large || restarts++ >= kDiveRestarts || fixed.size() < 2) break;
+    for (int k : fixed)
+      if (!fan[static_cast<std::size_t>(k)]) {
+        lo[k] = col_lo_[static_cast<std::size_t>(k)];
+        hi[k] = col_hi_[static_cast<std::size_t>(k)];
+      }
+    fixed.assign(1, c);
+    lo[c] = hi[c] = near;
     lp->dual(0, keep);
     if (lp->status() != 0) break;
   }
