@@ -220,6 +220,8 @@ constexpr int kDiveRestarts = 3;
 
 std::optional<std::vector<double>> IntegerProgram::solve(double seconds, double gap, double dive_gap, bool large) {
   const std::size_t n = cost_.size();
+  dive_restarts_ = 0;
+  branched_ = false;
   // The LP relaxation first: the quantization's matrices are network matrices apart from a few coupling and
   // parity rows, so its optimum is often integral already (then it is the integer optimum too), and Clp finds
   // it in a fraction of branch-and-cut's time. An infeasible relaxation means an infeasible program; a warm
@@ -294,6 +296,7 @@ std::optional<std::vector<double>> IntegerProgram::solve(double seconds, double 
         hi[k] = col_hi_[static_cast<std::size_t>(k)];
       }
     fixed.assign(1, c);
+    ++dive_restarts_;
     lo[c] = hi[c] = near;
     lp->dual(0, keep);
     if (lp->status() != 0) break;
@@ -304,6 +307,7 @@ std::optional<std::vector<double>> IntegerProgram::solve(double seconds, double 
     dived = std::vector<double>(x, x + n);
     if (lp->objectiveValue() <= bound + dive_gap) return dived;
   }
+  branched_ = true;
   return branch_and_cut(seconds, gap, dived);
 }
 

@@ -41,8 +41,13 @@ class IntegerProgram {
   /// either.
   /// Solving again after rows were added starts from the last solve's LP basis (the dual simplex).
   /// `large`: the relaxation is solved from scratch by the dual simplex instead of the primal, and each step of
-  /// the dive fixes every fractional column at once (one at a time only when that is infeasible).
+  /// the dive fixes every fractional column at once (one at a time only when that is infeasible), and a dive
+  /// that dead-ends (a column infeasible on both sides) starts again with only that column fixed.
   std::optional<std::vector<double>> solve(double seconds, double gap = 0.0, double dive_gap = 0.0, bool large = false);
+
+  /// What the last solve did: its dive's restarts, and whether it went on to branch-and-cut.
+  int dive_restarts() const { return dive_restarts_; }
+  bool branched() const { return branched_; }
 
   IntegerProgram();
   ~IntegerProgram();
@@ -63,6 +68,8 @@ class IntegerProgram {
   std::vector<double> row_lo_, row_hi_;
   std::vector<int> entry_row_, entry_col_;
   std::vector<double> entry_value_;
+  int dive_restarts_ = 0;
+  bool branched_ = false;
 };
 
 }  // namespace polysquare

@@ -201,3 +201,21 @@ TEST(IntegerProgram, RoundFirstColumnsTakeTheirFallbackWhenTheRoundedValuesHaveN
   EXPECT_NEAR((*s)[2], 2.0, 1e-9);
   EXPECT_NEAR((*s)[0] - (*s)[1], 4.0, 1e-9);
 }
+
+TEST(IntegerProgram, ALargeProgramsDiveStartsAgainAfterADeadEnd) {
+  // min -x0 - 3 x1 + x2 subject to 2 x0 + 2 x1 + x2 = 3, x0 + 2 x3 = 5, integers in [0, 3]: the one integer point
+  // is (1, 0, 1, 2). The relaxation's fractional columns, rounded all at once, leave a column that neither of its
+  // sides can take (found among random programs of this form). The dive starts again with that column alone
+  // fixed and reaches the point without branch-and-cut (where a dead end went before).
+  IntegerProgram p;
+  const double costs[4] = {-1.0, -3.0, 1.0, 0.0};
+  for (double c : costs) p.add_columns(1, 0.0, 3.0, c, true);
+  p.add_row({{0, 2.0}, {1, 2.0}, {2, 1.0}}, 3.0, 3.0);
+  p.add_row({{0, 1.0}, {3, 2.0}}, 5.0, 5.0);
+  const auto s = p.solve(10.0, 0.0, IntegerProgram::inf, true);
+  ASSERT_TRUE(s);
+  const double want[4] = {1.0, 0.0, 1.0, 2.0};
+  for (int c = 0; c < 4; ++c) EXPECT_NEAR((*s)[static_cast<std::size_t>(c)], want[c], 1e-9) << c;
+  EXPECT_GE(p.dive_restarts(), 1);
+  EXPECT_FALSE(p.branched());
+}
