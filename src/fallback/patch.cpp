@@ -82,7 +82,6 @@ bool inside_loops(const std::vector<std::vector<Vec2>>& loops, Vec2 p) {
   return in_region;
 }
 
-// Interior vertices: a hexagonal lattice of `spacing` inside the loops and `clearance` away from every segment.
 // The coarsest of the nested triangular lattices of spacing 2^k (k <= kMaxLatticeLevel) that point (i, j) of the
 // finest one belongs to: rows j divisible by 2^k, every 2^k-th point of a row, alternate rows shifted by half.
 constexpr int kMaxLatticeLevel = 8;
@@ -98,7 +97,7 @@ int lattice_level(long long i, long long j) {
   return k;
 }
 
-// Interior vertices on a triangular lattice of `spacing`, `clearance` from the curves. Graded (`field` given;
+// Interior vertices: a triangular lattice of `spacing` inside the loops, `clearance` from every segment. Graded (`field` given;
 // `spacing` stands for the field's `least` size): a point stays where the coarsest lattice it belongs to is no
 // coarser than the field asks there, so the spacing doubles in steps towards coarse sizes, and its clearance
 // grows with it.

@@ -260,9 +260,6 @@ std::optional<std::vector<double>> IntegerProgram::solve(double seconds, double 
   // which ran to its time limit on such programs of a graded delta_box, 20-40 s a solve).
   std::optional<std::vector<double>> dived;
   std::vector<int> all_fractional, fixed;
-  std::vector<std::uint8_t> fan(n, 0);
-  for (const auto& rf : round_first_) fan[static_cast<std::size_t>(rf.first)] = 1;
-  int restarts = 0;
   for (int c; (c = fractional(large ? &all_fractional : nullptr)) >= 0;) {
     double* lo = lp->columnLower();
     double* hi = lp->columnUpper();
@@ -289,12 +286,11 @@ std::optional<std::vector<double>> IntegerProgram::solve(double seconds, double 
     lo[c] = hi[c] = v > near ? near + 1.0 : near - 1.0;
     lp->dual(0, keep);
     if (lp->status() == 0) continue;
-    if (!large || restarts++ >= kDiveRestarts || fixed.size() < 2) break;
-    for (int k : fixed)
-      if (!fan[static_cast<std::size_t>(k)]) {
-        lo[k] = col_lo_[static_cast<std::size_t>(k)];
-        hi[k] = col_hi_[static_cast<std::size_t>(k)];
-      }
+    if (!large || dive_restarts_ >= kDiveRestarts || fixed.size() < 2) break;
+    for (int k : fixed) {  // the dive's own fixes (the fans fix_round_first fixed are never fractional)
+      lo[k] = col_lo_[static_cast<std::size_t>(k)];
+      hi[k] = col_hi_[static_cast<std::size_t>(k)];
+    }
     fixed.assign(1, c);
     ++dive_restarts_;
     lo[c] = hi[c] = near;

@@ -71,95 +71,100 @@ std::vector<std::vector<double>> coupled_targets(const JointProblem& jp, const s
   return target;
 }
 
-// With `broken` given, the couplings are elastic: a coupling may break at a cost per element far above any
-// deviation cost, so the program has a solution whenever each layout closes alone, and the couplings the
-// optimum breaks (appended to `broken`) show which subregions cannot agree.
-IntegerProgram joint_program(JointProblem& jp, const std::vector<SegmentCoupling>& couplings,
-                             const std::vector<EvenGroup>& even_groups, const QuantizeOptions& options,
-                             const std::string& part_name, bool elastic) {
-  IntegerProgram P;
-  const bool integer = !couplings.empty() || !even_groups.empty();
-  constexpr double inf = IntegerProgram::inf;
-  // Large programs take the compact form (see QuantizeOptions::large_program_columns): the same costs, so the
-  // same optimal cost, with the deviations as bounded columns of one equality row instead of inequality rows.
-  std::size_t inequality_columns = (elastic ? 2 : 0) * couplings.size() + even_groups.size();
+// Large programs take the compact form (see QuantizeOptions::large_program_columns): the same costs, so the
+// same optimal cost, with the deviations as bounded columns of one equality row instead of inequality rows.
+bool is_large(const JointProblem& jp, std::size_t couplings, std::size_t even_groups, const QuantizeOptions& options,
+              bool elastic) {
+  std::size_t inequality_columns = (elastic ? 2 : 0) * couplings + even_groups;
   for (std::size_t l = 0; l < jp.layouts.size(); ++l)
     inequality_columns += 2 * static_cast<std::size_t>(jp.ncls[l][0] + jp.ncls[l][1]) + 2 * jp.layouts[l]->segments.size();
-  jp.large = inequality_columns > static_cast<std::size_t>(std::max(options.large_program_columns, 0));
-  const bool compact = jp.large;
-  const std::vector<std::vector<double>> target = coupled_targets(jp, couplings);
-  // Class coordinate columns with the weak pull of each class towards its mean deformed coordinate (anchors
-  // pieces, such as interior features, that no segment ties to the boundary).
-  for (std::size_t l = 0; l < jp.layouts.size(); ++l) {
-    const Layout& layout = *jp.layouts[l];
-    const int nb = static_cast<int>(layout.break_vertex.size());
-    for (int axis = 0; axis < 2; ++axis) {
-      const int ncls = jp.ncls[l][axis];
-      jp.col0[l][axis] = P.add_columns(ncls, -1e8, 1e8, 0.0, integer);
-      std::vector<double> anchor(ncls, 0.0);
-      std::vector<int> members(ncls, 0);
-      for (int b = 0; b < nb; ++b) {
-        const Vec2 p = (*jp.deformed[l])[layout.break_vertex[b]];
-        anchor[jp.cls[l][axis][b]] += axis == 0 ? p.x : p.y;
-        members[jp.cls[l][axis][b]]++;
-      }
-      // v >= |X - a|; compact: X - a = above - below.
-      const int v0 = P.add_columns(compact ? 2 * ncls : ncls, 0.0, inf, options.position_weight);
-      for (int c = 0; c < ncls; ++c) {
-        const int xc = jp.col0[l][axis] + c;
-        const double a = std::round(anchor[c] / members[c]);
-        if (compact) {
-          P.add_row({{xc, 1.0}, {v0 + 2 * c, -1.0}, {v0 + 2 * c + 1, 1.0}}, a, a);
-          continue;
-        }
-        P.add_row({{v0 + c, 1.0}, {xc, -1.0}}, -a, inf);
-        P.add_row({{v0 + c, 1.0}, {xc, 1.0}}, a, inf);
-      }
+  return inequality_columns > static_cast<std::size_t>(std::max(options.large_program_columns, 0));
+}
+
+// Layout l's class coordinate columns, with the weak pull of each class towards its mean deformed coordinate
+// (anchors pieces, such as interior features, that no segment ties to the boundary).
+void add_class_columns(IntegerProgram& P, JointProblem& jp, std::size_t l, const QuantizeOptions& options,
+                       bool integer) {
+  constexpr double inf = IntegerProgram::inf;
+  const Layout& layout = *jp.layouts[l];
+  const int nb = static_cast<int>(layout.break_vertex.size());
+  for (int axis = 0; axis < 2; ++axis) {
+    const int ncls = jp.ncls[l][axis];
+    jp.col0[l][axis] = P.add_columns(ncls, -1e8, 1e8, 0.0, integer);
+    std::vector<double> anchor(ncls, 0.0);
+    std::vector<int> members(ncls, 0);
+    for (int b = 0; b < nb; ++b) {
+      const Vec2 p = (*jp.deformed[l])[layout.break_vertex[b]];
+      anchor[jp.cls[l][axis][b]] += axis == 0 ? p.x : p.y;
+      members[jp.cls[l][axis][b]]++;
     }
-    for (std::size_t k = 0; k < layout.segments.size(); ++k) {
-      const LayoutSegment& s = layout.segments[k];
-      const double target_k = target[l][k];
-      const int axis = label_axis(s.label);
-      const int xa = jp.col(l, axis, s.break_a), xb = jp.col(l, axis, s.break_b);
-      if (xa == xb)
-        throw MeshingError(part_name + ": quantization is infeasible: a side of the poly-square (chain " +
-                           std::to_string(s.chain) + ") would have zero length");
-      const double sg = label_sign(s.label);
-      const double unit = 1.0 / std::max(target_k, 1.0);
-      // Integer right-hand sides keep the LP vertex integral (the matrix is totally unimodular).
-      const double t = std::max(std::round(target_k), 1.0);
-      // n = sg (X_b - X_a) >= 1 ; u >= |n - t| ; w >= n - hi, w >= lo - n. The band is soft: a layout that only
-      // closes with a stretched side still gets counts, and the quality checks downstream judge the result.
-      const double fewer = options.graded ? options.graded_fewer_weight : 1.0;
-      const double lo = std::max(1.0, std::ceil(t / options.max_side_change));
-      const double hi = std::max(lo, std::floor(t * options.max_side_change));
-      if (compact) {
-        // n = t + longer within the band + longer beyond it - shorter within - shorter beyond; beyond the band
-        // costs u's and w's weights together and the costs are convex, so the band fills first. The bounds
-        // keep n >= 1.
-        const double beyond = unit * (1.0 + options.outside_band_weight);
-        const int d = P.add_columns(1, 0.0, hi - t, unit);
-        P.add_columns(1, 0.0, inf, beyond);
-        P.add_columns(1, 0.0, t - lo, fewer * unit);
-        P.add_columns(1, 0.0, lo - 1.0, fewer * beyond);
-        P.add_row({{xb, sg}, {xa, -sg}, {d, -1.0}, {d + 1, -1.0}, {d + 2, 1.0}, {d + 3, 1.0}}, t, t);
+    // v >= |X - a|; compact: X - a = above - below.
+    const int v0 = P.add_columns(jp.large ? 2 * ncls : ncls, 0.0, inf, options.position_weight);
+    for (int c = 0; c < ncls; ++c) {
+      const int xc = jp.col0[l][axis] + c;
+      const double a = std::round(anchor[c] / members[c]);
+      if (jp.large) {
+        P.add_row({{xc, 1.0}, {v0 + 2 * c, -1.0}, {v0 + 2 * c + 1, 1.0}}, a, a);
         continue;
       }
-      // u: deviation from t; w: deviation beyond the band [lo, hi]. Graded: the deviations below take columns
-      // of their own (a weighted row would cost the matrix its total unimodularity).
-      const int u = P.add_columns(1, 0.0, inf, unit);
-      // Divided, not `* unit`: bit for bit the cost the small cases' meshes were made with.
-      const int w = P.add_columns(1, 0.0, inf, options.outside_band_weight / std::max(target_k, 1.0));
-      const int u_below = fewer == 1.0 ? u : P.add_columns(1, 0.0, inf, fewer * unit);
-      const int w_below =
-          fewer == 1.0 ? w : P.add_columns(1, 0.0, inf, fewer * options.outside_band_weight / std::max(target_k, 1.0));
-      P.add_row({{xb, sg}, {xa, -sg}}, 1.0, inf);
-      P.add_row({{u, 1.0}, {xb, -sg}, {xa, sg}}, -t, inf);
-      P.add_row({{u_below, 1.0}, {xb, sg}, {xa, -sg}}, t, inf);
-      P.add_row({{w, 1.0}, {xb, -sg}, {xa, sg}}, -hi, inf);
-      P.add_row({{w_below, 1.0}, {xb, sg}, {xa, -sg}}, lo, inf);
+      P.add_row({{v0 + c, 1.0}, {xc, -1.0}}, -a, inf);
+      P.add_row({{v0 + c, 1.0}, {xc, 1.0}}, a, inf);
     }
   }
+}
+
+// Layout l's side counts n = sg (X_b - X_a) >= 1 and their deviations from the targets: u >= |n - t|,
+// w >= n - hi, w >= lo - n. The band [lo, hi] is soft: a layout that only closes with a stretched side still
+// gets counts, and the quality checks downstream judge the result.
+void add_side_rows(IntegerProgram& P, const JointProblem& jp, std::size_t l, const std::vector<double>& target,
+                   const QuantizeOptions& options, const std::string& part_name) {
+  constexpr double inf = IntegerProgram::inf;
+  const Layout& layout = *jp.layouts[l];
+  const double fewer = options.graded ? options.graded_fewer_weight : 1.0;
+  for (std::size_t k = 0; k < layout.segments.size(); ++k) {
+    const LayoutSegment& s = layout.segments[k];
+    const int axis = label_axis(s.label);
+    const int xa = jp.col(l, axis, s.break_a), xb = jp.col(l, axis, s.break_b);
+    if (xa == xb)
+      throw MeshingError(part_name + ": quantization is infeasible: a side of the poly-square (chain " +
+                         std::to_string(s.chain) + ") would have zero length");
+    const double sg = label_sign(s.label);
+    const double unit = 1.0 / std::max(target[k], 1.0);
+    // Divided, not `* unit`: bit for bit the cost the small cases' meshes were made with.
+    const double outside = options.outside_band_weight / std::max(target[k], 1.0);
+    // Integer right-hand sides keep the LP vertex integral (the matrix is totally unimodular).
+    const double t = std::max(std::round(target[k]), 1.0);
+    const double lo = std::max(1.0, std::ceil(t / options.max_side_change));
+    const double hi = std::max(lo, std::floor(t * options.max_side_change));
+    if (jp.large) {
+      // n = t + longer within the band + longer beyond it - shorter within - shorter beyond; beyond the band
+      // costs u's and w's weights together and the costs are convex, so the band fills first. The bounds
+      // keep n >= 1.
+      const double beyond = unit * (1.0 + options.outside_band_weight);
+      const int d = P.add_columns(1, 0.0, hi - t, unit);
+      P.add_columns(1, 0.0, inf, beyond);
+      P.add_columns(1, 0.0, t - lo, fewer * unit);
+      P.add_columns(1, 0.0, lo - 1.0, fewer * beyond);
+      P.add_row({{xb, sg}, {xa, -sg}, {d, -1.0}, {d + 1, -1.0}, {d + 2, 1.0}, {d + 3, 1.0}}, t, t);
+      continue;
+    }
+    // Graded: the deviations below take columns of their own (a weighted row would cost the matrix its total
+    // unimodularity).
+    const int u = P.add_columns(1, 0.0, inf, unit);
+    const int w = P.add_columns(1, 0.0, inf, outside);
+    const int u_below = fewer == 1.0 ? u : P.add_columns(1, 0.0, inf, fewer * unit);
+    const int w_below = fewer == 1.0 ? w : P.add_columns(1, 0.0, inf, fewer * outside);
+    P.add_row({{xb, sg}, {xa, -sg}}, 1.0, inf);
+    P.add_row({{u, 1.0}, {xb, -sg}, {xa, sg}}, -t, inf);
+    P.add_row({{u_below, 1.0}, {xb, sg}, {xa, -sg}}, t, inf);
+    P.add_row({{w, 1.0}, {xb, -sg}, {xa, sg}}, -hi, inf);
+    P.add_row({{w_below, 1.0}, {xb, sg}, {xa, -sg}}, lo, inf);
+  }
+}
+
+// Equal counts on the two sides of every coupling; elastic ones may break, transition ones differ by 2 per fan.
+void add_coupling_rows(IntegerProgram& P, const JointProblem& jp, const std::vector<SegmentCoupling>& couplings,
+                       const std::vector<std::vector<double>>& target, const QuantizeOptions& options, bool elastic) {
   for (const SegmentCoupling& c : couplings) {
     const LayoutSegment& s = jp.layouts[c.layout_a]->segments[c.segment_a];
     const LayoutSegment& t = jp.layouts[c.layout_b]->segments[c.segment_b];
@@ -168,21 +173,24 @@ IntegerProgram joint_program(JointProblem& jp, const std::vector<SegmentCoupling
     const int ta = jp.col(c.layout_b, label_axis(t.label), t.break_a), tb = jp.col(c.layout_b, label_axis(t.label), t.break_b);
     std::vector<std::pair<int, double>> row{{sb, ss}, {sa, -ss}, {tb, -st}, {ta, st}};
     if (elastic) {
-      const int e = P.add_columns(2, 0.0, inf, options.broken_coupling_cost);
+      const int e = P.add_columns(2, 0.0, IntegerProgram::inf, options.broken_coupling_cost);
       row.insert(row.end(), {{e, 1.0}, {e + 1, -1.0}});
     }
     if (c.transition) {
       // n_a - n_b = 2 (fans on b's side - fans on a's side); a fan costs as a relative deviation of the target.
       const double t_c = std::max(target[c.layout_a][static_cast<std::size_t>(c.segment_a)], 1.0);
-      const int f = P.add_columns(2, 0.0, inf, options.transition_cost / t_c, true);
+      const int f = P.add_columns(2, 0.0, IntegerProgram::inf, options.transition_cost / t_c, true);
       P.round_first(f, 0.0), P.round_first(f + 1, 0.0);
       row.insert(row.end(), {{f, -2.0}, {f + 1, 2.0}});
     }
     P.add_row(row, 0.0, 0.0);
   }
+}
+
+// Every even group's counts sum to an even number: sum - 2 m = 0, m integer.
+void add_even_rows(IntegerProgram& P, const JointProblem& jp, const std::vector<EvenGroup>& even_groups) {
   for (const EvenGroup& g : even_groups) {
-    // sum of the counts - 2 m = 0, m integer.
-    const int m = P.add_columns(1, 0.0, inf, 0.0, true);
+    const int m = P.add_columns(1, 0.0, IntegerProgram::inf, 0.0, true);
     std::vector<std::pair<int, double>> terms{{m, -2.0}};
     for (const auto& [l, k] : g) {
       const LayoutSegment& s = jp.layouts[l]->segments[static_cast<std::size_t>(k)];
@@ -193,6 +201,24 @@ IntegerProgram joint_program(JointProblem& jp, const std::vector<SegmentCoupling
     }
     P.add_row(terms, 0.0, 0.0);
   }
+}
+
+// With `broken` given, the couplings are elastic: a coupling may break at a cost per element far above any
+// deviation cost, so the program has a solution whenever each layout closes alone, and the couplings the
+// optimum breaks (appended to `broken`) show which subregions cannot agree.
+IntegerProgram joint_program(JointProblem& jp, const std::vector<SegmentCoupling>& couplings,
+                             const std::vector<EvenGroup>& even_groups, const QuantizeOptions& options,
+                             const std::string& part_name, bool elastic) {
+  IntegerProgram P;
+  const bool integer = !couplings.empty() || !even_groups.empty();
+  jp.large = is_large(jp, couplings.size(), even_groups.size(), options, elastic);
+  const std::vector<std::vector<double>> target = coupled_targets(jp, couplings);
+  for (std::size_t l = 0; l < jp.layouts.size(); ++l) {
+    add_class_columns(P, jp, l, options, integer);
+    add_side_rows(P, jp, l, target[l], options, part_name);
+  }
+  add_coupling_rows(P, jp, couplings, target, options, elastic);
+  add_even_rows(P, jp, even_groups);
   return P;
 }
 
