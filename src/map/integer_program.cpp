@@ -90,7 +90,7 @@ IntegerProgram::~IntegerProgram() = default;
 IntegerProgram::IntegerProgram(IntegerProgram&&) noexcept = default;
 IntegerProgram& IntegerProgram::operator=(IntegerProgram&&) noexcept = default;
 
-bool IntegerProgram::solve_relaxation(double seconds, bool large) {
+bool IntegerProgram::solve_relaxation(bool large) {
   ClpSimplex* model = nullptr;
   if (lp_ && lp_->columns == columns()) {
     // Rows added since the last solve join its model, the bounds a dive fixed are restored, and the dual
@@ -109,7 +109,6 @@ bool IntegerProgram::solve_relaxation(double seconds, bool large) {
     }
     model->chgColumnLower(col_lo_.data());
     model->chgColumnUpper(col_hi_.data());
-    model->setMaximumSeconds(seconds);
     model->dual(0);
   } else {
     lp_ = std::make_unique<Lp>();
@@ -118,7 +117,10 @@ bool IntegerProgram::solve_relaxation(double seconds, bool large) {
     model->setLogLevel(0);
     model->loadProblem(columns(), rows(), m.start.data(), m.index.data(), m.value.data(), col_lo_.data(), col_hi_.data(),
                        cost_.data(), row_lo_.data(), row_hi_.data());
-    model->setMaximumSeconds(seconds);
+    // No time limit: Clp's is a deadline in the process's CPU time (every thread's) from when it is set, so on
+    // two threads a large program's dive ran past it within seconds and every later step stopped at once, as
+    // if infeasible (graded delta_box: each dead end of its large dives, one of them then 44 s in Cbc for
+    // nothing), and answers depended on the machine's load. LP solves run to their end.
     // The primal simplex: on the small cases its choice among equal-cost optima gave the same meshes as the
     // GLPK primal simplex used before (turtle_shell SJ min 0.72; the dual simplex's choice 0.69). Large
     // programs (a coast's joint quantization, in the compact form) take the dual simplex, several times faster
@@ -183,8 +185,8 @@ void IntegerProgram::fix_round_first(int& keep) {
 }
 
 // Branch-and-cut from the dive's point (if any): its optimum, else its best point at the time limit, else the
-// dive's.
-std::optional<std::vector<double>> IntegerProgram::branch_and_cut(double seconds, double gap,
+// dive's. `large`: without Cbc's preprocessing.
+std::optional<std::vector<double>> IntegerProgram::branch_and_cut(double seconds, double gap, bool large,
                                                                   const std::optional<std::vector<double>>& dived) {
   const std::size_t n = cost_.size();
   const Csc m = compress(columns(), entry_row_, entry_col_, entry_value_);
@@ -201,6 +203,9 @@ std::optional<std::vector<double>> IntegerProgram::branch_and_cut(double seconds
     Cbc_setMIPStartI(P, static_cast<int>(n), all.data(), dived->data());
   }
   Cbc_setLogLevel(P, 0);
+  // Cbc's preprocessing does not look at the time limit: on the 256k-column program of a 2M-quad coast it ran
+  // for more than 50 minutes.
+  if (large) Cbc_setParameter(P, "preprocess", "off");
   Cbc_setMaximumSeconds(P, seconds);
   Cbc_setAllowableGap(P, gap);
   Cbc_solve(P);
@@ -229,10 +234,10 @@ std::optional<std::vector<double>> IntegerProgram::solve(double seconds, double 
   // proved the rows just added infeasible (status 1): the cold solve only agreed, at the cost of a whole solve
   // (delta_box 40 m: 105 such restarts of 28-36k-column programs).
   const bool warm = lp_ != nullptr;
-  if (!solve_relaxation(seconds, large)) {
+  if (!solve_relaxation(large)) {
     if (!warm || lp_->model->status() == 1) return std::nullopt;
     lp_.reset();
-    if (!solve_relaxation(seconds, large)) return std::nullopt;
+    if (!solve_relaxation(large)) return std::nullopt;
   }
   ClpSimplex* const lp = lp_->model.get();
   auto fractional = [&](std::vector<int>* all = nullptr) { return fractional_column(all); };
@@ -304,7 +309,7 @@ std::optional<std::vector<double>> IntegerProgram::solve(double seconds, double 
     if (lp->objectiveValue() <= bound + dive_gap) return dived;
   }
   branched_ = true;
-  return branch_and_cut(seconds, gap, dived);
+  return branch_and_cut(seconds, gap, large, dived);
 }
 
 }  // namespace polysquare

@@ -34,8 +34,9 @@ class IntegerProgram {
   /// the integer optimum too); otherwise a dive from it (fractional columns fixed one by one, the LP re-solved
   /// from its last basis) when that ends within `dive_gap` of the LP's cost; otherwise branch-and-cut's, started
   /// from the dive's point, which stops at a point whose cost is within `gap` of the best bound (or at its best
-  /// feasible point when stopped by the time limit); nullopt when the program is infeasible or no feasible point
-  /// was found within `seconds` (per solve).
+  /// feasible point when stopped by the time limit); nullopt when the program is infeasible or branch-and-cut
+  /// found no feasible point within `seconds` (LP solves have no limit: they always end, and the answer does not
+  /// depend on the machine's load).
   /// Columns marked round_first() are rounded and fixed before the dive when one of them is fractional; should
   /// that leave no solution, they are fixed at their fallback values instead, and released when that has none
   /// either.
@@ -56,10 +57,10 @@ class IntegerProgram {
 
  private:
   struct Lp;  // the LP relaxation's model as the last solve left it
-  bool solve_relaxation(double seconds, bool large);
+  bool solve_relaxation(bool large);
   int fractional_column(std::vector<int>* all) const;
   void fix_round_first(int& keep);
-  std::optional<std::vector<double>> branch_and_cut(double seconds, double gap,
+  std::optional<std::vector<double>> branch_and_cut(double seconds, double gap, bool large,
                                                     const std::optional<std::vector<double>>& dived);
   std::unique_ptr<Lp> lp_;
   std::vector<double> col_lo_, col_hi_, cost_;

@@ -219,3 +219,24 @@ TEST(IntegerProgram, ALargeProgramsDiveStartsAgainAfterADeadEnd) {
   EXPECT_GE(p.dive_restarts(), 1);
   EXPECT_FALSE(p.branched());
 }
+
+TEST(IntegerProgram, LpSolvesHaveNoTimeLimit) {
+  // 500 copies of half_integral's program with a time limit far below any solve's: the relaxation and the dive
+  // still run to their end (the limit is branch-and-cut's alone). Clp's own limit was a deadline in the
+  // process's CPU time, set once per solve: the dive's steps stopped at once past it, read as dead ends.
+  constexpr int copies = 500;
+  IntegerProgram p;
+  for (int k = 0; k < copies; ++k) {
+    const int x = p.add_columns(2, 0.0, 10.0, -1.0, true);
+    p.add_row({{x, 2.0}, {x + 1, 2.0}}, -IntegerProgram::inf, 3.0);
+  }
+  const auto s = p.solve(1e-9, 0.0, IntegerProgram::inf, true);
+  ASSERT_TRUE(s);
+  double sum = 0.0;
+  for (double v : *s) {
+    EXPECT_NEAR(v, std::round(v), 1e-9);
+    sum += v;
+  }
+  EXPECT_NEAR(sum, copies, 1e-9);
+  EXPECT_FALSE(p.branched());
+}
