@@ -6,11 +6,14 @@
 #include <filesystem>
 #include <iostream>
 #include <map>
+#include <memory>
 #include <optional>
 #include <sstream>
 
 #include "mesh_command.h"
 #include "polysquare/core/error.h"
+#include "polysquare/core/place_text.h"
+#include "polysquare/input/project_region.h"
 #include "polysquare/io/atomic_file.h"
 #include "polysquare/io/bathymetry.h"
 #include "polysquare/io/render_size_field.h"
@@ -265,29 +268,72 @@ double say_size_estimate(std::ostream& info, const Region& region, const MeshOpt
 }
 
 // Far from the origin (1e8 .. 1e11 around a small domain) the region is meshed in a local frame and the mesh
-// moved back before writing; figures are measured in the local frame, places printed in the input's.
+// moved back before writing; figures are measured in the local frame, places printed in the input's: with the
+// origin added, and in lon/lat when the input was (the user's file holds no UTM metres). Places are converted
+// here, on the thread that prints, not where the library writes them: its stages run on worker threads, where
+// no ScopedPlaceText is installed.
 struct LocalFrame {
   Vec2 origin{0, 0};
   bool moved = false;
   Region region;  ///< the input region in the frame
+  std::unique_ptr<PlaceTextHook> input_places;  ///< reprojected input: writes a place in its own CRS; else nullptr
 
-  /// A place of the report (local frame) in the input's coordinates.
-  std::string place(Vec2 at) const { return "(" + short_number(at.x + origin.x) + ", " + short_number(at.y + origin.y) + ")"; }
+  /// A place in the meshed CRS (the origin added) as printed.
+  std::string input_place(Vec2 p) const {
+    return input_places ? input_places->text(p) : "(" + short_number(p.x) + ", " + short_number(p.y) + ")";
+  }
+  /// The same, for a message that writes places its own way (`plain`) when the input was not reprojected.
+  std::string input_place_or(Vec2 p, std::string (*plain)(Vec2)) const { return input_places ? input_place(p) : plain(p); }
+  /// A place of the report (local frame) as printed.
+  std::string place(Vec2 at) const { return input_place(at + origin); }
+  /// The library's text about the local frame (an error, a reason) with its places as printed; as it is when the
+  /// input was not reprojected.
+  std::string local_text(const std::string& text) const { return in_input(text, origin); }
+  /// The same for a text whose places have the origin added already.
+  std::string input_text(const std::string& text) const { return in_input(text, {0, 0}); }
+  /// What the quality summaries write places with: input_place, or their own format (empty) for input not reprojected.
+  PlaceWriter place_writer() const {
+    if (!input_places) return {};
+    return [this](Vec2 p) { return input_place(p); };
+  }
+
+ private:
+  std::string in_input(const std::string& text, Vec2 shift) const {
+    if (!input_places) return text;
+    return rewrite_places(text, [&](Vec2 p) { return input_place(p + shift); });
+  }
 };
 
-LocalFrame local_frame(const Region& region) {
+LocalFrame local_frame(const Region& region, const InputNotes& notes) {
   LocalFrame frame;
   frame.origin = local_origin(region);
   frame.moved = frame.origin.x != 0 || frame.origin.y != 0;
   frame.region = region;
+  frame.input_places = input_place_text(region, notes);
   if (frame.moved) {
     const Vec2 origin = frame.origin;
     translate(frame.region, {-origin.x, -origin.y});
-    std::cerr << "meshed relative to (" << short_number(origin.x) << ", " << short_number(origin.y)
-              << "), " << short_number(std::max(std::abs(origin.x), std::abs(origin.y)) / region.bounding_box().diagonal())
+    std::cerr << "meshed relative to " << frame.input_place(origin) << ", "
+              << short_number(std::max(std::abs(origin.x), std::abs(origin.y)) / region.bounding_box().diagonal())
               << " times the domain's size away from the origin; written back in the input's coordinates\n";
   }
   return frame;
+}
+
+// Runs `step`; the places of an InputError or MeshingError it throws are printed as the frame prints them
+// (`in_frame`: they are in the local frame, else the origin is added already).
+template <class Step>
+auto with_input_places(const LocalFrame& frame, bool in_frame, Step&& step) {
+  auto text = [&](const std::exception& e) { return in_frame ? frame.local_text(e.what()) : frame.input_text(e.what()); };
+  try {
+    return step();
+  } catch (const MeshingError& e) {
+    if (!frame.input_places) throw;
+    throw MeshingError(text(e));
+  } catch (const InputError& e) {
+    if (!frame.input_places) throw;
+    throw InputError(text(e));
+  }
 }
 
 // The options the flags give indirectly: map composition and interfaces, partition kept for its picture, progress,
@@ -308,9 +354,9 @@ void set_derived_options(MeshOptions& options, const MeshArgs& args, ProgressCal
 MeshResult mesh_in_frame(const LocalFrame& frame, const MeshOptions& options) {
   MeshResult result;
   try {
-    result = mesh_region(frame.region, options);
+    result = with_input_places(frame, true, [&] { return mesh_region(frame.region, options); });
   } catch (const MeshingError& e) {
-    if (!frame.moved) throw;
+    if (!frame.moved || frame.input_places) throw;  // reprojected: its places were written back in the input's CRS
     throw MeshingError(std::string(e.what()) + " (places relative to (" + short_number(frame.origin.x) + ", " +
                        short_number(frame.origin.y) + "))");
   }
@@ -400,13 +446,13 @@ MeshMeasures measure_mesh(const MeshResult& result, const LocalFrame& frame, con
 // The report's quality and input sections; the named groups (domains, ring pieces, features, boundary
 // segments) from the region the mesh conforms to, their warnings said.
 MeshGroups complete_report(MeshResult& result, const MeshMeasures& m, const InputNotes& notes, const Region& region,
-                           double size) {
+                           const LocalFrame& frame, double size) {
   add_quality_to_report(result.report, m.quality, m.fv, m.domain, size, m.simplified ? &*m.simplified : nullptr);
   result.report.input.notes =
       InputNotesReport{notes.repairs, notes.snaps, notes.warnings, notes.input_crs, region.boundary_segments.size()};
   MeshGroups groups = mesh_groups(result.mesh, &result.region);
   result.report.groups = group_reports(groups);
-  for (const std::string& w : groups.warnings) std::cerr << "warning: " << w << "\n";
+  for (const std::string& w : groups.warnings) std::cerr << "warning: " << frame.local_text(w) << "\n";
   return groups;
 }
 
@@ -500,7 +546,7 @@ void say_patches_and_simplification(const MeshReport& report, const LocalFrame& 
   for (const UnstructuredReport& u : report.unstructured)
     if (u.meshed_by == "patch" && ++patches <= 5)
       std::cerr << "warning: part " << u.part << ": subregion " << u.subregion << " at " << frame.place(u.at)
-                << " is an unstructured patch of " << u.quads << " quads: " << u.reason.value_or("") << "\n";
+                << " is an unstructured patch of " << u.quads << " quads: " << frame.local_text(u.reason.value_or("")) << "\n";
     else if (u.meshed_by == "patch")
       patch_quads += u.quads;
   if (patches > 5)
@@ -550,7 +596,7 @@ void say_candidates(const MeshReport& report, int requested_parts, const LocalFr
           info << "part " << c.part << ": " << c.subregions << " subregion(s) kept of " << part.size()
                << " candidates (scaled Jacobian min " << figure(c.measures.value().min_scaled_jacobian) << ")\n";
       } else if (explicit_parts && c.error && c.subregions == requested_parts) {
-        std::cerr << "warning: part " << c.part << " meshed as one poly-square: " << *c.error << "\n";
+        std::cerr << "warning: part " << c.part << " meshed as one poly-square: " << frame.local_text(*c.error) << "\n";
       }
     }
   }
@@ -558,16 +604,16 @@ void say_candidates(const MeshReport& report, int requested_parts, const LocalFr
 
 // The summary on stdout: counts, groups, quality (against the simplified curves too), finite-volume figures.
 void print_summary(const MeshResult& result, const MeshMeasures& m, const std::string& output,
-                   const std::string& group_summary) {
+                   const std::string& group_summary, const PlaceWriter& place) {
   std::cout << "polysquare: " << result.mesh.quads.size() << " quads, " << result.mesh.nodes.size() << " nodes -> "
             << output << "\n"
-            << group_summary << format_quality_text(m.quality, &m.domain)
+            << group_summary << format_quality_text(m.quality, &m.domain, place)
             << (m.simplified ? "  against the simplified curves the mesh follows: boundary distance max " +
                                    short_number(m.simplified->boundary_max_distance) + ", feature distance to mesh edges max " +
                                    short_number(m.simplified->feature_max_distance) + ", feature nodes off curves max " +
                                    short_number(m.simplified->feature_node_max_distance) + "\n"
                              : std::string())
-            << format_finite_volume_text(m.fv) << format_schism_text(m.quality.schism)
+            << format_finite_volume_text(m.fv, place) << format_schism_text(m.quality.schism, place)
             << (result.report.summary.sj_below_0_3_pinned > 0
                     ? "  of the quads below scaled Jacobian 0.3, " + std::to_string(result.report.summary.sj_below_0_3_pinned) +
                           " lie in input corners or wedges sharper than 17.5 degrees; the others are a fraction " +
@@ -604,7 +650,7 @@ int mesh_checked(const MeshArgs& args, double& estimated_quads) {
   // The files the input decides (a .gr3's .ll, a .nc's .pli files, a .pvtu's pieces), before meshing.
   const InputFacts facts{notes.input_crs, open_segment_names(region), estimated_quads};
   check_outputs(args, &facts);
-  const LocalFrame frame = local_frame(region);
+  const LocalFrame frame = local_frame(region, notes);
   options.size.field.terms = raster_terms(args, region.crs, frame.origin);
   set_derived_options(options, args, limit.callback());
   MeshResult result = mesh_in_frame(frame, options);
@@ -615,26 +661,28 @@ int mesh_checked(const MeshArgs& args, double& estimated_quads) {
 
   progress.start("quality");
   const MeshMeasures measures = measure_mesh(result, frame, args);
-  MeshGroups groups = complete_report(result, measures, notes, region, options.size.h);
+  MeshGroups groups = complete_report(result, measures, notes, region, frame, options.size.h);
   const std::string group_summary = format_groups_text(groups);
   progress.finish("quality");
 
   limit.stop();  // the outputs are committed whole or not at all, never cut off between two renames
   progress.start("write");
-  move_back(result.mesh, frame, options.size.h);
-  write_outputs(args, result, region, field ? &*field : nullptr,
-                write_options(args, result.mesh, notes.input_crs, std::move(groups), split), agreement);
+  with_input_places(frame, false, [&] {
+    move_back(result.mesh, frame, options.size.h);
+    write_outputs(args, result, region, field ? &*field : nullptr,
+                  write_options(args, result.mesh, notes.input_crs, std::move(groups), split), agreement);
+  });
   progress.finish("write");
 
   if (lower_extension(args.output) == ".nc" && measures.fv.orthogonality_above > 0)
     std::cerr << "warning: " << measures.fv.orthogonality_above << " of " << measures.fv.interior_edges
               << " interior edges have a D-Flow FM orthogonality above " << measures.fv.orthogonality_limit
               << ", which D-Flow FM refuses; the worst, " << measures.fv.orthogonality.max << ", at "
-              << at_text(measures.fv.orthogonality_worst_at) << "\n";
+              << frame.input_place_or(measures.fv.orthogonality_worst_at, at_text) << "\n";
   warn_left_out(result.report, frame);
   say_patches_and_simplification(result.report, frame, info);
   say_candidates(result.report, args.options.subregions.parts, frame, info);
-  if (!args.quiet) print_summary(result, measures, args.output, group_summary);
+  if (!args.quiet) print_summary(result, measures, args.output, group_summary, frame.place_writer());
   return 0;
 }
 

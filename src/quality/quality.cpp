@@ -224,7 +224,20 @@ nlohmann::json to_json(const SchismQuadQuality& q) {
           {"non_convex", q.non_convex}, {"failing", q.failing}};
 }
 
-std::string format_schism_text(const SchismQuadQuality& q) {
+namespace {
+
+// A worst place of the one-line summaries: "x, y" with 10 significant digits, or as `place` writes it.
+std::string bare_place(Vec2 p, const PlaceWriter& place) {
+  if (place) return place(p);
+  std::ostringstream os;
+  os.precision(10);
+  os << p.x << ", " << p.y;
+  return os.str();
+}
+
+}  // namespace
+
+std::string format_schism_text(const SchismQuadQuality& q, const PlaceWriter& place) {
   std::ostringstream os;
   os.precision(4);
   os << "  SCHISM quad checks: angle ratio (min / max interior angle) min " << q.angle_ratio.min << " avg "
@@ -233,11 +246,8 @@ std::string format_schism_text(const SchismQuadQuality& q) {
   os << "; aspect ratio (longest / shortest side) max " << q.aspect_ratio.max << ", " << q.aspect_ratio_above
      << " above " << q.aspect_ratio_limit << "; " << q.failing << " quads fail either";
   if (q.failing > 0) {
-    os.precision(10);
-    if (q.angle_ratio_below > 0)
-      os << " (worst angle ratio at " << q.angle_ratio_worst_at.x << ", " << q.angle_ratio_worst_at.y << ")";
-    if (q.aspect_ratio_above > 0)
-      os << " (worst aspect ratio at " << q.aspect_ratio_worst_at.x << ", " << q.aspect_ratio_worst_at.y << ")";
+    if (q.angle_ratio_below > 0) os << " (worst angle ratio at " << bare_place(q.angle_ratio_worst_at, place) << ")";
+    if (q.aspect_ratio_above > 0) os << " (worst aspect ratio at " << bare_place(q.aspect_ratio_worst_at, place) << ")";
   }
   os << "\n";
   return os.str();
@@ -650,15 +660,13 @@ nlohmann::json to_json(const FiniteVolumeQuality& q) {
           {"smoothness_worst_at", {q.smoothness_worst_at.x, q.smoothness_worst_at.y}}};
 }
 
-std::string format_finite_volume_text(const FiniteVolumeQuality& q) {
+std::string format_finite_volume_text(const FiniteVolumeQuality& q, const PlaceWriter& place) {
   std::ostringstream os;
   os.precision(4);
   os << "  finite volume (D-Flow FM, " << q.interior_edges << " interior edges): orthogonality max "
      << q.orthogonality.max << " avg " << q.orthogonality.avg << ", " << q.orthogonality_above << " above "
      << q.orthogonality_limit;
-  os.precision(10);
-  os << " (worst at " << q.orthogonality_worst_at.x << ", " << q.orthogonality_worst_at.y << ")";
-  os.precision(4);
+  os << " (worst at " << bare_place(q.orthogonality_worst_at, place) << ")";
   os << "; smoothness (area ratio) max " << q.smoothness.max << " avg " << q.smoothness.avg << "\n";
   return os.str();
 }
@@ -741,7 +749,8 @@ void from_json(const nlohmann::json& j, DomainDistance& d) {
   j.at("sharp_vertices_missing").get_to(d.sharp_vertices_missing);
 }
 
-std::string format_quality_text(const QualityReport& q, const DomainDistance* d) {
+std::string format_quality_text(const QualityReport& q, const DomainDistance* d, const PlaceWriter& place) {
+  auto at = [&](Vec2 p) { return place ? place(p) : at_text(p); };
   std::ostringstream os;
   os.precision(4);
   auto line = [&](const char* name, const Stats& s) {
@@ -761,9 +770,9 @@ std::string format_quality_text(const QualityReport& q, const DomainDistance* d)
        << "), area change " << d->area_relative_change << ", sharp vertices missing " << d->sharp_vertices_missing << " of "
        << d->sharp_vertices_total << "\n";
     os << "  feature distance to mesh edges max " << d->feature_max_distance;
-    if (d->feature_max_distance > 0) os << " at " << at_text(d->feature_max_at);
+    if (d->feature_max_distance > 0) os << " at " << at(d->feature_max_at);
     os << ", feature nodes off curves max " << d->feature_node_max_distance;
-    if (d->feature_node_max_distance > 0) os << " at " << at_text(d->feature_node_max_at);
+    if (d->feature_node_max_distance > 0) os << " at " << at(d->feature_node_max_at);
     os << "\n";
   }
   return os.str();

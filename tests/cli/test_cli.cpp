@@ -3,10 +3,12 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <vector>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 #include <csignal>
 #include <sys/wait.h>
@@ -169,5 +171,56 @@ TEST(Cli, MshVersionAndFeatureOptions) {
   const CliRun bad = run("mesh " + input + (dir / "bad.msh").string() + " --msh-version 3");
   EXPECT_EQ(bad.code, 2) << bad.err;
   EXPECT_FALSE(fs::exists(dir / "bad.msh"));
+  fs::remove_all(dir);
+}
+
+// Issue 52: lon/lat input is meshed in UTM metres, but every place the CLI prints after reading is in the
+// file's own lon/lat: a part left out as smaller than one element (a 2 m square beside a square of about
+// 0.2 km, meshed in a local frame moved next to the origin, and one of about 1 km, meshed where it is), the
+// frame's origin, and a meshing error's places.
+TEST(Cli, PlacesAfterReadingAreInTheLonLatOfTheInput) {
+  const fs::path dir = fs::temp_directory_path() / ("polysquare_cli_lonlat_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  auto square = [](double lon, double lat, double side) {
+    std::ostringstream os;
+    os.precision(12);
+    os << R"({"type":"Feature","properties":{},"geometry":{"type":"Polygon","coordinates":[[)" << "[" << lon << ","
+       << lat << "],[" << lon + side << "," << lat << "],[" << lon + side << "," << lat + side << "],[" << lon << ","
+       << lat + side << "],[" << lon << "," << lat << "]]]}}";
+    return os.str();
+  };
+  // The place "(x, y)" after `after` in the text (NaN when none).
+  auto place_after = [](const std::string& text, const std::string& after) {
+    const std::size_t at = text.find(after);
+    double x = NAN, y = NAN;
+    if (at != std::string::npos) std::sscanf(text.c_str() + at + after.size(), " (%lf, %lf)", &x, &y);
+    return std::pair{x, y};
+  };
+  for (const auto& [side, size] : {std::pair{0.002, "10"}, std::pair{0.01, "50"}}) {
+    const double tiny_lon = -122.45 + 1.5 * side, tiny_lat = 37.75 + side / 2;  // the tiny square's corner
+    const fs::path input = dir / "lonlat.geojson";
+    std::ofstream(input) << R"({"type":"FeatureCollection","crs":{"type":"name","properties":{"name":"EPSG:4326"}},)"
+                         << R"("features":[)" << square(-122.45, 37.75, side) << "," << square(tiny_lon, tiny_lat, side / 100)
+                         << "]}";
+    const CliRun r = run("mesh " + input.string() + " --size " + size + " -o " + (dir / "m.msh").string());
+    ASSERT_EQ(r.code, 0) << r.err;
+    const auto [lon, lat] = place_after(r.err, "is less than one element, at");
+    EXPECT_NEAR(lon, tiny_lon + side / 200, side / 100) << r.err;  // the tiny square's centre, not UTM metres
+    EXPECT_NEAR(lat, tiny_lat + side / 200, side / 100) << r.err;
+    if (side == 0.002) {  // moved: the frame's origin is a place too
+      const auto [olon, olat] = place_after(r.err, "meshed relative to");
+      EXPECT_NEAR(olon, -122.45, 0.01) << r.err;
+      EXPECT_NEAR(olat, 37.75, 0.01) << r.err;
+      // An error from meshing (thrown on a worker thread, in the moved frame): its places in lon/lat as well.
+      const CliRun e = run("mesh " + input.string() + " --size 10 --min-sj 0.9999999999 --max-poor-fraction 0 -o " +
+                           (dir / "e.msh").string());
+      ASSERT_EQ(e.code, 3) << e.err;
+      const std::string error = e.err.substr(e.err.find("error:"));
+      const auto [elon, elat] = place_after(error, " at");
+      EXPECT_NEAR(elon, -122.45 + side / 2, side) << error;
+      EXPECT_NEAR(elat, 37.75 + side / 2, side) << error;
+      EXPECT_EQ(error.find("places relative to"), std::string::npos) << error;
+    }
+  }
   fs::remove_all(dir);
 }

@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "polysquare/core/geometry.h"
+#include "polysquare/core/place_text.h"
 #include "polysquare/core/quad_mesh.h"
 #include "polysquare/core/region.h"
 
@@ -54,9 +55,10 @@ std::vector<double> schism_angle_ratios(const QuadMesh& mesh);
 /// SCHISM's quad checks over the quads of `mesh` (triangles are left out) with the given cutoffs.
 SchismQuadQuality schism_quad_quality(const QuadMesh& mesh, double angle_ratio_limit = 0.5,
                                       double aspect_ratio_limit = 5.0);
-/// The report's `quality.schism` block (keys in schema/report.schema.json) and its one-line text.
+/// The report's `quality.schism` block (keys in schema/report.schema.json) and its one-line text; `place`
+/// writes its places (the CLI's lon/lat of reprojected input), empty: "x, y" as they are.
 nlohmann::json to_json(const SchismQuadQuality& q);
-std::string format_schism_text(const SchismQuadQuality& q);
+std::string format_schism_text(const SchismQuadQuality& q, const PlaceWriter& place = {});
 
 struct QualityReport {
   std::size_t nodes = 0, quads = 0, triangles = 0;
@@ -158,9 +160,10 @@ FiniteVolumeQuality finite_volume_quality(const QuadMesh& mesh, double orthogona
 /// #edges orthogonality of each edge of `edges` (-1 on boundary edges), from `centres` (face_circumcentres).
 std::vector<double> edge_orthogonality(const QuadMesh& mesh, const EdgeTable& edges, const std::vector<Vec2>& centres);
 
-/// The report's `quality.finite_volume` block (keys in schema/report.schema.json) and its one-line text.
+/// The report's `quality.finite_volume` block (keys in schema/report.schema.json) and its one-line text; `place`
+/// as format_schism_text's.
 nlohmann::json to_json(const FiniteVolumeQuality& q);
-std::string format_finite_volume_text(const FiniteVolumeQuality& q);
+std::string format_finite_volume_text(const FiniteVolumeQuality& q, const PlaceWriter& place = {});
 
 /// The report's `quality` and `domain` blocks (see schema/report.schema.json; add_quality_to_report adds the
 /// figures relative to the size).
@@ -171,7 +174,8 @@ void from_json(const nlohmann::json& j, SchismQuadQuality& q);
 void from_json(const nlohmann::json& j, FiniteVolumeQuality& q);
 void from_json(const nlohmann::json& j, QualityReport& q);
 void from_json(const nlohmann::json& j, DomainDistance& d);
-/// Human-readable table, one figure per line.
-std::string format_quality_text(const QualityReport& q, const DomainDistance* domain = nullptr);
+/// Human-readable table, one figure per line; `place` writes its places, empty: as at_text.
+std::string format_quality_text(const QualityReport& q, const DomainDistance* domain = nullptr,
+                                const PlaceWriter& place = {});
 
 }  // namespace polysquare
