@@ -234,7 +234,7 @@ void run_flags(CLI::App& t, MeshArgs& m) {
            "malformed file: GDAL 3.6's DXF driver can loop for ever; 0 = no limit)")
       ->capture_default_str();
   t.add_flag("-q,--quiet", m.quiet, "print errors and warnings only (no progress, no summary)");
-  t.add_flag("-v,--verbose", m.verbose, "print each stage's wall time as it finishes (on stderr)");
+  t.add_flag("-v,--verbose", m.verbose, "print each stage's wall time as it finishes, and how each large quantization program was solved (on stderr)");
 }
 
 }  // namespace

@@ -10,6 +10,8 @@
 #include <optional>
 #include <sstream>
 
+#include <spdlog/spdlog.h>
+
 #include "mesh_command.h"
 #include "polysquare/core/error.h"
 #include "polysquare/core/place_text.h"
@@ -630,6 +632,10 @@ namespace {
 int mesh_checked(const MeshArgs& args, double& estimated_quads) {
   // Progress on a terminal (never in a pipe or under CI), stage timings with --verbose; quiet: warnings only.
   TerminalProgress shown(args.quiet ? Verbosity::quiet : args.verbose ? Verbosity::verbose : Verbosity::normal);
+  if (args.verbose && !args.quiet) {  // the library's debug lines (its solvers' costliest calls), plain
+    spdlog::set_pattern("%v");
+    spdlog::set_level(spdlog::level::debug);
+  }
   // Under mpirun every process keeps the time; rank 0 alone says it was spent.
   TimeLimit limit(args.time_limit, args.read_time_limit, args.input, shown.callback(),
                   !args.mpi || args.mpi->rank() == 0);

@@ -1,6 +1,7 @@
 #include "polysquare/map/quantize.h"
 
 #include <algorithm>
+#include <chrono>
 #include <map>
 #include <mutex>
 #include <cmath>
@@ -9,6 +10,7 @@
 #include <array>
 
 #include <oneapi/tbb/parallel_for.h>
+#include <spdlog/spdlog.h>
 
 #include "core/digest.h"
 #include "map/integer_program.h"
@@ -240,7 +242,13 @@ void solve_joint(JointProblem& jp, IntegerProgram& P, const std::vector<SegmentC
   for (const Layout* layout : jp.layouts) sides += layout->segments.size();
   const double dive_gap = jp.large ? IntegerProgram::inf
                                    : options.dive_gap * std::max(1.0, static_cast<double>(sides) / 1000.0);
+  const auto t0 = std::chrono::steady_clock::now();
   const std::optional<std::vector<double>> x = P.solve(options.time_limit_ms / 1000.0, options.gap, dive_gap, jp.large);
+  // A large program's solve is the costliest step of a coast's map: the run's log shows how each ended.
+  if (jp.large)
+    spdlog::debug("{}: joint quantization of {} columns, {} rows: {}, {} dive restarts, {:.2f} s", part_name,
+                  P.columns(), P.rows(), !x ? "no solution" : P.branched() ? "branch-and-cut" : "LP and dive",
+                  P.dive_restarts(), std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
   if (!x)
     throw no_integer_solution(part_name);
   for (std::size_t l = 0; l < jp.layouts.size(); ++l) {
