@@ -326,8 +326,18 @@ struct QuantizeMemo::Impl {
     std::vector<Separation> own;          // the separations the layout needs alone
     std::optional<std::string> why_not;   // or why it cannot close alone
   };
+  // A joint quantization's outcome: the lattices it left (also when it failed), and its figures or its error.
+  struct Joint {
+    std::vector<std::vector<std::array<long long, 2>>> lattices;
+    QuantizeStats stats;
+    std::vector<std::size_t> broken;
+    std::optional<std::string> error;
+    std::vector<std::size_t> cannot_close;  // with `error`: LayoutsCannotClose's layouts and reasons
+    std::vector<std::string> reasons;
+  };
   mutable std::mutex mutex;
   std::map<std::array<std::uint64_t, 2>, Entry> entries;
+  std::map<std::array<std::uint64_t, 2>, Joint> joints;
   mutable std::size_t hits = 0;
 };
 
@@ -340,6 +350,7 @@ std::size_t QuantizeMemo::hits() const {
 }
 
 struct QuantizeMemoAccess {
+  using Joint = QuantizeMemo::Impl::Joint;
   static bool find(const QuantizeMemo& memo, const std::array<std::uint64_t, 2>& key, std::vector<Separation>& own,
                    std::optional<std::string>& why_not) {
     QuantizeMemo::Impl& m = *memo.impl_;
@@ -357,23 +368,40 @@ struct QuantizeMemoAccess {
     const std::lock_guard<std::mutex> lock(m.mutex);
     m.entries.try_emplace(key, QuantizeMemo::Impl::Entry{own, why_not});
   }
+  static std::optional<QuantizeMemo::Impl::Joint> find_joint(const QuantizeMemo& memo,
+                                                             const std::array<std::uint64_t, 2>& key) {
+    QuantizeMemo::Impl& m = *memo.impl_;
+    const std::lock_guard<std::mutex> lock(m.mutex);
+    const auto it = m.joints.find(key);
+    if (it == m.joints.end()) return std::nullopt;
+    ++m.hits;
+    return it->second;
+  }
+  static void store_joint(const QuantizeMemo& memo, const std::array<std::uint64_t, 2>& key,
+                          QuantizeMemo::Impl::Joint joint) {
+    QuantizeMemo::Impl& m = *memo.impl_;
+    const std::lock_guard<std::mutex> lock(m.mutex);
+    m.joints.try_emplace(key, std::move(joint));
+  }
 };
 
 namespace {
 
-// Everything the quantization of `layout` alone reads (find_conflicts and check-free solves read its sides and
-// break points, the program their deformed positions), into the memo's key.
-std::array<std::uint64_t, 2> alone_key(const Layout& layout, const std::vector<Vec2>& deformed,
-                                       const QuantizeOptions& o, const std::string& part_name) {
-  Digest d;
-  auto integer = [&](long long v) { d.word(static_cast<std::uint64_t>(v)); };
+// The options and the part's name, which every quantization reads, into a memo key.
+void digest_options(Digest& d, const QuantizeOptions& o, const std::string& part_name) {
   d.text(part_name);
   for (double v : {o.position_weight, o.max_side_change, o.outside_band_weight, o.gap, o.dive_gap, o.broken_coupling_cost,
                    o.graded ? o.graded_fewer_weight : 1.0})
     d.real(v);
   for (long long v : {static_cast<long long>(o.max_separation_rounds), static_cast<long long>(o.time_limit_ms),
                       static_cast<long long>(o.large_program_columns), static_cast<long long>(o.screen_separations)})
-    integer(v);
+    d.word(static_cast<std::uint64_t>(v));
+}
+
+// What the quantization reads of one layout (find_conflicts and check-free solves read its sides and break
+// points, the program their deformed positions) into a memo key.
+void digest_layout(Digest& d, const Layout& layout, const std::vector<Vec2>& deformed) {
+  auto integer = [&](long long v) { d.word(static_cast<std::uint64_t>(v)); };
   d.raw(layout.break_vertex);
   integer(static_cast<long long>(layout.segments.size()));
   for (const LayoutSegment& s : layout.segments) {  // field by field: the struct has padding
@@ -383,6 +411,40 @@ std::array<std::uint64_t, 2> alone_key(const Layout& layout, const std::vector<V
   for (std::int32_t v : layout.break_vertex) {
     d.real(deformed[static_cast<std::size_t>(v)].x);
     d.real(deformed[static_cast<std::size_t>(v)].y);
+  }
+}
+
+// The key of `layout`'s quantization alone.
+std::array<std::uint64_t, 2> alone_key(const Layout& layout, const std::vector<Vec2>& deformed,
+                                       const QuantizeOptions& o, const std::string& part_name) {
+  Digest d;
+  digest_options(d, o, part_name);
+  digest_layout(d, layout, deformed);
+  return d.key();
+}
+
+// The key of a joint quantization: its layouts, couplings and even groups, and whether its couplings are
+// elastic.
+std::array<std::uint64_t, 2> joint_key(const std::vector<Layout*>& layouts,
+                                       const std::vector<const std::vector<Vec2>*>& deformed,
+                                       const std::vector<SegmentCoupling>& couplings, const QuantizeOptions& o,
+                                       const std::string& part_name, const std::vector<EvenGroup>& even_groups,
+                                       bool elastic) {
+  Digest d;
+  d.word(1);  // a joint key, never equal to a layout's alone
+  digest_options(d, o, part_name);
+  d.word(elastic ? 1 : 0);
+  d.word(layouts.size());
+  for (std::size_t l = 0; l < layouts.size(); ++l) digest_layout(d, *layouts[l], *deformed[l]);
+  d.word(couplings.size());
+  for (const SegmentCoupling& c : couplings)
+    for (std::size_t v : {c.layout_a, static_cast<std::size_t>(c.segment_a), c.layout_b,
+                          static_cast<std::size_t>(c.segment_b), static_cast<std::size_t>(c.transition)})
+      d.word(v);
+  d.word(even_groups.size());
+  for (const EvenGroup& g : even_groups) {
+    d.word(g.size());
+    for (const auto& [l, k] : g) d.word(l), d.word(static_cast<std::uint64_t>(k));
   }
   return d.key();
 }
@@ -527,10 +589,13 @@ bool closes_alone(const JointProblem& jp, std::size_t l, const std::vector<Separ
 
 }  // namespace
 
-QuantizeStats quantize_layouts(const std::vector<Layout*>& layouts, const std::vector<const std::vector<Vec2>*>& deformed,
-                               const std::vector<SegmentCoupling>& couplings, const QuantizeOptions& options,
-                               const std::string& part_name, const std::vector<EvenGroup>& even_groups,
-                               std::vector<std::size_t>* broken) {
+namespace {
+
+QuantizeStats quantize_unmemoized(const std::vector<Layout*>& layouts,
+                                  const std::vector<const std::vector<Vec2>*>& deformed,
+                                  const std::vector<SegmentCoupling>& couplings, const QuantizeOptions& options,
+                                  const std::string& part_name, const std::vector<EvenGroup>& even_groups,
+                                  std::vector<std::size_t>* broken) {
   JointProblem jp = joint_problem(layouts, deformed);
   std::vector<Separation> separations;
   // A joint program is a mixed-integer one, each solve of it costly; each layout alone is a network program
@@ -582,6 +647,48 @@ QuantizeStats quantize_layouts(const std::vector<Layout*>& layouts, const std::v
   // so what fails is the couplings (the caller's elastic solve names them). A second solve without them
   // succeeded in none of 42 such failures on delta_box 40 m, at a cold solve of the whole program each.
   return solve_with_separations(jp, couplings, even_groups, separations, options, part_name, broken);
+}
+
+// A memo's joint outcome replayed: the lattices, then the figures or the error.
+QuantizeStats replay(const QuantizeMemoAccess::Joint& joint, const std::vector<Layout*>& layouts,
+                     std::vector<std::size_t>* broken) {
+  for (std::size_t l = 0; l < layouts.size(); ++l) layouts[l]->lattice = joint.lattices[l];
+  if (!joint.cannot_close.empty()) throw LayoutsCannotClose(*joint.error, joint.cannot_close, joint.reasons);
+  if (joint.error) throw MeshingError(*joint.error);
+  if (broken) *broken = joint.broken;
+  return joint.stats;
+}
+
+}  // namespace
+
+QuantizeStats quantize_layouts(const std::vector<Layout*>& layouts, const std::vector<const std::vector<Vec2>*>& deformed,
+                               const std::vector<SegmentCoupling>& couplings, const QuantizeOptions& options,
+                               const std::string& part_name, const std::vector<EvenGroup>& even_groups,
+                               std::vector<std::size_t>* broken) {
+  if (!options.memo) return quantize_unmemoized(layouts, deformed, couplings, options, part_name, even_groups, broken);
+  // The repair rounds and the candidates with and without transition rows quantize the same subregions again
+  // (graded delta_box: 5 solves of a 64,519-column program, twice).
+  const auto key = joint_key(layouts, deformed, couplings, options, part_name, even_groups, broken != nullptr);
+  if (const auto joint = QuantizeMemoAccess::find_joint(*options.memo, key)) return replay(*joint, layouts, broken);
+  QuantizeMemoAccess::Joint joint;
+  auto store = [&] {
+    for (const Layout* l : layouts) joint.lattices.push_back(l->lattice);
+    QuantizeMemoAccess::store_joint(*options.memo, key, std::move(joint));
+  };
+  try {
+    joint.stats = quantize_unmemoized(layouts, deformed, couplings, options, part_name, even_groups, broken);
+  } catch (const LayoutsCannotClose& e) {
+    joint.error = e.what(), joint.cannot_close = e.layouts, joint.reasons = e.reasons;
+    store();
+    throw;
+  } catch (const MeshingError& e) {
+    joint.error = e.what();
+    store();
+    throw;
+  }
+  if (broken) joint.broken = *broken;
+  store();
+  return joint.stats;
 }
 
 QuantizeStats quantize_layouts_shared(const WorkSharing* sharing, const std::vector<Layout*>& layouts,

@@ -413,11 +413,11 @@ TEST(InterfaceQuantization, EachLayoutAloneIsQuantizedOncePerRun) {
   EXPECT_EQ(solve(with_memo, A, B, C), plain);
   EXPECT_EQ(with_memo.memo->hits(), 0u);
   EXPECT_EQ(solve(with_memo, A, B, C), plain);
-  EXPECT_EQ(with_memo.memo->hits(), 3u);
+  EXPECT_EQ(with_memo.memo->hits(), 1u);  // the whole joint quantization, met again
   RectLayout longer = B;
   longer.layout.segments[1].target += 0.5;
   EXPECT_EQ(solve(with_memo, A, longer, C), solve(QuantizeOptions{}, A, longer, C));
-  EXPECT_EQ(with_memo.memo->hits(), 5u);  // A and C again; the changed B solved
+  EXPECT_EQ(with_memo.memo->hits(), 3u);  // a new joint program: A and C alone again; the changed B solved
 
   // A layout whose labels contradict each other is refused again from the memo, with the same reason.
   RectLayout bad = rectangle({0, 0}, {4, 3});
@@ -435,6 +435,42 @@ TEST(InterfaceQuantization, EachLayoutAloneIsQuantizedOncePerRun) {
   }
   ASSERT_EQ(reasons.size(), 2u);
   EXPECT_EQ(reasons[0], reasons[1]);
-  // The first run's A belongs to another part (its messages name the part), so it is solved anew; then A and bad.
-  EXPECT_EQ(with_memo.memo->hits(), 5u + 2u);
+  // The first run's A belongs to another part (its messages name the part), so it is solved anew; the second
+  // run replays the first's refusal.
+  EXPECT_EQ(with_memo.memo->hits(), 3u + 1u);
+}
+
+TEST(InterfaceQuantization, AJointQuantizationMetAgainIsReplayed) {
+  // The repair rounds and the candidates quantize the same subregions again: with a memo the second time gives
+  // the first's lattices, broken couplings (elastic) and refusal, without a solve; the elastic and the strict
+  // program of the same layouts are two programs.
+  RectLayout A = rectangle({0, 0}, {3, 2}), C = rectangle({0, 0}, {2, 3}, {1.5});
+  const std::vector<SegmentCoupling> couplings{{0, 0, 1, 4}, {0, 0, 1, 1}, {0, 1, 1, 0}};  // cannot all agree
+  QuantizeOptions with_memo;
+  with_memo.memo = std::make_shared<QuantizeMemo>();
+  std::vector<std::vector<std::array<long long, 2>>> lattices[2];
+  std::vector<std::size_t> broken[2];
+  for (int run = 0; run < 2; ++run) {
+    RectLayout a = A, c = C;
+    quantize_layouts({&a.layout, &c.layout}, {&a.deformed, &c.deformed}, couplings, with_memo, "AC", {}, &broken[run]);
+    lattices[run] = {a.layout.lattice, c.layout.lattice};
+  }
+  EXPECT_EQ(with_memo.memo->hits(), 1u);
+  EXPECT_EQ(lattices[1], lattices[0]);
+  ASSERT_EQ(broken[0].size(), 1u);
+  EXPECT_EQ(broken[1], broken[0]);
+  std::string refusals[2];
+  for (std::string& refusal : refusals) {
+    RectLayout a = A, c = C;
+    try {
+      quantize_layouts({&a.layout, &c.layout}, {&a.deformed, &c.deformed}, couplings, with_memo, "AC");
+      ADD_FAILURE() << "couplings that cannot agree were quantized";
+    } catch (const MeshingError& e) {
+      refusal = e.what();
+    }
+  }
+  EXPECT_FALSE(refusals[0].empty());
+  EXPECT_EQ(refusals[1], refusals[0]);
+  // The strict program: its layouts alone from the elastic one's solve (2), then itself replayed (1).
+  EXPECT_EQ(with_memo.memo->hits(), 4u);
 }

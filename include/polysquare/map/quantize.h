@@ -48,15 +48,17 @@ struct QuantizeOptions {
                                    ///< next choice for their conflict (false: added as found, and the solve fails)
   double broken_coupling_cost = 1e4;  ///< cost per element of an elastic coupling's mismatch (quantize_layouts
                                       ///< with `broken`): above any saving in deviation, so only what cannot agree breaks
-  /// Each layout's quantization alone (the separations it needs, or why it cannot close), shared by the copies of
-  /// these options within one run (the pipeline sets it; null = none): every joint solve starts from them, and
-  /// the joint maps, their re-solves and the repair rounds meet the same layouts again.
+  /// Each layout's quantization alone (the separations it needs, or why it cannot close) and each joint
+  /// quantization's outcome, shared by the copies of these options within one run (the pipeline sets it; null =
+  /// none): every joint solve starts from the former, and the joint maps, their re-solves and the repair rounds
+  /// meet the same layouts, and the same joint programs, again.
   std::shared_ptr<QuantizeMemo> memo;
 };
 
-/// Each layout's quantization alone (see QuantizeOptions::memo), by a 128-bit digest of what it reads (the
-/// layout's sides and break points, their deformed positions, the options, the part's name); the solve is
-/// deterministic, so a reused result is the one a new solve would give. Thread-safe.
+/// Each layout's quantization alone and each joint quantization (see QuantizeOptions::memo), by a 128-bit digest
+/// of what it reads (the layouts' sides and break points, their deformed positions, the couplings and even
+/// groups, the options, the part's name); the solve is deterministic, so a reused result is the one a new solve
+/// would give (or, where branch-and-cut stopped at its time limit, the one this run gave before). Thread-safe.
 class QuantizeMemo {
  public:
   QuantizeMemo();
