@@ -42,8 +42,9 @@ class IntegerProgram {
   /// either.
   /// Solving again after rows were added starts from the last solve's LP basis (the dual simplex).
   /// `large`: the relaxation is solved from scratch by the dual simplex instead of the primal, and each step of
-  /// the dive fixes every fractional column at once (one at a time only when that is infeasible), and a dive
-  /// that dead-ends (a column infeasible on both sides) starts again with only that column fixed.
+  /// the dive fixes every fractional column at once (else the half nearest to integers, a quarter, ..., one
+  /// column), and a dive that dead-ends (a column infeasible on both sides) starts again with only that column
+  /// fixed.
   std::optional<std::vector<double>> solve(double seconds, double gap = 0.0, double dive_gap = 0.0, bool large = false);
 
   /// What the last solve did: its dive's restarts, and whether it went on to branch-and-cut.
@@ -60,6 +61,7 @@ class IntegerProgram {
   bool solve_relaxation(bool large);
   int fractional_column(std::vector<int>* all) const;
   void fix_round_first(int& keep);
+  bool fix_nearest_first(const std::vector<int>& batch, std::vector<int>& fixed, int& keep);
   std::optional<std::vector<double>> branch_and_cut(double seconds, double gap, bool large,
                                                     const std::optional<std::vector<double>>& dived);
   std::unique_ptr<Lp> lp_;
