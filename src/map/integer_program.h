@@ -44,7 +44,7 @@ class IntegerProgram {
   /// `large`: the relaxation is solved from scratch by the dual simplex instead of the primal, and each step of
   /// the dive fixes every fractional column at once (else the half nearest to integers, a quarter, ..., one
   /// column), and a dive that dead-ends (a column infeasible on both sides) starts again with only that column
-  /// fixed.
+  /// fixed; when the dive finds no point, the answer is nullopt without branch-and-cut.
   std::optional<std::vector<double>> solve(double seconds, double gap = 0.0, double dive_gap = 0.0, bool large = false);
 
   /// What the last solve did: its dive's restarts, and whether it went on to branch-and-cut.
@@ -62,7 +62,7 @@ class IntegerProgram {
   int fractional_column(std::vector<int>* all) const;
   void fix_round_first(int& keep);
   bool fix_nearest_first(const std::vector<int>& batch, std::vector<int>& fixed, int& keep);
-  std::optional<std::vector<double>> branch_and_cut(double seconds, double gap, bool large,
+  std::optional<std::vector<double>> branch_and_cut(double seconds, double gap,
                                                     const std::optional<std::vector<double>>& dived);
   std::unique_ptr<Lp> lp_;
   std::vector<double> col_lo_, col_hi_, cost_;

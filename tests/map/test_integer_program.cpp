@@ -240,3 +240,16 @@ TEST(IntegerProgram, LpSolvesHaveNoTimeLimit) {
   EXPECT_NEAR(sum, copies, 1e-9);
   EXPECT_FALSE(p.branched());
 }
+
+TEST(IntegerProgram, ALargeProgramsFailedDiveIsNotBranched) {
+  // 2 x = 1 with x integer: the relaxation is feasible (x = 1/2), no integer is. A large program's dive gives up
+  // and the answer is nullopt at once (branch-and-cut found no point in any large program traced, at 20-40 s
+  // each); a small program still goes to branch-and-cut, which proves it.
+  for (const bool large : {true, false}) {
+    IntegerProgram p;
+    const int x = p.add_columns(1, 0.0, 10.0, 1.0, true);
+    p.add_row({{x, 2.0}}, 1.0, 1.0);
+    EXPECT_FALSE(p.solve(10.0, 0.0, IntegerProgram::inf, large)) << large;
+    EXPECT_EQ(p.branched(), !large);
+  }
+}
