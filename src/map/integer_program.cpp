@@ -236,23 +236,24 @@ bool IntegerProgram::fix_nearest_first(const std::vector<int>& batch, std::vecto
   // had no solution (proving that took 31,033 iterations, 32 s, once on graded delta_box; steps take 800-3,700).
   const int iterations = lp->maximumIterations();
   lp->setMaximumIterations(std::max(1000, rows() / 5));
-  for (std::size_t n = order.size(); n > 1; n /= 2) {
+  std::size_t n = order.size();
+  for (; n > 1; n /= 2) {
     for (std::size_t i = 0; i < n; ++i) lo[order[i].second] = hi[order[i].second] = value[i];
     lp->dual(0, keep);
     keep = 1 | 2;
-    if (lp->status() == 0) {
-      for (std::size_t i = 0; i < n; ++i) fixed.push_back(order[i].second);
-      lp->setMaximumIterations(iterations);
-      return true;
-    }
-    for (std::size_t i = 0; i < n; ++i) {
-      const auto k = static_cast<std::size_t>(order[i].second);
-      lo[k] = col_lo_[k];
-      hi[k] = col_hi_[k];
-    }
+    if (lp->status() == 0) break;
+    for (std::size_t i = 0; i < n; ++i) release(order[i].second);
   }
   lp->setMaximumIterations(iterations);
-  return false;
+  if (n <= 1) return false;
+  for (std::size_t i = 0; i < n; ++i) fixed.push_back(order[i].second);
+  return true;
+}
+
+void IntegerProgram::release(int k) {
+  const auto c = static_cast<std::size_t>(k);
+  lp_->model->columnLower()[c] = col_lo_[c];
+  lp_->model->columnUpper()[c] = col_hi_[c];
 }
 
 // Restarts of a large program's dive after a dead end (see solve).
@@ -313,10 +314,7 @@ std::optional<std::vector<double>> IntegerProgram::solve(double seconds, double 
     lp->dual(0, keep);
     if (lp->status() == 0) continue;
     if (!large || dive_restarts_ >= kDiveRestarts || fixed.size() < 2) break;
-    for (int k : fixed) {  // the dive's own fixes (the fans fix_round_first fixed are never fractional)
-      lo[k] = col_lo_[static_cast<std::size_t>(k)];
-      hi[k] = col_hi_[static_cast<std::size_t>(k)];
-    }
+    for (int k : fixed) release(k);  // the dive's own fixes (the fans fix_round_first fixed are never fractional)
     fixed.assign(1, c);
     ++dive_restarts_;
     lo[c] = hi[c] = near;

@@ -62,6 +62,7 @@ class IntegerProgram {
   int fractional_column(std::vector<int>* all) const;
   void fix_round_first(int& keep);
   bool fix_nearest_first(const std::vector<int>& batch, std::vector<int>& fixed, int& keep);
+  void release(int column);  // back to its own bounds in the LP
   std::optional<std::vector<double>> branch_and_cut(double seconds, double gap,
                                                     const std::optional<std::vector<double>>& dived);
   std::unique_ptr<Lp> lp_;
