@@ -13,7 +13,7 @@ void quad_fields(IO& io, M& m) {
 
 template <class IO, class L>
 void layout_fields(IO& io, L& l) {
-  io(l.break_vertex), io(l.vertex_break), io(l.break_is_corner), io(l.segments), io(l.lattice), io(l.chain_labels);
+  io(l.break_vertex), io(l.vertex_break), io(l.break_is_corner), io(l.segments), io(l.lattice), io(l.chain_labels), io(l.separations);
 }
 
 template <class IO, class M>

@@ -19,19 +19,15 @@ using namespace polysquare;
 
 namespace {
 
-// A rectangle layout from its four corners (counter-clockwise from bottom-left), with extra straight break
-// points on its right side (heights in `right_breaks`), deformed positions taken as given.
+// A layout with its deformed positions (taken as given).
 struct RectLayout {
   Layout layout;
   std::vector<Vec2> deformed;
 };
 
-RectLayout rectangle(Vec2 lo, Vec2 hi, const std::vector<double>& right_breaks = {}) {
+// The layout of one axis-parallel polygon (counter-clockwise, a break point at every vertex).
+RectLayout polygon(const std::vector<Vec2>& ring) {
   RectLayout r;
-  std::vector<Vec2> ring{lo, {hi.x, lo.y}};
-  for (double y : right_breaks) ring.push_back({hi.x, y});
-  ring.push_back(hi);
-  ring.push_back({lo.x, hi.y});
   r.deformed = ring;
   const int n = static_cast<int>(ring.size());
   for (int i = 0; i < n; ++i) {
@@ -52,6 +48,16 @@ RectLayout rectangle(Vec2 lo, Vec2 hi, const std::vector<double>& right_breaks =
     r.layout.segments.push_back(s);
   }
   return r;
+}
+
+// A rectangle layout from its four corners (counter-clockwise from bottom-left), with extra straight break
+// points on its right side (heights in `right_breaks`).
+RectLayout rectangle(Vec2 lo, Vec2 hi, const std::vector<double>& right_breaks = {}) {
+  std::vector<Vec2> ring{lo, {hi.x, lo.y}};
+  for (double y : right_breaks) ring.push_back({hi.x, y});
+  ring.push_back(hi);
+  ring.push_back({lo.x, hi.y});
+  return polygon(ring);
 }
 
 }  // namespace
@@ -438,6 +444,44 @@ TEST(InterfaceQuantization, EachLayoutAloneIsQuantizedOncePerRun) {
   // The first run's A belongs to another part (its messages name the part), so it is solved anew; the second
   // run replays the first's refusal.
   EXPECT_EQ(with_memo.memo->hits(), 3u + 1u);
+}
+
+TEST(InterfaceQuantization, AJointQuantizationSolvedAgainStartsFromTheSeparationsItEndedWith) {
+  // U (6 x 4, a notch 2 wide and 3 deep from the top) closes alone without a separation; coupled to R (3 x 2),
+  // its right side gets 3 elements, and the notch 3 deep would reach its bottom: the joint program needs a
+  // separation that U alone does not. The layouts keep it, and a second solve of the same layouts starts from
+  // it: with no separation rounds allowed it is valid at once, where fresh copies are not. (Programs this small
+  // reuse separations only when told to: reuse_separations_sides 0.)
+  const RectLayout U = polygon({{0, 0}, {6, 0}, {6, 4}, {4, 4}, {4, 1}, {2, 1}, {2, 4}, {0, 4}});
+  const RectLayout R = rectangle({0, 0}, {3, 2});
+  const std::vector<SegmentCoupling> couplings{{0, 1, 1, 3}};
+  QuantizeOptions reuse;
+  reuse.reuse_separations_sides = 0;
+  RectLayout u = U, r = R;
+  RectLayout by_default_u = U, by_default_r = R;
+  quantize_layouts({&by_default_u.layout, &by_default_r.layout}, {&by_default_u.deformed, &by_default_r.deformed},
+                   couplings, QuantizeOptions{}, "UR");
+  EXPECT_TRUE(by_default_u.layout.separations.empty());
+  quantize_layouts({&u.layout, &r.layout}, {&u.deformed, &r.deformed}, couplings, reuse, "UR");
+  EXPECT_EQ(u.layout.lattice, by_default_u.layout.lattice);
+  ASSERT_EQ(check_layout(u.layout), "");
+  const auto right = [](const Layout& l) { return l.lattice[2][1] - l.lattice[1][1]; };
+  ASSERT_EQ(right(u.layout), 3);  // the coupled count: the notch is 2 deep at most
+  ASSERT_FALSE(u.layout.separations.empty());
+  RectLayout alone = U;
+  quantize_layout(alone.layout, alone.deformed, QuantizeOptions{}, "U");
+  EXPECT_EQ(right(alone.layout), 4);  // alone, the notch keeps its 3 (no separation needed)
+  EXPECT_TRUE(alone.layout.separations.empty());
+
+  QuantizeOptions no_rounds = reuse;
+  no_rounds.max_separation_rounds = 0;
+  const auto first = u.layout.lattice;
+  quantize_layouts({&u.layout, &r.layout}, {&u.deformed, &r.deformed}, couplings, no_rounds, "UR");
+  EXPECT_EQ(check_layout(u.layout), "");
+  EXPECT_EQ(u.layout.lattice, first);
+  RectLayout fresh_u = U, fresh_r = R;
+  quantize_layouts({&fresh_u.layout, &fresh_r.layout}, {&fresh_u.deformed, &fresh_r.deformed}, couplings, no_rounds, "UR");
+  EXPECT_NE(check_layout(fresh_u.layout), "");  // the first solve alone leaves the notch on the bottom
 }
 
 TEST(InterfaceQuantization, AJointQuantizationMetAgainIsReplayed) {

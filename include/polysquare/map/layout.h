@@ -47,6 +47,9 @@ struct Layout {
   std::vector<LayoutSegment> segments;
   std::vector<std::array<long long, 2>> lattice;  ///< #B integer lattice position (after quantization)
   std::vector<std::vector<int>> chain_labels;     ///< per chain, the cleaned label of each edge
+  /// Joint quantization: the separations (axis, lo, hi: break point hi's lattice coordinate along the axis at
+  /// least lo's + 1) that this layout's last joint quantization ended with; the next one starts from them.
+  std::vector<std::array<int, 3>> separations;
 };
 
 /// Labels and break points of every chain of `mesh` deformed to `deformed` (lattice units: 1 = one element).
