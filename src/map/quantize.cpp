@@ -393,6 +393,16 @@ struct QuantizeMemoAccess {
 
 namespace {
 
+// Whether a program of these layouts starts from (and keeps) their Layout::separations: a joint program of more
+// than options.reuse_separations_sides sides.
+bool reuses_separations(const std::vector<Layout*>& layouts, const std::vector<SegmentCoupling>& couplings,
+                        const std::vector<EvenGroup>& even_groups, const QuantizeOptions& options) {
+  if (layouts.size() < 2 || (couplings.empty() && even_groups.empty())) return false;
+  std::size_t sides = 0;
+  for (const Layout* layout : layouts) sides += layout->segments.size();
+  return sides > options.reuse_separations_sides;
+}
+
 // The options and the part's name, which every quantization reads, into a memo key.
 void digest_options(Digest& d, const QuantizeOptions& o, const std::string& part_name) {
   d.text(part_name);
@@ -442,8 +452,11 @@ std::array<std::uint64_t, 2> joint_key(const std::vector<Layout*>& layouts,
   digest_options(d, o, part_name);
   d.word(elastic ? 1 : 0);
   d.word(layouts.size());
+  // Separations a program does not start from are not read: the key stays the one of its first solve.
+  const bool reuse = reuses_separations(layouts, couplings, even_groups, o);
   for (std::size_t l = 0; l < layouts.size(); ++l) {
     digest_layout(d, *layouts[l], *deformed[l]);
+    if (!reuse) continue;
     d.word(layouts[l]->separations.size());
     for (const auto& sep : layouts[l]->separations)
       for (int v : sep) d.word(static_cast<std::uint64_t>(static_cast<std::int64_t>(v)));
@@ -618,11 +631,8 @@ QuantizeStats quantize_unmemoized(const std::vector<Layout*>& layouts,
   // its neighbours' counts was measured worse (delta_box ensembles: it fails later, after the joint solve).
   std::vector<std::size_t> cannot_close;
   std::vector<std::string> reasons;
-  const bool joint = layouts.size() > 1 && (!couplings.empty() || !even_groups.empty());
-  std::size_t sides = 0;
-  for (const Layout* layout : layouts) sides += layout->segments.size();
-  const bool reuse = joint && sides > options.reuse_separations_sides;
-  if (joint) {
+  const bool reuse = reuses_separations(layouts, couplings, even_groups, options);
+  if (layouts.size() > 1 && (!couplings.empty() || !even_groups.empty())) {
     // Each layout alone, in parallel (they share nothing), then collected in layout order.
     std::vector<std::vector<Separation>> own(layouts.size());
     std::vector<std::optional<std::string>> why_not(layouts.size());
