@@ -343,6 +343,7 @@ struct PatchPiece {
   PatchEdgeRole role = PatchEdgeRole::none;
   int tag = -1;
   double length = 0;
+  double sizes = 0;  // the length in local sizes: length / h, or graded the integral of 1 / h along it
 };
 
 // What cutting a subregion's chains into patch pieces reads.
@@ -353,6 +354,7 @@ struct PatchPieces {
   const std::map<SideKey, long long>& side_count;
   const std::vector<std::uint8_t>& chain_ends;
   double h;
+  const SizeField* field;  // graded: the size along the pieces; null: h everywhere
   const std::string& where;
 
   std::int32_t gv(std::int32_t v) const { return sub.global_vertex[static_cast<std::size_t>(v)]; }
@@ -365,6 +367,22 @@ struct PatchPieces {
     else
       for (std::size_t i = verts.size() - 1; i > 0; --i) l += distance(m.vertices[verts[i - 1]], m.vertices[verts[i]]);
     return l;
+  }
+  // The piece's length in local sizes, summed from the same end as length_of: both sides of an interface between
+  // two patches take the same count from it. Graded, each patch's least size would give each side its own.
+  double sizes_of(const std::vector<std::int32_t>& verts, double length) const {
+    if (!field) return length / h;
+    const TriMesh& m = sub.mesh;
+    auto step = [&](std::size_t i) {
+      const Vec2 a = m.vertices[verts[i - 1]], b = m.vertices[verts[i]];
+      return distance(a, b) / field->at(0.5 * (a + b));
+    };
+    double n = 0.0;
+    if (gv(verts.front()) <= gv(verts.back()))
+      for (std::size_t i = 1; i < verts.size(); ++i) n += step(i);
+    else
+      for (std::size_t i = verts.size() - 1; i > 0; --i) n += step(i);
+    return n;
   }
 };
 
@@ -428,16 +446,17 @@ std::vector<PatchPiece> pieces_of(const PatchPieces& c, const TriChain& ch, bool
     PatchPiece pc;
     pc.verts.assign(verts.begin() + static_cast<std::ptrdiff_t>(i), verts.begin() + static_cast<std::ptrdiff_t>(j) + 1);
     pc.length = c.length_of(pc.verts);
+    pc.sizes = c.sizes_of(pc.verts, pc.length);
     pc.role = ch.kind == TriChain::Kind::ring ? PatchEdgeRole::boundary
                                                : (ch.kind == TriChain::Kind::feature ? PatchEdgeRole::feature : PatchEdgeRole::none);
     pc.tag = ch.index;
     if (count >= 0) {
       pc.n = count;
     } else if (inner_feature || ch.kind == TriChain::Kind::ring || interface) {
-      pc.n = 2 * std::max(1LL, std::llround(pc.length / (2.0 * c.h)));  // even: its ends stay coarse vertices
+      pc.n = 2 * std::max(1LL, std::llround(pc.sizes / 2.0));  // even: its ends stay coarse vertices
       pc.adjustable = ch.kind == TriChain::Kind::ring;
     } else {
-      pc.n = std::max(1LL, std::llround(pc.length / c.h));
+      pc.n = std::max(1LL, std::llround(pc.sizes));
     }
     out.push_back(std::move(pc));
     i = j;
@@ -445,15 +464,15 @@ std::vector<PatchPiece> pieces_of(const PatchPieces& c, const TriChain& ch, bool
   return out;
 }
 
-// A piece's count made odd or even by one more element (one fewer when it is already well above length / h).
-void even_out(PatchPiece& pc, double h) {
-  pc.n = pc.n + 1 <= std::llround(pc.length / h) + 1 || pc.n == 1 ? pc.n + 1 : pc.n - 1;
+// A piece's count made odd or even by one more element (one fewer when it is already well above its sizes).
+void even_out(PatchPiece& pc) {
+  pc.n = pc.n + 1 <= std::llround(pc.sizes) + 1 || pc.n == 1 ? pc.n + 1 : pc.n - 1;
 }
 
 // Every run of fixed pieces (interfaces) with an odd count is evened out by the ring piece right after it
 // (or before it), so that ring pieces keep starting on coarse vertices. Anchors (ends of inner features) start
 // new runs: between two of them the count must be even.
-void even_out_runs(std::vector<PatchPiece>& pieces, const std::set<std::int32_t>& anchors, double h) {
+void even_out_runs(std::vector<PatchPiece>& pieces, const std::set<std::int32_t>& anchors) {
   const std::size_t np = pieces.size();
   std::size_t start = 0;  // a run may not wrap past a loop start that is an adjustable piece or an anchor
   for (std::size_t k = 0; k < np; ++k)
@@ -471,7 +490,7 @@ void even_out_runs(std::vector<PatchPiece>& pieces, const std::set<std::int32_t>
       else if (pieces[before].adjustable) fix = before;
       // No ring piece next to the run: the split construction cannot take it, the matching one can (it
       // needs only an even count in all, below).
-      if (fix != np) even_out(pieces[fix], h);
+      if (fix != np) even_out(pieces[fix]);
       run = 0;
     }
     if (step == np) break;
@@ -540,7 +559,7 @@ void refine_crossing_chords(const TriMesh& m, std::vector<std::vector<PatchPiece
 
 // A quad mesh has an even number of boundary edges in all (every quad has four edges, every inner edge is
 // in two quads); the first ring piece evens it out, and without one the quantization should have.
-void even_out_total(const TriMesh& m, std::vector<std::vector<PatchPiece>>& loops, double h, const std::string& where) {
+void even_out_total(const TriMesh& m, std::vector<std::vector<PatchPiece>>& loops, const std::string& where) {
   long long total = 0;
   PatchPiece* first_adjustable = nullptr;
   for (auto& pieces : loops)
@@ -553,7 +572,7 @@ void even_out_total(const TriMesh& m, std::vector<std::vector<PatchPiece>>& loop
       throw MeshingError(where + ": an odd number of interface elements (" + std::to_string(total) +
                          ") all round it, from " + at_text(m.vertices[loops.front().front().verts.front()]) +
                          ", and no boundary piece to even it out");
-    even_out(*first_adjustable, h);
+    even_out(*first_adjustable);
   }
 }
 
@@ -618,10 +637,10 @@ struct PatchNodes {
 // anchors (ends of inner features), the matching one only an even count in all.
 PatchInput patch_input(const Subregion& sub, const std::vector<std::uint8_t>& is_patch,
                        const std::map<SideKey, long long>& side_count, const std::vector<std::uint8_t>& chain_ends,
-                       double h, double corner_deg, const std::string& where) {
+                       double h, const SizeField* field, double corner_deg, const std::string& where) {
   const TriMesh& m = sub.mesh;
   const std::vector<std::uint8_t> corner = corner_vertices(m, m.vertices, corner_deg);
-  const PatchPieces cut{sub, corner, is_patch, side_count, chain_ends, h, where};
+  const PatchPieces cut{sub, corner, is_patch, side_count, chain_ends, h, field, where};
   std::vector<std::uint8_t> in_loop(m.chains.size(), 0);
   std::vector<std::vector<PatchPiece>> loops, inner;
   for (const auto& loop : m.loops) {
@@ -644,13 +663,13 @@ PatchInput patch_input(const Subregion& sub, const std::vector<std::uint8_t>& is
       anchors.insert(pc.verts.front());
       anchors.insert(pc.verts.back());
     }
-  for (auto& pieces : loops) even_out_runs(pieces, anchors, h);
+  for (auto& pieces : loops) even_out_runs(pieces, anchors);
   refine_crossing_chords(m, loops, inner, h);
-  even_out_total(m, loops, h, where);
+  even_out_total(m, loops, where);
   // Inner features cut the patch into faces, and the matching construction pairs triangles within a face: each
   // face needs an even count along its sides too. An inner piece between two faces flips both when its count
   // changes by one, so odd faces are paired along a spanning tree of the faces (the total is even, so they pair).
-  even_faces(m, loops, inner, [h](PatchPiece& pc) { even_out(pc, h); });
+  even_faces(m, loops, inner, [](PatchPiece& pc) { even_out(pc); });
 
   PatchNodes nodes{m, corner, {}, {}};
   for (const auto& pieces : loops) nodes.add_curve(pieces, true, true);
@@ -704,8 +723,20 @@ int split_listed_subregions(const TriMesh& tri, std::vector<std::int32_t>& trian
   }
   const std::vector<std::int32_t> before = triangle_part;
   const int parts_before = parts;
+  // The part's quads: by the field's local sizes on a graded run, whose subregions are small by design.
+  double part_quads = part_area / (h * h);
+  if (options.size_field) {
+    part_quads = 0.0;
+    for (const auto& tr : tri.triangles) {
+      const Vec2 a = tri.vertices[tr[0]], b = tri.vertices[tr[1]], c = tri.vertices[tr[2]];
+      const double hc = options.size_field->at((1.0 / 3.0) * (a + b + c));
+      part_quads += 0.5 * orient2(a, b, c) / (hc * hc);
+    }
+  }
+  const std::size_t per_subregion =
+      options.size_field ? options.split_graded_quads_per_subregion : options.split_quads_per_subregion;
   const double cap = std::max(static_cast<double>(options.split_max_subregions),
-                              part_area / (h * h) / static_cast<double>(std::max<std::size_t>(options.split_quads_per_subregion, 1)));
+                              part_quads / static_cast<double>(std::max<std::size_t>(per_subregion, 1)));
   for (const auto& [p, sides] : listed) {
     const auto& mine = triangles[static_cast<std::size_t>(p)];
     const double area = sub_area[static_cast<std::size_t>(p)];
@@ -1468,7 +1499,7 @@ void count_interface_sides(PiecewiseMap& m) {
 void build_patch(PiecewiseMap& m, std::size_t p, const Subregion& sub, const std::vector<std::uint8_t>& patch_now,
                  PatchMethod method) {
   const double size = least_size(sub.mesh, m.options);  // graded: the finest of the subregion
-  const PatchInput in = patch_input(sub, patch_now, m.side_count, m.chain_ends, size,
+  const PatchInput in = patch_input(sub, patch_now, m.side_count, m.chain_ends, size, m.options.size_field.get(),
                                     m.options.layout.corner_threshold_deg, m.sub_name(p));
   PatchOptions po;
   po.size = size;

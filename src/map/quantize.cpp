@@ -344,6 +344,9 @@ struct QuantizeMemo::Impl {
   mutable std::mutex mutex;
   std::map<std::array<std::uint64_t, 2>, Entry> entries;
   std::map<std::array<std::uint64_t, 2>, Joint> joints;
+  // By a layout's alone key: the separations its last large joint quantization ended with, which a later map's
+  // program holding the same layout starts from.
+  std::map<std::array<std::uint64_t, 2>, std::vector<std::array<int, 3>>> learned;
   mutable std::size_t hits = 0;
 };
 
@@ -388,6 +391,21 @@ struct QuantizeMemoAccess {
     QuantizeMemo::Impl& m = *memo.impl_;
     const std::lock_guard<std::mutex> lock(m.mutex);
     m.joints.try_emplace(key, std::move(joint));
+  }
+  static bool find_learned(const QuantizeMemo& memo, const std::array<std::uint64_t, 2>& key,
+                           std::vector<std::array<int, 3>>& separations) {
+    QuantizeMemo::Impl& m = *memo.impl_;
+    const std::lock_guard<std::mutex> lock(m.mutex);
+    const auto it = m.learned.find(key);
+    if (it == m.learned.end()) return false;
+    separations = it->second;
+    return true;
+  }
+  static void store_learned(const QuantizeMemo& memo, const std::array<std::uint64_t, 2>& key,
+                            const std::vector<std::array<int, 3>>& separations) {
+    QuantizeMemo::Impl& m = *memo.impl_;
+    const std::lock_guard<std::mutex> lock(m.mutex);
+    m.learned[key] = separations;
   }
 };
 
@@ -436,6 +454,17 @@ std::array<std::uint64_t, 2> alone_key(const Layout& layout, const std::vector<V
                                        const QuantizeOptions& o, const std::string& part_name) {
   Digest d;
   digest_options(d, o, part_name);
+  digest_layout(d, layout, deformed);
+  return d.key();
+}
+
+// The key of the separations `layout` ended with in its last large joint program (QuantizeMemo::Impl::learned):
+// the layout alone, whatever the options (a separation is a choice any program of the layout may start from).
+std::array<std::uint64_t, 2> learned_key(const Layout& layout, const std::vector<Vec2>& deformed,
+                                         const std::string& part_name) {
+  Digest d;
+  d.word(2);  // never equal to an alone or a joint key
+  d.text(part_name);
   digest_layout(d, layout, deformed);
   return d.key();
 }
@@ -710,6 +739,17 @@ QuantizeStats quantize_layouts(const std::vector<Layout*>& layouts, const std::v
                                const std::string& part_name, const std::vector<EvenGroup>& even_groups,
                                std::vector<std::size_t>* broken) {
   if (!options.memo) return quantize_unmemoized(layouts, deformed, couplings, options, part_name, even_groups, broken);
+  // A large program's layouts met in an earlier map of the part (a joint split round, a repair round, the pulled
+  // snaps: each maps the part again, most subregions unchanged) start from the separations they ended with there;
+  // each new map otherwise found them again in rounds of a large solve (graded delta_box: 4-6 per map).
+  const bool reuse = reuses_separations(layouts, couplings, even_groups, options);
+  std::vector<std::array<std::uint64_t, 2>> layout_keys;
+  if (reuse)
+    for (std::size_t l = 0; l < layouts.size(); ++l) {
+      layout_keys.push_back(learned_key(*layouts[l], *deformed[l], part_name));
+      if (layouts[l]->separations.empty())
+        QuantizeMemoAccess::find_learned(*options.memo, layout_keys.back(), layouts[l]->separations);
+    }
   // The repair rounds and the candidates with and without transition rows quantize the same subregions again
   // (graded delta_box: 5 solves of a 64,519-column program, twice).
   const auto key = joint_key(layouts, deformed, couplings, options, part_name, even_groups, broken != nullptr);
@@ -731,6 +771,8 @@ QuantizeStats quantize_layouts(const std::vector<Layout*>& layouts, const std::v
     throw;
   }
   if (broken) joint.broken = *broken;
+  for (std::size_t l = 0; l < layout_keys.size(); ++l)
+    QuantizeMemoAccess::store_learned(*options.memo, layout_keys[l], layouts[l]->separations);
   store();
   return joint.stats;
 }

@@ -14,6 +14,7 @@
 #include "polysquare/pipeline/invariants.h"
 #include "polysquare/pipeline/mesh_region.h"
 #include "polysquare/quality/quality.h"
+#include "polysquare/size/size_field.h"
 
 using namespace polysquare;
 
@@ -58,6 +59,13 @@ RectLayout rectangle(Vec2 lo, Vec2 hi, const std::vector<double>& right_breaks =
   ring.push_back(hi);
   ring.push_back({lo.x, hi.y});
   return polygon(ring);
+}
+
+// The area of a triangulation.
+double triangulated_area(const TriMesh& tri) {
+  double area = 0.0;
+  for (const auto& t : tri.triangles) area += 0.5 * orient2(tri.vertices[t[0]], tri.vertices[t[1]], tri.vertices[t[2]]);
+  return area;
 }
 
 }  // namespace
@@ -296,8 +304,7 @@ TEST(PartitionRepair, TheSubregionCapGrowsWithThePartsQuads) {
   // rect_feature at h = 3 in 4 subregions; subregion 0 listed with 24 sides is split in two. A cap of 4
   // subregions blocks that split, unless the part's quads over split_quads_per_subregion allow more.
   const auto [tri, tp] = partitioned("rect_feature", 3.0, 4);
-  double area = 0.0;
-  for (const auto& t : tri.triangles) area += 0.5 * orient2(tri.vertices[t[0]], tri.vertices[t[1]], tri.vertices[t[2]]);
+  const double area = triangulated_area(tri);
   PolysquareMapOptions o;
   o.size = 3.0;
   o.split_max_subregions = 4;
@@ -312,6 +319,27 @@ TEST(PartitionRepair, TheSubregionCapGrowsWithThePartsQuads) {
   EXPECT_EQ(split_listed_subregions(tri, grown, 4, {{0, 24}}, o, "rect_feature", split), 5);
   EXPECT_EQ(split, 1);
   EXPECT_EQ(std::set<std::int32_t>(grown.begin(), grown.end()).size(), 5u);
+}
+
+TEST(PartitionRepair, AGradedPartsCapCountsItsQuadsByTheField) {
+  // The same split on a graded run, the field at twice the size everywhere: the part holds a quarter of the
+  // quads, so a cap that the size's count would lift to 8 stays at 4; the graded figure per subregion lifts it.
+  const auto [tri, tp] = partitioned("rect_feature", 3.0, 4);
+  const double area = triangulated_area(tri);
+  PolysquareMapOptions o;
+  o.size = 3.0;
+  o.size_field = std::make_shared<const SizeField>(Vec2{-1e4, -1e4}, 2e4, 2, 2, std::vector<double>(4, 6.0));
+  o.split_max_subregions = 4;
+  o.split_quads_per_subregion = static_cast<std::size_t>(area / 9.0 / 8.0);  // uniform: 8 subregions' worth
+  o.split_graded_quads_per_subregion = static_cast<std::size_t>(area / 9.0 / 8.0) + 1;  // by the field: 2
+  std::vector<std::int32_t> capped = tp;
+  int split = -1;
+  EXPECT_EQ(split_listed_subregions(tri, capped, 4, {{0, 24}}, o, "rect_feature", split), 4);
+  EXPECT_EQ(split, 0);
+  o.split_graded_quads_per_subregion = static_cast<std::size_t>(area / 36.0 / 8.0);  // by the field: 8
+  std::vector<std::int32_t> grown = tp;
+  EXPECT_EQ(split_listed_subregions(tri, grown, 4, {{0, 24}}, o, "rect_feature", split), 5);
+  EXPECT_EQ(split, 1);
 }
 
 namespace {
@@ -482,6 +510,34 @@ TEST(InterfaceQuantization, AJointQuantizationSolvedAgainStartsFromTheSeparation
   RectLayout fresh_u = U, fresh_r = R;
   quantize_layouts({&fresh_u.layout, &fresh_r.layout}, {&fresh_u.deformed, &fresh_r.deformed}, couplings, no_rounds, "UR");
   EXPECT_NE(check_layout(fresh_u.layout), "");  // the first solve alone leaves the notch on the bottom
+}
+
+TEST(InterfaceQuantization, ALayoutMetAgainInAnotherMapStartsFromItsSeparations) {
+  // A new map of the part (a split round, a repair round) makes new layouts, most of them the same as before but
+  // without separations of their own: through the memo, the same U starts from the separation its last joint
+  // program ended with (U and R of the test above), and with no rounds allowed it is valid at once; with a
+  // memo that never met U it is not.
+  const RectLayout U = polygon({{0, 0}, {6, 0}, {6, 4}, {4, 4}, {4, 1}, {2, 1}, {2, 4}, {0, 4}});
+  const RectLayout R = rectangle({0, 0}, {3, 2});
+  const std::vector<SegmentCoupling> couplings{{0, 1, 1, 3}};
+  QuantizeOptions reuse;
+  reuse.reuse_separations_sides = 0;
+  reuse.memo = std::make_shared<QuantizeMemo>();
+  RectLayout u = U, r = R;
+  quantize_layouts({&u.layout, &r.layout}, {&u.deformed, &r.deformed}, couplings, reuse, "UR");
+  ASSERT_EQ(check_layout(u.layout), "");
+  ASSERT_FALSE(u.layout.separations.empty());
+  QuantizeOptions no_rounds = reuse;
+  no_rounds.max_separation_rounds = 0;
+  RectLayout again_u = U, again_r = R;
+  ASSERT_TRUE(again_u.layout.separations.empty());
+  quantize_layouts({&again_u.layout, &again_r.layout}, {&again_u.deformed, &again_r.deformed}, couplings, no_rounds, "UR");
+  EXPECT_EQ(check_layout(again_u.layout), "");
+  EXPECT_EQ(again_u.layout.lattice, u.layout.lattice);
+  no_rounds.memo = std::make_shared<QuantizeMemo>();
+  RectLayout new_u = U, new_r = R;
+  quantize_layouts({&new_u.layout, &new_r.layout}, {&new_u.deformed, &new_r.deformed}, couplings, no_rounds, "UR");
+  EXPECT_NE(check_layout(new_u.layout), "");
 }
 
 TEST(InterfaceQuantization, AJointQuantizationMetAgainIsReplayed) {

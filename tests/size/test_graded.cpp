@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <string>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -71,6 +72,17 @@ CliRun run(const std::string& args) {
   return {WEXITSTATUS(status), text};
 }
 
+// A 2 km x 1 km basin with a channel of width w, 600 m long, from the middle of its upper side.
+Region basin_with_channel(double w) {
+  Region region;
+  region.rings.push_back({{{0, 0}, {2000, 0}, {2000, 1000}, {1000 + w / 2, 1000}, {1000 + w / 2, 1600},
+                           {1000 - w / 2, 1600}, {1000 - w / 2, 1000}, {0, 1000}},
+                          0, false, -1, {}});
+  region.num_parts = 1;
+  region.source = "channel";
+  return region;
+}
+
 }  // namespace
 
 // The coast: delta_water at 50 m at the shore, 1000 m offshore, gradient 0.15.
@@ -128,13 +140,8 @@ TEST(Graded, TransitionRowsBringQuadsNearerTheirSize) {
 // A 2 km x 1 km basin with a 30 m wide, 600 m long channel: --across 3 puts at least three quads across the
 // channel everywhere along it, while the basin grades up to 100 m.
 TEST(Graded, AcrossPutsQuadsAcrossANarrowChannel) {
-  Region region;
   const double w = 30.0;
-  region.rings.push_back({{{0, 0}, {2000, 0}, {2000, 1000}, {1000 + w / 2, 1000}, {1000 + w / 2, 1600},
-                           {1000 - w / 2, 1600}, {1000 - w / 2, 1000}, {0, 1000}},
-                          0, false, -1, {}});
-  region.num_parts = 1;
-  region.source = "channel";
+  const Region region = basin_with_channel(w);
   const MeshResult r = mesh_region(region, graded(5.0, 100.0, 0.15, 3.0));
   EXPECT_TRUE(check_invariants(r.mesh).ok());
   // Sections across the channel every 50 m, away from its mouth and its end.
@@ -145,6 +152,25 @@ TEST(Graded, AcrossPutsQuadsAcrossANarrowChannel) {
   // Without --across, the distance term alone would give the channel size 5 m quads at the walls anyway; the
   // point of the field is the basin: far fewer quads than 5 m throughout.
   EXPECT_LT(static_cast<double>(r.mesh.quads.size()), 2000.0 * 1000.0 / 25.0 / 5.0);
+}
+
+// Two failed subregions side by side are both patched; their shared interface must get one count from both. Each
+// patch's own least size gave each side its own count (a crack and overlapping quads along the interface: 53 pairs
+// on a graded delta_box, which sent the whole coast to the unstructured fallback). The basin and channel of the
+// test above, every subregion a patch, no repair round to hide a crack: the patches must stitch as they are.
+TEST(Graded, NeighbouringPatchesTakeOneCountOnTheirInterface) {
+  const double w = 30.0;
+  const Region region = basin_with_channel(w);
+  MeshOptions o = graded(5.0, 100.0, 0.15, 3.0);
+  o.subregions.parts = 6;
+  o.map.patch_subregions = {0, 1, 2, 3, 4, 5};
+  o.repair.rounds = 0;
+  o.repair.split_fallback = false;
+  MeshResult r;
+  ASSERT_NO_THROW(r = mesh_region(region, o));
+  const InvariantReport inv = check_invariants(r.mesh);
+  EXPECT_TRUE(inv.ok()) << inv.first_problem;
+  EXPECT_GE(std::set<std::int32_t>(r.mesh.quad_part.begin(), r.mesh.quad_part.end()).size(), 6u);
 }
 
 // Bad field options: exit 2, one error line naming the flag, no file.

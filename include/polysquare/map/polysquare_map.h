@@ -81,6 +81,13 @@ struct PolysquareMapOptions {
                                   ///< mapped; at a cap of 256, 0.84)
   std::size_t split_quads_per_subregion = 2000;  ///< (see split_max_subregions) large parts may split down to
                                                  ///< subregions of about this many quads
+  std::size_t split_graded_quads_per_subregion = 100;  ///< the same on a graded run, whose quads are counted by the
+                                                       ///< field (integral of 1 / h^2): its subregions start at
+                                                       ///< about 150 quads (SubregionOptions::
+                                                       ///< graded_quads_per_subregion), so a coast holds more than
+                                                       ///< split_max_subregions before any split (graded delta_box:
+                                                       ///< 649, none of its 53 failed subregions split; 100: 857
+                                                       ///< subregions after the splits, structured 0.86 -> 0.97)
   int sides_per_split = 12; ///< a failed subregion with s poly-square sides is split into ceil(s / this) pieces
                             ///< (at least 2, at most 8)
   /// PPM: the subregion of every background triangle from an earlier map_part of the same part with the same
