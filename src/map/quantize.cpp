@@ -344,8 +344,8 @@ struct QuantizeMemo::Impl {
   mutable std::mutex mutex;
   std::map<std::array<std::uint64_t, 2>, Entry> entries;
   std::map<std::array<std::uint64_t, 2>, Joint> joints;
-  // By a layout's alone key: the separations its last large joint quantization ended with, which a later map's
-  // program holding the same layout starts from.
+  // By learned_key (a layout and its part): the separations its last large joint quantization ended with,
+  // which a later map's program holding the same layout starts from.
   std::map<std::array<std::uint64_t, 2>, std::vector<std::array<int, 3>>> learned;
   mutable std::size_t hits = 0;
 };
