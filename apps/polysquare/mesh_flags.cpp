@@ -94,7 +94,8 @@ void size_flags(CLI::App& t, MeshArgs& m) {
 void partition_flags(CLI::App& t, MeshArgs& m) {
   t.add_option("--graded-subregion-quads", m.options.subregions.graded_quads_per_subregion,
                "graded mesh: at least one subregion per this many quads (their corners take the singular nodes the "
-               "grading needs; fewer quads per subregion: less stretched quads, more singular nodes)")
+               "grading needs; fewer quads per subregion: less stretched quads, more singular nodes; at --grade G below 0.15, "
+               "times (0.15 / G)^2)")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
   t.add_option("--transition-cost", m.options.map.quantize.transition_cost,

@@ -94,8 +94,7 @@ AutomaticCounts automatic_counts(const Region& region, const RegionPart& part, c
   const int by_perimeter = static_cast<int>(std::lround(perimeter / options.subregions.perimeter_per_subregion));
   n.automatic = std::max(by_area, std::min(by_perimeter, options.subregions.max_automatic_subregions));
   if (map.size_field)
-    n.automatic = std::max(n.automatic,
-                           static_cast<int>(std::lround(quads / options.subregions.graded_quads_per_subregion)));
+    n.automatic = std::max(n.automatic, static_cast<int>(std::lround(quads / graded_subregion_quads(options.subregions, options.size.field.grade))));
   // A boundary much longer than a square's of the same area (twice over), or features longer than the rings.
   n.convoluted = ring_length > 8.0 * std::sqrt(quads) || perimeter > 2.0 * ring_length;
   n.quads = quads;
@@ -315,3 +314,15 @@ Candidate try_split_fallback(const Region& region, const RegionPart& part, const
 }
 
 }  // namespace polysquare::pipeline
+
+namespace polysquare {
+
+// The singular nodes a grading needs go as G^2 (2 G^2 / pi of the quads), so below the reference gradient the
+// subregions grow as (reference / G)^2 and each still spans about the same change of size (a coast at 10-1000 m
+// and G = 0.04 had 13,400 subregions of 150 quads, a joint program of 515k columns).
+double graded_subregion_quads(const SubregionOptions& options, double grade) {
+  const double ratio = options.graded_reference_grade / grade;
+  return options.graded_quads_per_subregion * std::max(1.0, ratio * ratio);
+}
+
+}  // namespace polysquare

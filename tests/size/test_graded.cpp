@@ -17,6 +17,7 @@
 #include "polysquare/input/read_region.h"
 #include "polysquare/pipeline/invariants.h"
 #include "polysquare/pipeline/mesh_region.h"
+#include "polysquare/pipeline/subregions.h"
 #include "polysquare/quality/quality.h"
 
 using namespace polysquare;
@@ -152,6 +153,15 @@ TEST(Graded, AcrossPutsQuadsAcrossANarrowChannel) {
   // Without --across, the distance term alone would give the channel size 5 m quads at the walls anyway; the
   // point of the field is the basin: far fewer quads than 5 m throughout.
   EXPECT_LT(static_cast<double>(r.mesh.quads.size()), 2000.0 * 1000.0 / 25.0 / 5.0);
+}
+
+// The singular nodes a grading needs go as G^2, so a gentler gradient takes larger subregions (a quarter of the
+// gradient: 16 times the quads), and a steeper one no smaller than at the reference.
+TEST(Graded, GentlerGradientsTakeLargerSubregions) {
+  const SubregionOptions o;
+  EXPECT_DOUBLE_EQ(graded_subregion_quads(o, o.graded_reference_grade), o.graded_quads_per_subregion);
+  EXPECT_NEAR(graded_subregion_quads(o, o.graded_reference_grade / 4.0), 16.0 * o.graded_quads_per_subregion, 1e-9);
+  EXPECT_DOUBLE_EQ(graded_subregion_quads(o, 2.0 * o.graded_reference_grade), o.graded_quads_per_subregion);
 }
 
 // Two failed subregions side by side are both patched; their shared interface must get one count from both. Each

@@ -34,10 +34,17 @@ struct SubregionOptions {
                                              ///< the size's change across it by stretching its quads; the
                                              ///< subregions' corners, where the singular nodes go, must come
                                              ///< about as often as the grading needs them (one per ~70 quads
-                                             ///< at a gradient of 0.15, 2 G^2 / pi of the quads)
+                                             ///< at a gradient of 0.15, 2 G^2 / pi of the quads); at
+                                             ///< gradients G below graded_reference_grade, times
+                                             ///< (graded_reference_grade / G)^2
+  double graded_reference_grade = 0.15;      ///< the gradient graded_quads_per_subregion is meant for
   std::size_t bent_round_quads = 5'000;       ///< automatic mode retries partitions with bendable interfaces only
                                               ///< for parts up to this many quads (larger parts spent long there
                                               ///< and rarely gained)
 };
+
+/// A graded part's quads per subregion at gradient `grade`: graded_quads_per_subregion, times
+/// (graded_reference_grade / grade)^2 below the reference gradient.
+double graded_subregion_quads(const SubregionOptions& options, double grade);
 
 }  // namespace polysquare
