@@ -11,7 +11,8 @@ Tables, in the order run (each says its commands, the commit, the machine, the d
   3. threads against MPI processes (bench/processes.py) on estuary at 200 m (--large: also fjord_coast,
      delta_water and delta_box at 200 m);
   4. the coasts at 200 m: the same figures as 1 plus structured fraction, SJ < 0.3, peak memory (/usr/bin/time -v);
-  5. the graded runs (bench/graded.py): polysquare beside Gmsh on the same distance-graded size field;
+  5. the graded runs (bench/graded.py): polysquare beside Gmsh on the same distance-graded size field (--large:
+     also delta_box at 10-1000 m, G 0.04, about 2 million quads, polysquare alone, 15-30 min);
   6. with --large only: delta_box at 40, 20 and 10 m (bench/scale.py, one run each; the 10 m run takes 15 min or
      more on two cores), and 5,000 feature lines in a 250,000-quad region (issue 52's scale case, about 3 min a
      run; `--only many_features` runs it alone).
@@ -40,10 +41,14 @@ SMALL = [("letter_I", "2"), ("letter_M", "2"), ("letter_R", "2"), ("pentagon", "
          ("square_feature", "3"), ("rect_feature", "3"), ("smile", "2.5"), ("turtle_shell", "2.5"),
          ("mechanical_part", "3"), ("dam_channel", "2"), ("key", "2")]
 COASTS = [("estuary", "200"), ("fjord_coast", "200"), ("delta_water", "200"), ("delta_box", "200")]
-# Graded runs (bench/graded.py: polysquare and Gmsh 4.8 on the same distance field): case, HMIN, HMAX, --across.
-# delta_box: polysquare only (Gmsh 4.8's Frontal-Delaunay stops on this field, see issue 51).
-GRADED = [("channel_estuary", "13.33", "500", "3", []), ("estuary", "100", "800", None, []),
-          ("delta_water", "50", "1000", None, []), ("delta_box", "50", "1000", None, ["--skip-gmsh"])]
+# Graded runs (bench/graded.py: polysquare and Gmsh 4.8 on the same distance field): case, HMIN, HMAX, --across,
+# --grade, timeout in s, more arguments. delta_box: polysquare only (Gmsh 4.8's Frontal-Delaunay stops on this
+# field, see issue 51).
+GRADED = [("channel_estuary", "13.33", "500", "3", "0.15", 600, []), ("estuary", "100", "800", None, "0.15", 600, []),
+          ("delta_water", "50", "1000", None, "0.15", 600, []),
+          ("delta_box", "50", "1000", None, "0.15", 600, ["--skip-gmsh"])]
+# --large: a whole coast graded to about 2 million quads (issue 51; 30 min on a loaded 2-core machine).
+GRADED_LARGE = [("delta_box", "10", "1000", None, "0.04", 3600, ["--skip-gmsh"])]
 PROCESS_CASES = ["estuary:200"]
 PROCESS_CASES_LARGE = ["fjord_coast:200", "delta_water:200", "delta_box:200"]
 SCALE_SIZES = "40,20,10"
@@ -351,30 +356,31 @@ def coast_table(a, pg, cases):
 def graded_table(a, pg, cases):
     """bench/graded.py on each case: polysquare's graded mode beside Gmsh on the same distance-graded field."""
     sec = Section("Graded meshes (polysquare and Gmsh 4.8 on one size field)")
-    sec.lines = table_head("case", "HMIN-HMAX, G 0.15", "tool", "quads (uniform at HMIN)", "wall s", "regular_quad_frac",
+    sec.lines = table_head("case", "HMIN-HMAX, G", "tool", "quads (uniform at HMIN)", "wall s (peak GB)", "regular_quad_frac",
                            "interior singular per 1000", "SJ min", "size ratio median / p05 / p95",
                            "neighbour ratio p99 / max", "edge ratio avg", "fewest quads across a channel")
-    for case, hmin, hmax, across, extra in cases:
-        out = os.path.join(a.work_rel, "graded_%s" % case)
+    for case, hmin, hmax, across, grade, timeout, extra in cases:
+        out = os.path.join(a.work_rel, "graded_%s_%s" % (case, hmin))
         cmd = ["/usr/bin/python3", "bench/graded.py", "--case", "data/cases/%s.geojson" % case, "--size-min", hmin,
-               "--size-max", hmax, "--out", out, "--cli", a.cli_rel, "--timeout", "600"] + (["--across", across] if across else []) + extra
+               "--size-max", hmax, "--grade", grade, "--out", out, "--cli", a.cli_rel, "--timeout", str(timeout)]
+        cmd += (["--across", across] if across else []) + extra
         run_output(sec, cmd)
         with open(os.path.join(ROOT, out, "graded.json")) as f:
             g = json.load(f)
         for r in g["runs"]:
             if r.get("exit", 1) != 0 or not r.get("quads"):
-                sec.lines.append("| %s | %s-%s m | %s | failed: %s | %s | | | | | | | |" % (
-                    case, hmin, hmax, r["tool"], r.get("error", "exit %s" % r.get("exit")), r.get("seconds", "")))
+                sec.lines.append("| %s | %s-%s m, %s | %s | failed: %s | %s | | | | | | | |" % (
+                    case, hmin, hmax, grade, r["tool"], r.get("error", "exit %s" % r.get("exit")), r.get("seconds", "")))
                 continue
             sec.lines.append(
-                "| %s | %s-%s m | %s | %d (%d) | %.1f | %.4f | %.1f | %.3f | %.2f / %.2f / %.2f | %.2f / %.2f | %.2f | %s |" % (
-                    case, hmin, hmax, r["tool"], r["quads"], g["uniform_quads_at_hmin"], r["seconds"],
+                "| %s | %s-%s m, %s | %s | %d (%d) | %.1f (%.2f) | %.4f | %.1f | %.3f | %.2f / %.2f / %.2f | %.2f / %.2f | %.2f | %s |" % (
+                    case, hmin, hmax, grade, r["tool"], r["quads"], g["uniform_quads_at_hmin"], r["seconds"], r["peak_gb"],
                     r["regular_quad_frac"], r["sing_per_kquad"], r["sj_min"], r["size_ratio_median"],
                     r["size_ratio_p05"], r["size_ratio_p95"], r["nbr_ratio_p99"], r["nbr_ratio_max"], r["er_avg"],
                     r.get("sections_min", "-")))
         pg.save(sec)
     sec.notes = [
-        "Both tools on h = min(HMAX, HMIN + 0.15 d), d the distance to the boundary and feature curves (polysquare "
+        "Both tools on h = min(HMAX, HMIN + G d), d the distance to the boundary and feature curves (polysquare "
         "--size-min HMIN --size-max HMAX [--across N]; Gmsh Distance + Threshold fields, Frontal-Delaunay + "
         "Blossom, 2 threads). Figures from the independent judge (../shared/tools/judge.py) and bench/graded.py: "
         "size ratio = sqrt(quad area) / h at the centroid; neighbour ratio over quads sharing an edge; fewest "
@@ -549,7 +555,7 @@ def main():
         pg.add([process_table(a, process_cases)])
     if coasts:
         pg.add([coast_table(a, pg, coasts)])
-    graded = [g for g in GRADED if not a.only or g[0] in a.only]
+    graded = [g for g in GRADED + (GRADED_LARGE if a.large else []) if not a.only or g[0] in a.only]
     if graded:
         pg.add([graded_table(a, pg, graded)])
     if a.large and (not a.only or "delta_box" in a.only):
