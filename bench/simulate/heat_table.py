@@ -1,0 +1,328 @@
+#!/usr/bin/env python3
+"""Reproduces the paper's Table 3 (Sec. 6.4, heat diffusion on mechanical_part) with polysquare, Gmsh quad and Gmsh
+triangle meshes at equal DoFs, and writes docs/simulation.md from the runs it makes.
+
+usage: python3 bench/simulate/heat_table.py [--build DIR] [--work DIR] [--out docs/simulation.md]
+                                            [--cells 1900] [--reference-size 0.5] [--dt 0.01] [--diffusivity 1,100]
+
+Steps (every command is logged and listed on the page):
+  1. polysquare meshes the case at the size whose cell count is nearest --cells (the paper's PPM mesh: 1.9k);
+  2. Gmsh 4.8 meshes it as quads (scripts/make-gmsh-geo: Frontal-Delaunay + Blossom, the feature circle embedded)
+     and as triangles (the same .geo with Delaunay, no recombination), each at the size whose DoF count is within
+     5 % of polysquare's (sizes are searched; a size where Blossom finds no matching is skipped);
+  3. for each D of --diffusivity (1: the issue's; 100, added: the heat reaches the feature circle by t = 1):
+     the reference: Q2 on a polysquare mesh at --reference-size (about 25 times the cells), solutions saved at
+     t = 1 and t = 10; a P2 Gmsh triangle mesh at the same size is compared with it (the reference's own error);
+  4. build/bench/simulate/heat on each coarse mesh against the reference: eps(t), CG iterations;
+  5. /work/shared/tools/judge.py on the quad meshes (interior singular nodes, min scaled Jacobian).
+Needs the heat target (cmake -DPOLYSQUARE_BUILD_BENCH=ON with deal.II; ninja heat), gmsh, and /usr/bin/python3
+with numpy and meshio for the judge.
+"""
+import argparse
+import datetime
+import json
+import math
+import os
+import platform
+import shlex
+import subprocess
+import sys
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+CASE = os.path.join(ROOT, "data", "cases", "mechanical_part.geojson")
+JUDGE = "/work/shared/tools/judge.py"
+COMMANDS = []  # every command run, for the page
+
+# The paper's Table 3 (cells, singular nodes, eta_w, eps(t=1), eps(t=10)); it gives no DoFs or CG iterations.
+PAPER = {"triangle": ("2.1k", "-", "-", "5.4e-4", "1.3e-4"),
+         "quad": ("1.4k (advancing front)", "122", "0.63", "3.4e-4", "0.5e-4"),
+         "polysquare": ("1.9k (PPM)", "12", "0.66", "1.9e-4", "0.5e-4")}
+
+
+def run(cmd, log=None, check=True):
+    """Runs cmd under nice (the machine is shared); on failure stops the script with the command and its output,
+    or with check=False returns None."""
+    full = ["nice", "-n", "10"] + cmd
+    COMMANDS.append(" ".join(shlex.quote(c) for c in full))
+    p = subprocess.run(full, capture_output=True, text=True)
+    if log:
+        with open(log, "w") as f:
+            f.write(p.stdout + p.stderr)
+    if p.returncode != 0 and not check:
+        return None
+    if p.returncode != 0:
+        sys.exit("failed (%d): %s\n%s%s" % (p.returncode, COMMANDS[-1], p.stdout[-3000:], p.stderr[-3000:]))
+    return p.stdout
+
+
+def last_json(text):
+    return json.loads(text.strip().splitlines()[-1])
+
+
+def polysquare_mesh(args, size):
+    out = os.path.join(args.work, "polysquare_%g.msh" % size)
+    if not os.path.exists(out):
+        run([os.path.join(args.build, "polysquare"), "mesh", CASE, "--size", "%g" % size, "-o", out],
+            log=out + ".log")
+    return out
+
+
+def gmsh_mesh(args, size, kind):
+    """Gmsh mesh of the case: kind 'quad' (the project's baseline .geo) or 'triangle' (Delaunay, no recombination).
+    Only the surface is a physical group, so the embedded circle's line elements (which deal.II refuses as interior
+    boundary lines) are not written; the circle stays as mesh edges. None when Gmsh fails (Blossom finds no
+    perfect matching at some sizes: it then writes triangles and exits 1)."""
+    geo = os.path.join(args.work, "gmsh_%s_%g.geo" % (kind, size))
+    msh = geo[:-4] + ".msh"
+    failed = msh + ".failed"
+    if os.path.exists(failed):
+        return None
+    if not os.path.exists(msh):
+        run([os.path.join(ROOT, "scripts", "make-gmsh-geo"), CASE, "%g" % size, geo])
+        extra = ["Physical Surface(1) = {1};"]
+        if kind == "triangle":
+            extra += ["Mesh.Algorithm = 5;", "Mesh.RecombineAll = 0;"]
+        with open(geo, "a") as f:
+            f.write("\n".join(extra) + "\n")
+        if run(["gmsh", geo, "-2", "-format", "msh41", "-o", msh], log=msh + ".log", check=False) is None:
+            os.replace(msh, failed) if os.path.exists(msh) else open(failed, "w").close()
+            return None
+    return msh
+
+
+def heat(args, mesh, *extra):
+    return last_json(run([os.path.join(args.build, "bench", "simulate", "heat"), mesh, "--region", CASE,
+                          "--dt", "%g" % args.dt, "--diffusivity", "%g" % args.diffusivity] + list(extra)))
+
+
+def dofs_of(args, mesh):
+    """DoF count and cell kinds as deal.II sees the mesh: one time step, no output."""
+    r = heat(args, mesh, "--times", "%g" % args.dt)
+    return r["dofs"], r["quads"], r["triangles"]
+
+
+def judge(mesh):
+    COMMANDS.append("/usr/bin/python3 %s %s" % (JUDGE, mesh))
+    p = subprocess.run(["nice", "-n", "10", "/usr/bin/python3", JUDGE, mesh], capture_output=True, text=True)
+    return json.loads(p.stdout.strip().splitlines()[-1]) if p.returncode == 0 else None
+
+
+def scan(count, h0, target, spread=0.15, step=0.01):
+    """{size: count} over sizes spread around the one expected to give target (counts go as 1/size^2, estimated
+    from count(h0)); sizes where count is None (refused, e.g. Blossom found no matching) are left out. A grid rather
+    than a root search: Gmsh's Blossom fails at whole runs of sizes and polysquare's counts move in steps."""
+    n0, h = None, h0
+    while n0 is None and h < 2 * h0:
+        n0, h = count(h), h * 1.03
+    if n0 is None:
+        return {}
+    centre = (h / 1.03) * math.sqrt(n0 / target)
+    k = int(round(spread / step))
+    found = {}
+    for i in range(-k, k + 1):
+        size = round(centre * (1 + i * step), 3)
+        n = count(size)
+        if n is not None:
+            found[size] = n
+    return found
+
+
+def nearest(found, target):
+    return min(found.items(), key=lambda kv: abs(kv[1] - target)) if found else (None, None)
+
+
+def fmt(x, digits=2):
+    return "%.*e" % (digits, x) if isinstance(x, float) else str(x)
+
+
+def choose_meshes(args):
+    """1. polysquare sizes around --cells cells; 2. Gmsh quad and triangle sizes around polysquare's DoFs. The
+    polysquare size is the one nearest --cells for which both Gmsh meshes have a size within 5 % of its DoFs."""
+    ps = {}
+
+    def ps_count(h):
+        ps[h] = dofs_of(args, polysquare_mesh(args, h))
+        return ps[h][1] + ps[h][2]
+    ps_cells = scan(ps_count, 2.5, args.cells, spread=0.08)
+    h_first, _ = nearest(ps_cells, args.cells)
+    gmsh_found = {}
+    for kind in ("quad", "triangle"):
+        def g_count(h, kind=kind):
+            mesh = gmsh_mesh(args, h, kind)
+            if mesh is None:
+                return None
+            d, q, t = dofs_of(args, mesh)
+            return None if kind == "quad" and q == 0 else d
+        gmsh_found[kind] = scan(g_count, h_first, ps[h_first][0])
+    for h_ps in sorted(ps_cells, key=lambda h: abs(ps_cells[h] - args.cells)):
+        target = ps[h_ps][0]
+        picks = {kind: nearest(gmsh_found[kind], target) for kind in gmsh_found}
+        if all(n is not None and abs(n - target) <= 0.05 * target for _, n in picks.values()):
+            return [("Gmsh triangles (Delaunay, P1)", "triangle", picks["triangle"][0],
+                     gmsh_mesh(args, picks["triangle"][0], "triangle")),
+                    ("Gmsh quads (Frontal-Delaunay + Blossom, Q1)", "quad", picks["quad"][0],
+                     gmsh_mesh(args, picks["quad"][0], "quad")),
+                    ("polysquare (Q1)", "polysquare", h_ps, polysquare_mesh(args, h_ps))]
+    sys.exit("no polysquare size near %d cells with both Gmsh meshes within 5 %% of its DoFs: %s" % (
+        args.cells, json.dumps({"polysquare": ps_cells, **gmsh_found})))
+
+
+def measure(args, meshes):
+    """3. The reference (and its own error against a P2 Gmsh triangle mesh of the same size); 4. the coarse runs."""
+    ref_mesh = polysquare_mesh(args, args.reference_size)
+    ref_prefix = os.path.join(args.runs, "reference")
+    ref = heat(args, ref_mesh, "--degree", "2", "--save", ref_prefix, "--residuals", ref_prefix + ".residuals.json")
+    check = heat(args, gmsh_mesh(args, args.reference_size, "triangle"), "--degree", "2",
+                 "--reference", ref_mesh, ref_prefix)
+    rows = []
+    for name, kind, h, mesh in meshes:
+        residuals = os.path.join(args.runs, os.path.basename(mesh)[:-4] + ".residuals.json")
+        rows.append((name, kind, h, heat(args, mesh, "--reference", ref_mesh, ref_prefix, "--residuals", residuals)))
+    # A check of the measure: eps on polysquare meshes at twice and half the table's size.
+    h_ps = rows[-1][2]
+    ladder = [(2 * h_ps, heat(args, polysquare_mesh(args, 2 * h_ps), "--reference", ref_mesh, ref_prefix)),
+              (h_ps, rows[-1][3]),
+              (h_ps / 2, heat(args, polysquare_mesh(args, h_ps / 2), "--reference", ref_mesh, ref_prefix))]
+    return ref, check, rows, ladder
+
+
+def ladder_line(ladder):
+    parts = ["size %g: %d DoFs, eps(1) %s, eps(10) %s" % (h, r["dofs"], fmt(r["eps_t1"]), fmt(r["eps_t10"]))
+             for h, r in ladder]
+    rates = []
+    for key in ("eps_t1", "eps_t10"):
+        a, b = ladder[0][1], ladder[-1][1]
+        rates.append("%.2f" % (math.log(a[key] / b[key]) / math.log(ladder[0][0] / ladder[-1][0])))
+    return ("The measure converges: polysquare at twice and half the size, " + "; ".join(parts) +
+            " (rates in h: %s at t = 1, %s at t = 10; Q1 in L2 tends to 2).\n" % tuple(rates))
+
+
+def table(args, ref, check, rows, judged):
+    L = ["## D = %g\n" % args.diffusivity]
+    L.append("Reference: Q2 on a polysquare mesh at size %g (%d cells, %d DoFs); a P2 Gmsh Delaunay mesh of the same "
+             "size (%d cells, %d DoFs) differs from it by eps(1) = %s, eps(10) = %s (the reference's own error, to "
+             "read the table against).\n" % (args.reference_size, ref["cells"], ref["dofs"], check["cells"],
+                                             check["dofs"], fmt(check["eps_t1"]), fmt(check["eps_t10"])))
+    L.append("| mesh | size | cells | DoFs | interior singular nodes | eta_w | boundary cell height | eps(t=1) | "
+             "eps(t=10) | mean CG iterations | paper: cells, N_s, eta_w, eps(1), eps(10) |")
+    L.append("|---|---|---|---|---|---|---|---|---|---|---|")
+    for name, kind, h, r in rows:
+        j = judged.get(kind)
+        cells = "%d" % r["cells"] + (" (%d triangles)" % r["triangles"] if r["quads"] and r["triangles"] else "")
+        L.append("| %s | %g | %s | %d | %s | %s | %.2f | %s | %s | %.2f | %s |" % (
+            name, h, cells, r["dofs"], "%d" % j["sing_interior"] if j else "-", "%.2f" % j["sja_min"] if j else "-",
+            r["boundary_cell_height"], fmt(r["eps_t1"]), fmt(r["eps_t10"]), r["cg_mean"], ", ".join(PAPER[kind])))
+    L.append("")
+    by = {kind: r for _, kind, _, r in rows}
+    ratios = []
+    for other, label in (("quad", "Gmsh quads"), ("triangle", "Gmsh triangles")):
+        ratios.append("against %s: eps(1) %.2f, eps(10) %.2f, CG iterations %.2f" % (
+            label, by["polysquare"]["eps_t1"] / by[other]["eps_t1"], by["polysquare"]["eps_t10"] / by[other]["eps_t10"],
+            by["polysquare"]["cg_mean"] / by[other]["cg_mean"]))
+    L.append("polysquare's figures as ratios (below 1: polysquare better): " + "; ".join(ratios) + ". Boundary "
+             "cell height, polysquare over Gmsh quads: %.2f. Diffusion length sqrt(4 D t): %.1f at t = 1, %.1f at "
+             "t = 10.\n" % (by["polysquare"]["boundary_cell_height"] / by["quad"]["boundary_cell_height"],
+                            math.sqrt(4 * args.diffusivity), math.sqrt(40 * args.diffusivity)))
+    where = []
+    for _, kind, _, r in rows:
+        where.append("%s %.2f / %.2f" % (kind, r["curve_error_share_t1"], r["curve_error_share_t10"]))
+    p = by["polysquare"]
+    L.append("Where the error is: share of eps^2 in the cells touching the boundary or the circle (%.0f %% of "
+             "polysquare's cells), t = 1 / t = 10: %s. Cell with polysquare's largest error at t = 10: centre "
+             "(%.1f, %.1f), %.1f %% of eps^2, area %.2f times the mean cell's (at t = 1: (%.1f, %.1f), %.1f %%, "
+             "%.2f times).\n" % (
+                 100 * p["curve_cells_fraction"], "; ".join(where), p["worst_cell_t10"][0], p["worst_cell_t10"][1],
+                 100 * p["worst_cell_share_t10"], p["worst_cell_area_ratio_t10"], p["worst_cell_t1"][0],
+                 p["worst_cell_t1"][1], 100 * p["worst_cell_share_t1"], p["worst_cell_area_ratio_t1"]))
+    return L
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--build", default=os.path.join(ROOT, "build"))
+    ap.add_argument("--work", default=os.path.join(ROOT, "out", "simulate"))
+    ap.add_argument("--out", default=os.path.join(ROOT, "docs", "simulation.md"))
+    ap.add_argument("--cells", type=int, default=1900)
+    ap.add_argument("--reference-size", type=float, default=0.5)
+    ap.add_argument("--dt", type=float, default=0.01)
+    ap.add_argument("--diffusivity", default="1,100",
+                    help="comma-separated D values, one table each (1: the issue's; 100: heat reaches the circle)")
+    args = ap.parse_args()
+    diffusivities = [float(d) for d in args.diffusivity.split(",")]
+    args.work = os.path.abspath(args.work)
+    os.makedirs(args.work, exist_ok=True)
+    started = datetime.datetime.now(datetime.timezone.utc)
+    load = os.getloadavg()
+
+    args.diffusivity = diffusivities[0]  # mesh choice runs one step: D does not matter
+    meshes = choose_meshes(args)
+    judged = {kind: judge(mesh) for _, kind, _, mesh in meshes if kind != "triangle"}
+    sections = []
+    for d in diffusivities:
+        args.diffusivity = d
+        args.runs = os.path.join(args.work, "D%g_dt%g" % (d, args.dt))
+        os.makedirs(args.runs, exist_ok=True)
+        ref, check, rows, ladder = measure(args, meshes)
+        sections.append(table(args, ref, check, rows, judged) + [ladder_line(ladder)])
+        print("\n".join(sections[-1]), flush=True)
+
+    L = []
+    L.append("# Simulation fitness: heat diffusion on mechanical_part (the paper's Table 3)\n")
+    L.append("Generated by `python3 bench/simulate/heat_table.py` (%s UTC, %.0f s; load average %.1f at the start, "
+             "machine %s, %d cores). Issue 54, first part: Table 3 only (the Poisson study is not done yet).\n" % (
+                 started.strftime("%Y-%m-%d %H:%M"),
+                 (datetime.datetime.now(datetime.timezone.utc) - started).total_seconds(), load[0],
+                 platform.machine(), os.cpu_count()))
+    L.append("## Problem\n")
+    L.append("dT/dt = D laplace(T) on `data/cases/mechanical_part.geojson` (a 140 x 90 plate with two bolt holes of "
+             "radius 8 and a feature circle of radius 15 at the centre); T = 273 on the outer boundary and both "
+             "holes, T = 0 on the feature circle (every DoF on the faces between cells centred inside it and cells "
+             "centred outside: both mesh generators put the circle on mesh edges; their length is checked against its "
+             "perimeter), T = 0 inside at t = 0 (nodal values: "
+             "the boundary nodes start at 273). Crank-Nicolson with dt = %g (the first 2 steps backward Euler, to "
+             "damp the jump of the initial data; the paper does not say how it starts), %d steps to t = 10; CG with "
+             "SSOR (omega 1.2), previous step as initial guess, to a residual of %g times the right-hand side's "
+             "norm. Elements: Q1 on quads (FE_Q), P1 on triangles (FE_SimplexP), both on Gmsh's quad mesh, whose "
+             "Blossom recombination leaves a few triangles. deal.II 9.4.\n" % (
+                 args.dt, rows[0][3]["steps"], rows[0][3]["tolerance"]))
+    L.append("eps(t) = ||T_h - T_ref||_L2 / ||T_ref||_L2 over the coarse mesh, T_ref evaluated at the coarse mesh's "
+             "quadrature points (Gauss, two orders above the element's). The reference is Q2 on a much finer "
+             "polysquare mesh with the same dt and time stepping, so eps measures the spatial error.\n")
+    L.append("Mesh sizes: polysquare's is the one nearest %d cells (the paper's PPM mesh: 1.9k) for which Gmsh has a "
+             "quad and a triangle size within 5 %% of its DoFs (Gmsh's Blossom finds no perfect matching at whole "
+             "runs of sizes; those are skipped). Interior singular nodes: interior vertices of valence other than 4 "
+             "(judge.py `sing_interior`; on Gmsh's quad mesh over its quads only, so vertices next to its leftover "
+             "triangles count too). eta_w: judge.py `sja_min` (the paper's scaled Jacobian: the mean of a quad's 4 "
+             "corners, minimum over quads). Boundary cell height: how far the cells on the boundary reach inwards "
+             "(length-weighted mean of area over boundary-face length, twice that for triangles), the width over "
+             "which the nodal initial data ramps from 273 to 0. The paper's quad row is an advancing-front mesh, not Gmsh, and its table "
+             "gives neither DoFs nor iterations.\n" % args.cells)
+    for sec in sections:
+        L += sec
+    L.append("## Reading the numbers\n")
+    L.append("D = 1 is the issue's setting. In this case's units (lengths of tens) the heat is then a thin layer "
+             "along the boundary and the holes, about one coarse cell wide at t = 1, and the circle at T = 0 sits in "
+             "an interior still at 0: eps is dominated by how each mesh resolves that layer and the jump of the "
+             "initial data (a coarse mesh's boundary nodes start with a whole cell of ramp at 273), which is why it "
+             "is orders of magnitude above the paper's figures. The paper gives neither its domain's size nor units; "
+             "its eps(10) below eps(1) suggests a problem nearer steady state" + (
+                 ", which the D = 100 table is (an added setting, not the paper's): there the heat reaches the circle "
+                 "and eps(10) measures the near-steady field around holes and feature" if 100 in diffusivities else "")
+             + ".\n")
+    L.append("Residual histories of the CG solve at t = 1 and t = 10 (the paper's Fig. 17) are in the runs' "
+             "`*.residuals.json` under %s; no plot is drawn (no matplotlib here).\n" % args.work)
+    L.append("## Commands\n")
+    L.append("```")
+    L.append("cmake -S . -B build -DPOLYSQUARE_BUILD_BENCH=ON && cmake --build build --target heat")
+    L.append("python3 bench/simulate/heat_table.py " + " ".join(shlex.quote(a) for a in sys.argv[1:]))
+    L.append("```\n")
+    L.append("Every command it ran, in order:\n")
+    L.append("```")
+    L += COMMANDS
+    L.append("```")
+    with open(args.out, "w") as f:
+        f.write("\n".join(L) + "\n")
+
+
+if __name__ == "__main__":
+    main()
