@@ -713,26 +713,23 @@ int split_listed_subregions(const TriMesh& tri, std::vector<std::int32_t>& trian
   std::vector<std::vector<std::int32_t>> triangles(static_cast<std::size_t>(parts));
   std::vector<double> sub_area(static_cast<std::size_t>(parts), 0.0);
   double part_area = 0.0;
+  double field_quads = 0.0;  // graded: the part's quads by the field's local sizes (its subregions are small by design)
   for (std::size_t t = 0; t < triangle_part.size(); ++t) {
     const auto p = static_cast<std::size_t>(triangle_part[t]);
     const auto& tr = tri.triangles[t];
-    const double a = 0.5 * orient2(tri.vertices[tr[0]], tri.vertices[tr[1]], tri.vertices[tr[2]]);
+    const Vec2 va = tri.vertices[tr[0]], vb = tri.vertices[tr[1]], vc = tri.vertices[tr[2]];
+    const double a = 0.5 * orient2(va, vb, vc);
     triangles[p].push_back(static_cast<std::int32_t>(t));
     sub_area[p] += a;
     part_area += a;
+    if (options.size_field) {
+      const double hc = options.size_field->at((1.0 / 3.0) * (va + vb + vc));
+      field_quads += a / (hc * hc);
+    }
   }
   const std::vector<std::int32_t> before = triangle_part;
   const int parts_before = parts;
-  // The part's quads: by the field's local sizes on a graded run, whose subregions are small by design.
-  double part_quads = part_area / (h * h);
-  if (options.size_field) {
-    part_quads = 0.0;
-    for (const auto& tr : tri.triangles) {
-      const Vec2 a = tri.vertices[tr[0]], b = tri.vertices[tr[1]], c = tri.vertices[tr[2]];
-      const double hc = options.size_field->at((1.0 / 3.0) * (a + b + c));
-      part_quads += 0.5 * orient2(a, b, c) / (hc * hc);
-    }
-  }
+  const double part_quads = options.size_field ? field_quads : part_area / (h * h);
   const std::size_t per_subregion =
       options.size_field ? options.split_graded_quads_per_subregion : options.split_quads_per_subregion;
   const double cap = std::max(static_cast<double>(options.split_max_subregions),

@@ -94,7 +94,8 @@ AutomaticCounts automatic_counts(const Region& region, const RegionPart& part, c
   const int by_perimeter = static_cast<int>(std::lround(perimeter / options.subregions.perimeter_per_subregion));
   n.automatic = std::max(by_area, std::min(by_perimeter, options.subregions.max_automatic_subregions));
   if (map.size_field)
-    n.automatic = std::max(n.automatic, static_cast<int>(std::lround(quads / graded_subregion_quads(options.subregions, options.size.field.grade))));
+    n.automatic = std::max(
+        n.automatic, static_cast<int>(std::lround(quads / graded_subregion_quads(options.subregions, options.size.field.grade))));
   // A boundary much longer than a square's of the same area (twice over), or features longer than the rings.
   n.convoluted = ring_length > 8.0 * std::sqrt(quads) || perimeter > 2.0 * ring_length;
   n.quads = quads;
