@@ -42,6 +42,8 @@
 #include <boost/geometry/index/rtree.hpp>
 #include <nlohmann/json.hpp>
 
+#include "discretisation.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
@@ -55,6 +57,8 @@
 #include <vector>
 
 using namespace dealii;
+using simulate::Discretisation;
+using simulate::fail;
 
 namespace {
 
@@ -68,11 +72,6 @@ struct Options {
   unsigned max_cg = 10000;
   std::vector<double> times{1.0, 10.0};
 };
-
-[[noreturn]] void fail(const std::string& why) {
-  std::cerr << "heat: " << why << "\n";
-  std::exit(2);
-}
 
 // The feature circle of a region: the one closed ring with role "feature" (centre = vertex mean, radius = mean distance).
 void circle_from_region(Options& o) {
@@ -101,9 +100,7 @@ void circle_from_region(Options& o) {
 
 Options parse(int argc, char** argv) {
   Options o;
-  auto need = [&](int& i, int n) {
-    if (i + n >= argc) fail(std::string(argv[i]) + " needs " + std::to_string(n) + " value(s)");
-  };
+  const simulate::Need need{argc, argv};
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--region") need(i, 1), o.region = argv[++i];
@@ -154,42 +151,6 @@ std::string time_tag(double t) {
   s << t;
   return s.str();
 }
-
-// A mesh with an element, mapping and quadratures for each of its cell kinds: index 0 quads (FE_Q), 1 triangles
-// (FE_SimplexP). Gmsh's Blossom recombination leaves a few triangles among its quads, so a mesh may hold both.
-struct Discretisation {
-  Triangulation<2> tria;
-  hp::FECollection<2> fe;
-  hp::MappingCollection<2> mapping;
-  hp::QCollection<2> assembly_quadrature, error_quadrature;
-  DoFHandler<2> dofs;
-  unsigned quads = 0, triangles = 0;
-
-  Discretisation(const std::string& path, unsigned degree) {
-    GridIn<2> in;
-    in.attach_triangulation(tria);
-    std::ifstream file(path);
-    if (!file) fail("cannot read " + path);
-    in.read_msh(file);
-    fe.push_back(FE_Q<2>(degree)), fe.push_back(FE_SimplexP<2>(degree));
-    mapping.push_back(MappingQ<2>(1)), mapping.push_back(MappingFE<2>(FE_SimplexP<2>(1)));
-    assembly_quadrature.push_back(QGauss<2>(degree + 1)), assembly_quadrature.push_back(QGaussSimplex<2>(degree + 1));
-    error_quadrature.push_back(QGauss<2>(degree + 3)), error_quadrature.push_back(QGaussSimplex<2>(degree + 2));
-    dofs.reinit(tria);
-    for (const auto& cell : dofs.active_cell_iterators()) {
-      const bool triangle = cell->reference_cell() == ReferenceCells::Triangle;
-      cell->set_active_fe_index(triangle ? 1 : 0);
-      ++(triangle ? triangles : quads);
-    }
-    dofs.distribute_dofs(fe);
-  }
-
-  // The one mapping of a mesh of one cell kind (point location needs a single mapping).
-  const Mapping<2>& single_mapping(const std::string& what) const {
-    if (quads && triangles) fail(what + " must be all quads or all triangles");
-    return mapping[triangles ? 1 : 0];
-  }
-};
 
 // A solution saved by --save on the reference mesh, evaluated at arbitrary points of the coarse mesh.
 struct Reference {
@@ -280,6 +241,7 @@ class RecordingControl : public SolverControl {
 }  // namespace
 
 int main(int argc, char** argv) {
+  simulate::program = "heat";
   const Options o = parse(argc, argv);
   Discretisation d(o.mesh, o.degree);
   const unsigned n = d.dofs.n_dofs();
