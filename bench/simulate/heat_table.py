@@ -1,9 +1,8 @@
 #!/usr/bin/env python3
 """Reproduces the paper's Table 3 (Sec. 6.4, heat diffusion on mechanical_part) with polysquare, Gmsh quad and Gmsh
-triangle meshes at equal DoFs, and writes docs/simulation.md from the runs it makes.
-
-usage: python3 bench/simulate/heat_table.py [--build DIR] [--work DIR] [--out docs/simulation.md]
-                                            [--cells 1900] [--reference-size 0.5] [--dt 0.01] [--diffusivity 1,100]
+triangle meshes at equal DoFs: the heat part of docs/simulation.md (simulation.py writes the page; running this file
+is `simulation.py --poisson-part keep`, with its options: --cells 1900 --reference-size 0.5 --dt 0.01
+--diffusivity 1,100 and the paths).
 
 Steps (every command is logged and listed on the page):
   1. polysquare meshes the case at the size whose cell count is nearest --cells (the paper's PPM mesh: 1.9k);
@@ -13,25 +12,21 @@ Steps (every command is logged and listed on the page):
   3. for each D of --diffusivity (1: the issue's; 100, added: the heat reaches the feature circle by t = 1):
      the reference: Q2 on a polysquare mesh at --reference-size (about 25 times the cells), solutions saved at
      t = 1 and t = 10; a P2 Gmsh triangle mesh at the same size is compared with it (the reference's own error);
-  4. build/bench/simulate/heat on each coarse mesh against the reference: eps(t), CG iterations;
+  4. bench/simulate/heat on each coarse mesh against the reference: eps(t), CG iterations, and the CG residual
+     histories at t = 1 and t = 10, drawn by plots.py (docs/img/heat_residuals.png, the paper's Fig. 17);
   5. /work/shared/tools/judge.py on the quad meshes (interior singular nodes, min scaled Jacobian).
-Needs the heat target (cmake -DPOLYSQUARE_BUILD_BENCH=ON with deal.II; ninja heat), gmsh, and /usr/bin/python3
-with numpy and meshio for the judge.
 """
-import argparse
 import datetime
 import json
 import math
 import os
 import platform
-import shlex
-import subprocess
 import sys
 
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+import common
+from common import ROOT, SYSTEM_PYTHON, fmt, gmsh_mesh, judge, last_json, nearest, run, scan
+
 CASE = os.path.join(ROOT, "data", "cases", "mechanical_part.geojson")
-JUDGE = "/work/shared/tools/judge.py"
-COMMANDS = []  # every command run, for the page
 
 # The paper's Table 3 (cells, singular nodes, eta_w, eps(t=1), eps(t=10)); it gives no DoFs or CG iterations.
 PAPER = {"triangle": ("2.1k", "-", "-", "5.4e-4", "1.3e-4"),
@@ -42,40 +37,15 @@ PAPER = {"triangle": ("2.1k", "-", "-", "5.4e-4", "1.3e-4"),
 GRADED_MAX_RATIO = 1.6
 
 
-def run(cmd, log=None, check=True):
-    """Runs cmd under nice (the machine is shared); on failure stops the script with the command and its output,
-    or with check=False returns None."""
-    full = ["nice", "-n", "10"] + cmd
-    COMMANDS.append(" ".join(shlex.quote(c) for c in full))
-    p = subprocess.run(full, capture_output=True, text=True)
-    if log:
-        with open(log, "w") as f:
-            f.write(p.stdout + p.stderr)
-    if p.returncode != 0 and not check:
-        return None
-    if p.returncode != 0:
-        sys.exit("failed (%d): %s\n%s%s" % (p.returncode, COMMANDS[-1], p.stdout[-3000:], p.stderr[-3000:]))
-    return p.stdout
-
-
-def last_json(text):
-    return json.loads(text.strip().splitlines()[-1])
-
-
 def polysquare_mesh(args, size):
-    out = os.path.join(args.work, "polysquare_%g.msh" % size)
-    if not os.path.exists(out):
-        run([os.path.join(args.build, "polysquare"), "mesh", CASE, "--size", "%g" % size, "-o", out],
-            log=out + ".log")
-    return out
+    return common.polysquare_mesh(args.polysquare, CASE, os.path.join(args.work, "polysquare_%g.msh" % size),
+                                  ["--size", "%g" % size])
 
 
 def polysquare_graded_mesh(args, size_min, size_max):
-    out = os.path.join(args.work, "polysquare_graded_%g_%g.msh" % (size_min, size_max))
-    if not os.path.exists(out):
-        run([os.path.join(args.build, "polysquare"), "mesh", CASE, "--size-min", "%g" % size_min, "--size-max",
-             "%g" % size_max, "--grade", "0.15", "-o", out], log=out + ".log")
-    return out
+    return common.polysquare_mesh(
+        args.polysquare, CASE, os.path.join(args.work, "polysquare_graded_%g_%g.msh" % (size_min, size_max)),
+        ["--size-min", "%g" % size_min, "--size-max", "%g" % size_max, "--grade", "0.15"])
 
 
 def graded_row(args, h_ps, target):
@@ -90,31 +60,8 @@ def graded_row(args, h_ps, target):
             polysquare_graded_mesh(args, h, size_max))
 
 
-def gmsh_mesh(args, size, kind):
-    """Gmsh mesh of the case: kind 'quad' (the project's baseline .geo) or 'triangle' (Delaunay, no recombination).
-    Only the surface is a physical group, so the embedded circle's line elements (which deal.II refuses as interior
-    boundary lines) are not written; the circle stays as mesh edges. None when Gmsh fails (Blossom finds no
-    perfect matching at some sizes: it then writes triangles and exits 1)."""
-    geo = os.path.join(args.work, "gmsh_%s_%g.geo" % (kind, size))
-    msh = geo[:-4] + ".msh"
-    failed = msh + ".failed"
-    if os.path.exists(failed):
-        return None
-    if not os.path.exists(msh):
-        run([os.path.join(ROOT, "scripts", "make-gmsh-geo"), CASE, "%g" % size, geo])
-        extra = ["Physical Surface(1) = {1};"]
-        if kind == "triangle":
-            extra += ["Mesh.Algorithm = 5;", "Mesh.RecombineAll = 0;"]
-        with open(geo, "a") as f:
-            f.write("\n".join(extra) + "\n")
-        if run(["gmsh", geo, "-2", "-format", "msh41", "-o", msh], log=msh + ".log", check=False) is None:
-            os.replace(msh, failed) if os.path.exists(msh) else open(failed, "w").close()
-            return None
-    return msh
-
-
 def heat(args, mesh, *extra):
-    return last_json(run([os.path.join(args.build, "bench", "simulate", "heat"), mesh, "--region", CASE,
+    return last_json(run([args.heat, mesh, "--region", CASE,
                           "--dt", "%g" % args.dt, "--diffusivity", "%g" % args.diffusivity] + list(extra)))
 
 
@@ -122,40 +69,6 @@ def dofs_of(args, mesh):
     """DoF count and cell kinds as deal.II sees the mesh: one time step, no output."""
     r = heat(args, mesh, "--times", "%g" % args.dt)
     return r["dofs"], r["quads"], r["triangles"]
-
-
-def judge(mesh):
-    COMMANDS.append("/usr/bin/python3 %s %s" % (JUDGE, mesh))
-    p = subprocess.run(["nice", "-n", "10", "/usr/bin/python3", JUDGE, mesh], capture_output=True, text=True)
-    return json.loads(p.stdout.strip().splitlines()[-1]) if p.returncode == 0 else None
-
-
-def scan(count, h0, target, spread=0.15, step=0.01):
-    """{size: count} over sizes spread around the one expected to give target (counts go as 1/size^2, estimated
-    from count(h0)); sizes where count is None (refused, e.g. Blossom found no matching) are left out. A grid rather
-    than a root search: Gmsh's Blossom fails at whole runs of sizes and polysquare's counts move in steps."""
-    n0, h = None, h0
-    while n0 is None and h < 2 * h0:
-        n0, h = count(h), h * 1.03
-    if n0 is None:
-        return {}
-    centre = (h / 1.03) * math.sqrt(n0 / target)
-    k = int(round(spread / step))
-    found = {}
-    for i in range(-k, k + 1):
-        size = round(centre * (1 + i * step), 3)
-        n = count(size)
-        if n is not None:
-            found[size] = n
-    return found
-
-
-def nearest(found, target):
-    return min(found.items(), key=lambda kv: abs(kv[1] - target)) if found else (None, None)
-
-
-def fmt(x, digits=2):
-    return "%.*e" % (digits, x) if isinstance(x, float) else str(x)
 
 
 def choose_meshes(args):
@@ -171,7 +84,7 @@ def choose_meshes(args):
     gmsh_found = {}
     for kind in ("quad", "triangle"):
         def g_count(h, kind=kind):
-            mesh = gmsh_mesh(args, h, kind)
+            mesh = gmsh_mesh(CASE, args.work, h, kind)
             if mesh is None:
                 return None
             d, q, t = dofs_of(args, mesh)
@@ -183,9 +96,9 @@ def choose_meshes(args):
         if all(n is not None and abs(n - target) <= 0.05 * target for _, n in picks.values()):
             graded = graded_row(args, h_ps, target)
             return [("Gmsh triangles (Delaunay, P1)", "triangle", picks["triangle"][0],
-                     gmsh_mesh(args, picks["triangle"][0], "triangle")),
+                     gmsh_mesh(CASE, args.work, picks["triangle"][0], "triangle")),
                     ("Gmsh quads (Frontal-Delaunay + Blossom, Q1)", "quad", picks["quad"][0],
-                     gmsh_mesh(args, picks["quad"][0], "quad"))] + ([graded] if graded else []) + [
+                     gmsh_mesh(CASE, args.work, picks["quad"][0], "quad"))] + ([graded] if graded else []) + [
                     ("polysquare (Q1)", "polysquare", h_ps, polysquare_mesh(args, h_ps))]
     sys.exit("no polysquare size near %d cells with both Gmsh meshes within 5 %% of its DoFs: %s" % (
         args.cells, json.dumps({"polysquare": ps_cells, **gmsh_found})))
@@ -196,7 +109,7 @@ def measure(args, meshes):
     ref_mesh = polysquare_mesh(args, args.reference_size)
     ref_prefix = os.path.join(args.runs, "reference")
     ref = heat(args, ref_mesh, "--degree", "2", "--save", ref_prefix, "--residuals", ref_prefix + ".residuals.json")
-    check = heat(args, gmsh_mesh(args, args.reference_size, "triangle"), "--degree", "2",
+    check = heat(args, gmsh_mesh(CASE, args.work, args.reference_size, "triangle"), "--degree", "2",
                  "--reference", ref_mesh, ref_prefix)
     rows = []
     for name, kind, h, mesh in meshes:
@@ -222,7 +135,7 @@ def ladder_line(ladder):
 
 
 def table(args, ref, check, rows, judged):
-    L = ["## D = %g\n" % args.diffusivity]
+    L = ["### D = %g\n" % args.diffusivity]
     L.append("Reference: Q2 on a polysquare mesh at size %g (%d cells, %d DoFs); a P2 Gmsh Delaunay mesh of the same "
              "size (%d cells, %d DoFs) differs from it by eps(1) = %s, eps(10) = %s (the reference's own error, to "
              "read the table against).\n" % (args.reference_size, ref["cells"], ref["dofs"], check["cells"],
@@ -265,43 +178,55 @@ def table(args, ref, check, rows, judged):
     return L
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--build", default=os.path.join(ROOT, "build"))
-    ap.add_argument("--work", default=os.path.join(ROOT, "out", "simulate"))
-    ap.add_argument("--out", default=os.path.join(ROOT, "docs", "simulation.md"))
-    ap.add_argument("--cells", type=int, default=1900)
-    ap.add_argument("--reference-size", type=float, default=0.5)
-    ap.add_argument("--dt", type=float, default=0.01)
+def add_arguments(ap):
+    ap.add_argument("--cells", type=int, default=1900, help="heat: polysquare's cell count (the paper's: 1.9k)")
+    ap.add_argument("--reference-size", type=float, default=0.5, help="heat: the Q2 reference mesh's size")
+    ap.add_argument("--dt", type=float, default=0.01, help="heat: the time step")
     ap.add_argument("--diffusivity", default="1,100",
-                    help="comma-separated D values, one table each (1: the issue's; 100: heat reaches the circle)")
-    args = ap.parse_args()
+                    help="heat: comma-separated D values, one table each (1: the issue's; 100: heat reaches the circle)")
+
+
+def residual_plot(args, runs):
+    """The CG residual histories at t = 1 and t = 10 of the table's meshes (the paper's Fig. 17), as a PNG under
+    docs/img; runs: {D: [(label, residuals.json)]}. Returns the page's line about it."""
+    spec = os.path.join(args.work, "heat_residuals_plot.json")
+    with open(spec, "w") as f:
+        json.dump({"D = %g" % d: files for d, files in runs.items()}, f)
+    png = os.path.join(args.img, "heat_residuals.png")
+    run([SYSTEM_PYTHON, os.path.join(ROOT, "bench", "simulate", "plots.py"), "residuals", spec, png])
+    return ("![CG residual histories](%s)\n\nCG residual histories at t = 1 and t = 10 (the paper's Fig. 17): the "
+            "residual norm at each iteration of that step's solve, one line per mesh of the tables above (from the "
+            "runs' `*.residuals.json` under %s).\n" % (os.path.relpath(png, os.path.dirname(args.out)),
+                                                       os.path.relpath(args.work, ROOT)))
+
+
+def part(args):
+    """Makes the meshes, runs the tables and returns the heat part of the page (markdown lines)."""
     diffusivities = [float(d) for d in args.diffusivity.split(",")]
-    args.work = os.path.abspath(args.work)
-    os.makedirs(args.work, exist_ok=True)
     started = datetime.datetime.now(datetime.timezone.utc)
     load = os.getloadavg()
 
     args.diffusivity = diffusivities[0]  # mesh choice runs one step: D does not matter
     meshes = choose_meshes(args)
     judged = {kind: judge(mesh) for _, kind, _, mesh in meshes if kind != "triangle"}
-    sections = []
+    sections, runs = [], {}
     for d in diffusivities:
         args.diffusivity = d
         args.runs = os.path.join(args.work, "D%g_dt%g" % (d, args.dt))
         os.makedirs(args.runs, exist_ok=True)
         ref, check, rows, ladder = measure(args, meshes)
         sections.append(table(args, ref, check, rows, judged) + [ladder_line(ladder)])
+        runs[d] = [(name, os.path.join(args.runs, os.path.basename(r["mesh"])[:-4] + ".residuals.json"))
+                   for name, _, _, r in rows]
         print("\n".join(sections[-1]), flush=True)
 
     L = []
-    L.append("# Simulation fitness: heat diffusion on mechanical_part (the paper's Table 3)\n")
-    L.append("Generated by `python3 bench/simulate/heat_table.py` (%s UTC, %.0f s; load average %.1f at the start, "
-             "machine %s, %d cores). Issue 54, first part: Table 3 only (the Poisson study is not done yet).\n" % (
+    L.append("## Heat diffusion on mechanical_part (the paper's Table 3)\n")
+    L.append("This part generated %s UTC (%.0f s; load average %.1f at the start, machine %s, %d cores).\n" % (
                  started.strftime("%Y-%m-%d %H:%M"),
                  (datetime.datetime.now(datetime.timezone.utc) - started).total_seconds(), load[0],
                  platform.machine(), os.cpu_count()))
-    L.append("## Problem\n")
+    L.append("### Problem\n")
     L.append("dT/dt = D laplace(T) on `data/cases/mechanical_part.geojson` (a 140 x 90 plate with two bolt holes of "
              "radius 8 and a feature circle of radius 15 at the centre); T = 273 on the outer boundary and both "
              "holes, T = 0 on the feature circle (every DoF on the faces between cells centred inside it and cells "
@@ -327,7 +252,7 @@ def main():
              "gives neither DoFs nor iterations.\n" % args.cells)
     for sec in sections:
         L += sec
-    L.append("## Reading the numbers\n")
+    L.append("### Reading the numbers\n")
     L.append("D = 1 is the issue's setting. In this case's units (lengths of tens) the heat is then a thin layer "
              "along the boundary and the holes, about one coarse cell wide at t = 1, and the circle at T = 0 sits in "
              "an interior still at 0: eps is dominated by how each mesh resolves that layer and the jump of the "
@@ -340,20 +265,10 @@ def main():
              "holes and the circle, up to %g times the uniform row's size inside): the same DoFs spent where the "
              "solution varies. Gmsh's rows are uniform, as the issue asks; a Gmsh mesh on the same distance field "
              "is the fair counterpart.\n" % GRADED_MAX_RATIO)
-    L.append("Residual histories of the CG solve at t = 1 and t = 10 (the paper's Fig. 17) are in the runs' "
-             "`*.residuals.json` under %s; no plot is drawn (no matplotlib here).\n" % args.work)
-    L.append("## Commands\n")
-    L.append("```")
-    L.append("cmake -S . -B build -DPOLYSQUARE_BUILD_BENCH=ON && cmake --build build --target heat")
-    L.append("python3 bench/simulate/heat_table.py " + " ".join(shlex.quote(a) for a in sys.argv[1:]))
-    L.append("```\n")
-    L.append("Every command it ran, in order:\n")
-    L.append("```")
-    L += COMMANDS
-    L.append("```")
-    with open(args.out, "w") as f:
-        f.write("\n".join(L) + "\n")
+    L.append(residual_plot(args, runs))
+    return L
 
 
 if __name__ == "__main__":
-    main()
+    import simulation
+    simulation.main(["--poisson-part", "keep"] + sys.argv[1:])

@@ -11,7 +11,8 @@
 // every mesh of a case, whatever each generator does to the boundary), --box, or else the mesh's own vertices.
 // --count reads the mesh and prints cells and DoFs only (for searching sizes). The last line printed is a JSON
 // object with every figure: cells, dofs, l2, h1 (seminorm), cg_iterations, the cells with the largest local errors
-// (centre, share of the error squared, scaled Jacobian, edge ratio, irregular vertices) and the mesh's worst shapes.
+// (centre, share of the error squared, scaled Jacobian, edge ratio, irregular vertices), the mesh's worst shapes
+// (per cell kind) and the spread of its cell areas (percentiles over the mean).
 // Exit status 1 when CG does not reach the tolerance in --max-cg iterations, 2 on bad input.
 #include <deal.II/base/function.h>
 #include <deal.II/dofs/dof_tools.h>
@@ -258,11 +259,18 @@ int main(int argc, char** argv) {
         for (unsigned v = 0; v < 2; ++v) on_boundary[cell->face(f)->vertex_index(v)] = true;
   }
   auto irregular = [&](unsigned v) { return !on_boundary[v] && (valence[v] != 4 || near_triangle[v]); };
-  double sj_min = std::numeric_limits<double>::max(), ratio_max = 0;
+  // Shapes by cell kind (index 0 quads, 1 triangles): a quad mesh's few leftover triangles are no quad's shape.
+  std::array<double, 2> sj_min{2, 2}, ratio_max{0, 0};
   for (const auto& cell : d.tria.active_cell_iterators()) {
     const auto [sj, ratio] = shape(cell);
-    sj_min = std::min(sj_min, sj), ratio_max = std::max(ratio_max, ratio);
+    const unsigned kind = cell->n_vertices() == 3;
+    sj_min[kind] = std::min(sj_min[kind], sj), ratio_max[kind] = std::max(ratio_max[kind], ratio);
   }
+  // How far cell sizes spread: a mesh whose cells are much larger than its mean in places has its error there.
+  std::vector<double> areas;
+  for (const auto& cell : d.tria.active_cell_iterators()) areas.push_back(cell->measure() * cells / area);
+  std::sort(areas.begin(), areas.end());
+  auto percentile = [&](double p) { return areas[std::min<std::size_t>(areas.size() - 1, p * areas.size())]; };
   unsigned irregular_vertices = 0;
   for (unsigned v = 0; v < d.tria.n_vertices(); ++v) irregular_vertices += valence[v] > 0 && irregular(v);
 
@@ -302,9 +310,23 @@ int main(int argc, char** argv) {
   out["h1"] = std::sqrt(h1);
   out["u_l2"] = std::sqrt(u_l2);
   out["u_h1"] = std::sqrt(u_h1);
-  out["sj_min"] = sj_min;
-  out["edge_ratio_max"] = ratio_max;
+  for (unsigned kind = 0; kind < 2; ++kind)
+    if (kind == 0 ? d.quads : d.triangles) {
+      const std::string name = kind == 0 ? "quads" : "triangles";
+      out["sj_min_" + name] = sj_min[kind];
+      out["edge_ratio_max_" + name] = ratio_max[kind];
+    }
   out["irregular_vertices"] = irregular_vertices;
+  out["area_ratio_p05"] = percentile(0.05);
+  out["area_ratio_p95"] = percentile(0.95);
+  out["area_ratio_max"] = areas.back();
+  // The share of the L2 error (squared) in the cells over twice the mean area, and how many cells those are.
+  double large_l2 = 0;
+  unsigned large = 0;
+  for (const auto& cell : d.tria.active_cell_iterators())
+    if (cell->measure() * cells / area > 2) large_l2 += cell_l2[cell->active_cell_index()], ++large;
+  out["large_cells_fraction"] = double(large) / cells;
+  out["large_cells_l2_share"] = large_l2 / l2;
   out["worst_l2"] = describe(cell_l2, l2);
   out["worst_h1"] = describe(cell_h1, h1);
   std::cout << "poisson: k " << o.k << ", " << out["cells"] << " cells, " << n << " DoFs, L2 error " << out["l2"]
