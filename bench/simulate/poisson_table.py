@@ -256,13 +256,12 @@ def reading(results, pictures):
                  "of its cells over twice the mean area hold %.1f %% of the L2 error squared (Gmsh quads: %.1f %% of "
                  "cells, %.1f %%); its largest cell is %.1f times the mean (Gmsh's %.1f), and the %d cells with the "
                  "largest error are %.1f to %.1f times the mean with SJ %.2f or more and %d irregular corners between "
-                 "them. The picture shows the cell sizes changing in patches, whole stretches of quads at 2 to 4 times "
-                 "the mean area beside stretches at a quarter of it, the changes running along lines (subregion "
-                 "interfaces, it appears: each subregion's lattice is scaled by its own map and by the counts it "
-                 "shares with its neighbours). Quads nearer the requested size in every subregion (a quantization "
-                 "that holds each subregion's spacing to the size, or more subregions where a map stretches) is what "
-                 "would close the gap; Gmsh's sizes vary less (95th percentile %.2f times the mean to polysquare's "
-                 "%.2f).\n\n![%s: polysquare's cell areas](%s)\n" % (
+                 "them. The picture shows the cell sizes changing in patches and bands, whole stretches of quads at 2 to 4 "
+                 "times the mean area beside stretches at a quarter of it; Gmsh's sizes vary less (95th percentile "
+                 "%.2f times the mean to polysquare's %.2f). Which stage sets those spacings (each subregion's map, "
+                 "the side counts subregions share) is not measured here; quads held nearer the requested size "
+                 "wherever the open water is wide is what would close the gap.\n\n![%s: polysquare's cell areas, "
+                 "the cells with the largest L2 error starred](%s)\n" % (
                      name, 100 * ps["large_cells_fraction"], 100 * ps["large_cells_l2_share"],
                      100 * q["large_cells_fraction"], 100 * q["large_cells_l2_share"], ps["area_ratio_max"],
                      q["area_ratio_max"], len(worst), min(c["area_ratio"] for c in worst),
