@@ -1,6 +1,7 @@
 #include "polysquare/map/quantize.h"
 
 #include <algorithm>
+#include <cstdlib>
 #include <chrono>
 #include <map>
 #include <mutex>
@@ -53,6 +54,16 @@ struct JointProblem {
   std::vector<std::array<std::vector<int>, 2>> cls;  // per layout, per axis: class of each break point
   std::vector<std::array<int, 2>> ncls, col0;        // class counts and first column per layout and axis
   bool large = false;  // its program is built in the compact form and solved as large (joint_program decides)
+  // Sides coupled to a layout left out of the program (quantize_locally): their counts are given. A transition
+  // coupling's side may differ from the given count by an even number, as between two layouts in the program.
+  struct FixedCount {
+    std::size_t layout;
+    int segment;
+    long long count;
+    bool transition;
+  };
+  std::vector<FixedCount> fixed;
+  std::vector<long long> even_offset;  // per even group: the count its members outside the program add (or none)
   // The program's column of break point b's coordinate along `axis` in layout l.
   int col(std::size_t l, int axis, int b) const { return col0[l][axis] + cls[l][axis][b]; }
 };
@@ -77,6 +88,9 @@ std::vector<std::vector<double>> coupled_targets(const JointProblem& jp, const s
 // same optimal cost, with the deviations as bounded columns of one equality row instead of inequality rows.
 bool is_large(const JointProblem& jp, std::size_t couplings, std::size_t even_groups, const QuantizeOptions& options,
               bool elastic) {
+  // A part's program solved locally is a piece of a large one: solved the same way (no branch-and-cut, whose time
+  // limit would make the answer depend on the machine's load; 41 s on one such piece of 1,032 sides).
+  if (!jp.fixed.empty()) return true;
   std::size_t inequality_columns = (elastic ? 2 : 0) * couplings + even_groups;
   for (std::size_t l = 0; l < jp.layouts.size(); ++l)
     inequality_columns += 2 * static_cast<std::size_t>(jp.ncls[l][0] + jp.ncls[l][1]) + 2 * jp.layouts[l]->segments.size();
@@ -194,9 +208,30 @@ void add_coupling_rows(IntegerProgram& P, const JointProblem& jp, const std::vec
   }
 }
 
+// Sides whose count a layout outside the program gives: n = count, or n - count = 2 (fans there - fans here).
+void add_fixed_rows(IntegerProgram& P, const JointProblem& jp, const std::vector<std::vector<double>>& target,
+                    const QuantizeOptions& options) {
+  for (const JointProblem::FixedCount& f : jp.fixed) {
+    const LayoutSegment& s = jp.layouts[f.layout]->segments[static_cast<std::size_t>(f.segment)];
+    const double sg = label_sign(s.label);
+    const int axis = label_axis(s.label);
+    std::vector<std::pair<int, double>> row{{jp.col(f.layout, axis, s.break_b), sg}, {jp.col(f.layout, axis, s.break_a), -sg}};
+    if (f.transition) {
+      const double t_c = std::max(target[f.layout][static_cast<std::size_t>(f.segment)], 1.0);
+      const int c = P.add_columns(2, 0.0, IntegerProgram::inf, options.transition_cost / t_c, true);
+      P.round_first(c, 0.0), P.round_first(c + 1, 0.0);
+      row.insert(row.end(), {{c, -2.0}, {c + 1, 2.0}});
+    }
+    const double n = static_cast<double>(f.count);
+    P.add_row(row, n, n);
+  }
+}
+
 // Every even group's counts sum to an even number: sum - 2 m = 0, m integer.
 void add_even_rows(IntegerProgram& P, const JointProblem& jp, const std::vector<EvenGroup>& even_groups) {
-  for (const EvenGroup& g : even_groups) {
+  for (std::size_t i = 0; i < even_groups.size(); ++i) {
+    const EvenGroup& g = even_groups[i];
+    const double offset = i < jp.even_offset.size() ? static_cast<double>(jp.even_offset[i]) : 0.0;
     const int m = P.add_columns(1, 0.0, IntegerProgram::inf, 0.0, true);
     std::vector<std::pair<int, double>> terms{{m, -2.0}};
     for (const auto& [l, k] : g) {
@@ -206,7 +241,7 @@ void add_even_rows(IntegerProgram& P, const JointProblem& jp, const std::vector<
       terms.push_back({jp.col(l, axis, s.break_b), sg});
       terms.push_back({jp.col(l, axis, s.break_a), -sg});
     }
-    P.add_row(terms, 0.0, 0.0);
+    P.add_row(terms, -offset, -offset);
   }
 }
 
@@ -217,7 +252,7 @@ IntegerProgram joint_program(JointProblem& jp, const std::vector<SegmentCoupling
                              const std::vector<EvenGroup>& even_groups, const QuantizeOptions& options,
                              const std::string& part_name, bool elastic) {
   IntegerProgram P;
-  const bool integer = !couplings.empty() || !even_groups.empty();
+  const bool integer = !couplings.empty() || !even_groups.empty() || !jp.fixed.empty();
   jp.large = is_large(jp, couplings.size(), even_groups.size(), options, elastic);
   const std::vector<std::vector<double>> target = coupled_targets(jp, couplings);
   for (std::size_t l = 0; l < jp.layouts.size(); ++l) {
@@ -225,6 +260,7 @@ IntegerProgram joint_program(JointProblem& jp, const std::vector<SegmentCoupling
     add_side_rows(P, jp, l, target[l], options, part_name);
   }
   add_coupling_rows(P, jp, couplings, target, options, elastic);
+  add_fixed_rows(P, jp, target, options);
   add_even_rows(P, jp, even_groups);
   return P;
 }
@@ -345,8 +381,12 @@ struct QuantizeMemo::Impl {
   std::map<std::array<std::uint64_t, 2>, Entry> entries;
   std::map<std::array<std::uint64_t, 2>, Joint> joints;
   // By learned_key (a layout and its part): the separations its last large joint quantization ended with,
-  // which a later map's program holding the same layout starts from.
-  std::map<std::array<std::uint64_t, 2>, std::vector<std::array<int, 3>>> learned;
+  // which a later map's program holding the same layout starts from, and the lattice it got there.
+  struct Learned {
+    std::vector<std::array<int, 3>> separations;
+    std::vector<std::array<long long, 2>> lattice;
+  };
+  std::map<std::array<std::uint64_t, 2>, Learned> learned;
   mutable std::size_t hits = 0;
 };
 
@@ -392,20 +432,18 @@ struct QuantizeMemoAccess {
     const std::lock_guard<std::mutex> lock(m.mutex);
     m.joints.try_emplace(key, std::move(joint));
   }
-  static bool find_learned(const QuantizeMemo& memo, const std::array<std::uint64_t, 2>& key,
-                           std::vector<std::array<int, 3>>& separations) {
+  using Learned = QuantizeMemo::Impl::Learned;
+  static std::optional<Learned> find_learned(const QuantizeMemo& memo, const std::array<std::uint64_t, 2>& key) {
     QuantizeMemo::Impl& m = *memo.impl_;
     const std::lock_guard<std::mutex> lock(m.mutex);
     const auto it = m.learned.find(key);
-    if (it == m.learned.end()) return false;
-    separations = it->second;
-    return true;
+    if (it == m.learned.end()) return std::nullopt;
+    return it->second;
   }
-  static void store_learned(const QuantizeMemo& memo, const std::array<std::uint64_t, 2>& key,
-                            const std::vector<std::array<int, 3>>& separations) {
+  static void store_learned(const QuantizeMemo& memo, const std::array<std::uint64_t, 2>& key, const Layout& layout) {
     QuantizeMemo::Impl& m = *memo.impl_;
     const std::lock_guard<std::mutex> lock(m.mutex);
-    m.learned[key] = separations;
+    m.learned[key] = Learned{layout.separations, layout.lattice};
   }
 };
 
@@ -425,11 +463,11 @@ bool reuses_separations(const std::vector<Layout*>& layouts, const std::vector<S
 void digest_options(Digest& d, const QuantizeOptions& o, const std::string& part_name) {
   d.text(part_name);
   for (double v : {o.position_weight, o.max_side_change, o.outside_band_weight, o.gap, o.dive_gap, o.broken_coupling_cost,
-                   o.graded ? o.graded_fewer_weight : 1.0})
+                   o.graded ? o.graded_fewer_weight : 1.0, o.localize_max_fraction})
     d.real(v);
   for (long long v : {static_cast<long long>(o.max_separation_rounds), static_cast<long long>(o.time_limit_ms),
                       static_cast<long long>(o.large_program_columns), static_cast<long long>(o.screen_separations),
-                      static_cast<long long>(o.reuse_separations_sides)})
+                      static_cast<long long>(o.reuse_separations_sides), static_cast<long long>(o.localize_rings)})
     d.word(static_cast<std::uint64_t>(v));
 }
 
@@ -649,8 +687,12 @@ QuantizeStats quantize_unmemoized(const std::vector<Layout*>& layouts,
                                   const std::vector<const std::vector<Vec2>*>& deformed,
                                   const std::vector<SegmentCoupling>& couplings, const QuantizeOptions& options,
                                   const std::string& part_name, const std::vector<EvenGroup>& even_groups,
-                                  std::vector<std::size_t>* broken) {
+                                  std::vector<std::size_t>* broken,
+                                  std::vector<JointProblem::FixedCount> fixed = {},
+                                  std::vector<long long> even_offset = {}) {
   JointProblem jp = joint_problem(layouts, deformed);
+  jp.fixed = std::move(fixed);
+  jp.even_offset = std::move(even_offset);
   std::vector<Separation> separations;
   // A joint program is a mixed-integer one, each solve of it costly; each layout alone is a network program
   // solved in milliseconds. The separations each layout needs alone start the joint program, which then
@@ -661,7 +703,7 @@ QuantizeStats quantize_unmemoized(const std::vector<Layout*>& layouts,
   std::vector<std::size_t> cannot_close;
   std::vector<std::string> reasons;
   const bool reuse = reuses_separations(layouts, couplings, even_groups, options);
-  if (layouts.size() > 1 && (!couplings.empty() || !even_groups.empty())) {
+  if (!jp.fixed.empty() || (layouts.size() > 1 && (!couplings.empty() || !even_groups.empty()))) {
     // Each layout alone, in parallel (they share nothing), then collected in layout order.
     std::vector<std::vector<Separation>> own(layouts.size());
     std::vector<std::optional<std::string>> why_not(layouts.size());
@@ -719,6 +761,127 @@ QuantizeStats quantize_unmemoized(const std::vector<Layout*>& layouts,
   return stats;
 }
 
+// A segment's element count in a quantized lattice.
+long long lattice_count(const LayoutSegment& s, const std::vector<std::array<long long, 2>>& lattice) {
+  const auto a = lattice[static_cast<std::size_t>(s.break_a)], b = lattice[static_cast<std::size_t>(s.break_b)];
+  return std::llabs(b[0] - a[0]) + std::llabs(b[1] - a[1]);
+}
+
+// A large joint program whose layouts mostly kept the lattices an earlier map of the part gave them (`known`,
+// empty where a layout is new): only the new layouts, those whose known counts disagree with a neighbour's or
+// that border a patch (even groups), and their neighbours out to options.localize_rings couplings are solved; the
+// sides they share with the rest take the rest's known counts. nullopt when that is more than
+// options.localize_max_fraction of the sides, or when the smaller program has no solution (the caller then
+// solves the whole).
+std::optional<QuantizeStats> quantize_locally(const std::vector<Layout*>& layouts,
+                                              const std::vector<const std::vector<Vec2>*>& deformed,
+                                              const std::vector<SegmentCoupling>& couplings,
+                                              const QuantizeOptions& options, const std::string& part_name,
+                                              const std::vector<EvenGroup>& even_groups,
+                                              const std::vector<std::vector<std::array<long long, 2>>>& known) {
+  const std::size_t n = layouts.size();
+  std::vector<std::uint8_t> solve(n, 0);
+  for (std::size_t l = 0; l < n; ++l) solve[l] = known[l].size() != layouts[l]->break_vertex.size();
+  auto known_count = [&](std::size_t l, int k) {
+    return lattice_count(layouts[l]->segments[static_cast<std::size_t>(k)], known[l]);
+  };
+  // An even group whose members all kept lattices that sum to an even count is met already.
+  for (const EvenGroup& g : even_groups) {
+    long long sum = 0;
+    bool all_known = true;
+    for (const auto& [l, k] : g) {
+      all_known = all_known && !solve[l];
+      if (!solve[l]) sum += known_count(l, k);
+    }
+    if (!all_known || sum % 2 != 0)
+      for (const auto& [l, k] : g) solve[l] = 1;
+  }
+  std::vector<std::vector<std::size_t>> next(n);
+  for (const SegmentCoupling& c : couplings) {
+    next[c.layout_a].push_back(c.layout_b), next[c.layout_b].push_back(c.layout_a);
+    if (solve[c.layout_a] || solve[c.layout_b]) continue;
+    const long long d = known_count(c.layout_a, c.segment_a) - known_count(c.layout_b, c.segment_b);
+    if (c.transition ? d % 2 != 0 : d != 0) solve[c.layout_a] = solve[c.layout_b] = 1;
+  }
+  for (int ring = 0; ring < options.localize_rings; ++ring) {
+    std::vector<std::uint8_t> grown = solve;
+    for (std::size_t l = 0; l < n; ++l)
+      if (solve[l])
+        for (std::size_t q : next[l]) grown[q] = 1;
+    solve = std::move(grown);
+  }
+  std::size_t sides = 0, solved_sides = 0;
+  for (std::size_t l = 0; l < n; ++l) {
+    sides += layouts[l]->segments.size();
+    solved_sides += solve[l] ? layouts[l]->segments.size() : 0;
+  }
+  if (static_cast<double>(solved_sides) > options.localize_max_fraction * static_cast<double>(sides)) return std::nullopt;
+  // The smaller program: the solved layouts, their couplings among themselves, and the known counts across.
+  std::vector<std::int64_t> index(n, -1);
+  std::vector<Layout*> sub;
+  std::vector<const std::vector<Vec2>*> sub_deformed;
+  for (std::size_t l = 0; l < n; ++l)
+    if (solve[l]) {
+      index[l] = static_cast<std::int64_t>(sub.size());
+      sub.push_back(layouts[l]), sub_deformed.push_back(deformed[l]);
+    }
+  std::vector<SegmentCoupling> sub_couplings;
+  std::vector<JointProblem::FixedCount> fixed;
+  for (const SegmentCoupling& c : couplings) {
+    const std::int64_t a = index[c.layout_a], b = index[c.layout_b];
+    if (a >= 0 && b >= 0)
+      sub_couplings.push_back({static_cast<std::size_t>(a), c.segment_a, static_cast<std::size_t>(b), c.segment_b, c.transition});
+    else if (a >= 0)
+      fixed.push_back({static_cast<std::size_t>(a), c.segment_a, known_count(c.layout_b, c.segment_b), c.transition});
+    else if (b >= 0)
+      fixed.push_back({static_cast<std::size_t>(b), c.segment_b, known_count(c.layout_a, c.segment_a), c.transition});
+  }
+  // Even groups with a member in the program; the members outside add their known counts.
+  std::vector<EvenGroup> sub_even;
+  std::vector<long long> even_offset;
+  for (const EvenGroup& g : even_groups) {
+    EvenGroup h;
+    long long offset = 0;
+    for (const auto& [l, k] : g) {
+      if (index[l] >= 0) h.push_back({static_cast<std::size_t>(index[l]), k});
+      else offset += known_count(l, k);
+    }
+    if (h.empty()) continue;
+    sub_even.push_back(std::move(h));
+    even_offset.push_back(offset);
+  }
+  QuantizeStats stats;
+  const auto t0 = std::chrono::steady_clock::now();
+  if (!sub.empty()) {
+    std::vector<std::vector<std::array<long long, 2>>> before;
+    for (const Layout* l : sub) before.push_back(l->lattice);
+    try {
+      stats = quantize_unmemoized(sub, sub_deformed, sub_couplings, options, part_name, sub_even, nullptr, std::move(fixed),
+                                  std::move(even_offset));
+    } catch (const LayoutsCannotClose& e) {  // as in the whole program: those layouts do not close alone
+      std::vector<std::size_t> which;
+      for (std::size_t i : e.layouts) which.push_back(static_cast<std::size_t>(std::find(index.begin(), index.end(), static_cast<std::int64_t>(i)) - index.begin()));
+      throw LayoutsCannotClose(part_name + ": " + std::to_string(which.size()) + " of " + std::to_string(n) +
+                                   " poly-squares cannot close alone (" + e.reasons.front() + ")",
+                               std::move(which), e.reasons);
+    } catch (const MeshingError&) {
+      for (std::size_t i = 0; i < sub.size(); ++i) sub[i]->lattice = std::move(before[i]);
+      return std::nullopt;
+    }
+  }
+  stats.segments = 0;
+  for (std::size_t l = 0; l < n; ++l) {
+    Layout& layout = *layouts[l];
+    if (!solve[l]) layout.lattice = known[l];
+    for (const LayoutSegment& s : layout.segments)
+      stats.max_relative_deviation = std::max(stats.max_relative_deviation, std::abs(static_cast<double>(lattice_count(s, layout.lattice)) - s.target) / std::max(s.target, 1.0));
+    stats.segments += static_cast<int>(layout.segments.size());
+  }
+  spdlog::debug("{}: joint quantization solved locally: {} of {} layouts ({} of {} sides), {:.2f} s", part_name, sub.size(), n,
+                solved_sides, sides, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  return stats;
+}
+
 // A memo's joint outcome replayed: the lattices, then the figures or the error.
 QuantizeStats replay(const QuantizeMemoAccess::Joint& joint, const std::vector<Layout*>& layouts,
                      std::vector<std::size_t>* broken) {
@@ -744,11 +907,14 @@ QuantizeStats quantize_layouts(const std::vector<Layout*>& layouts, const std::v
   // each new map otherwise found them again in rounds of a large solve (graded delta_box: 4-6 per map).
   const bool reuse = reuses_separations(layouts, couplings, even_groups, options);
   std::vector<std::array<std::uint64_t, 2>> layout_keys;
+  std::vector<std::vector<std::array<long long, 2>>> known(layouts.size());
   if (reuse)
     for (std::size_t l = 0; l < layouts.size(); ++l) {
       layout_keys.push_back(learned_key(*layouts[l], *deformed[l], part_name));
-      if (layouts[l]->separations.empty())
-        QuantizeMemoAccess::find_learned(*options.memo, layout_keys.back(), layouts[l]->separations);
+      if (auto learned = QuantizeMemoAccess::find_learned(*options.memo, layout_keys.back())) {
+        if (layouts[l]->separations.empty()) layouts[l]->separations = std::move(learned->separations);
+        known[l] = std::move(learned->lattice);
+      }
     }
   // The repair rounds and the candidates with and without transition rows quantize the same subregions again
   // (graded delta_box: 5 solves of a 64,519-column program, twice).
@@ -760,7 +926,10 @@ QuantizeStats quantize_layouts(const std::vector<Layout*>& layouts, const std::v
     QuantizeMemoAccess::store_joint(*options.memo, key, std::move(joint));
   };
   try {
-    joint.stats = quantize_unmemoized(layouts, deformed, couplings, options, part_name, even_groups, broken);
+    std::optional<QuantizeStats> local;
+    if (reuse && !broken && options.localize_rings >= 0)
+      local = quantize_locally(layouts, deformed, couplings, options, part_name, even_groups, known);
+    joint.stats = local ? *local : quantize_unmemoized(layouts, deformed, couplings, options, part_name, even_groups, broken);
   } catch (const LayoutsCannotClose& e) {
     joint.error = e.what(), joint.cannot_close = e.layouts, joint.reasons = e.reasons;
     store();
@@ -772,7 +941,7 @@ QuantizeStats quantize_layouts(const std::vector<Layout*>& layouts, const std::v
   }
   if (broken) joint.broken = *broken;
   for (std::size_t l = 0; l < layout_keys.size(); ++l)
-    QuantizeMemoAccess::store_learned(*options.memo, layout_keys[l], layouts[l]->separations);
+    QuantizeMemoAccess::store_learned(*options.memo, layout_keys[l], *layouts[l]);
   store();
   return joint.stats;
 }

@@ -574,3 +574,47 @@ TEST(InterfaceQuantization, AJointQuantizationMetAgainIsReplayed) {
   // The strict program: its layouts alone from the elastic one's solve (2), then itself replayed (1).
   EXPECT_EQ(with_memo.memo->hits(), 4u);
 }
+
+TEST(InterfaceQuantization, AMapMetAgainSolvesOnlyWhatChangedAndItsNeighbours) {
+  // Four 2 x 2 squares in a row, each right side coupled to the next one's left: one height for all, 2. A later
+  // map replaces the last one by a 2 x 20 rectangle. The whole program would now give the row a larger height (2
+  // is far below the band of the tall one's sides); solved locally (the new layout and its neighbour, their
+  // side towards the rest taking the count it had), the row keeps 2, every layout is valid and the untouched ones
+  // keep their lattices.
+  std::vector<RectLayout> row(4, rectangle({0, 0}, {2, 2}));
+  std::vector<SegmentCoupling> couplings;
+  for (std::size_t i = 0; i + 1 < row.size(); ++i) couplings.push_back({i, 1, i + 1, 3});
+  const auto height = [](const Layout& l) { return l.lattice[2][1] - l.lattice[1][1]; };
+  auto quantize = [&](std::vector<RectLayout>& rs, const QuantizeOptions& o) {
+    std::vector<Layout*> layouts;
+    std::vector<const std::vector<Vec2>*> deformed;
+    for (RectLayout& r : rs) layouts.push_back(&r.layout), deformed.push_back(&r.deformed);
+    quantize_layouts(layouts, deformed, couplings, o, "row");
+  };
+  QuantizeOptions o;
+  o.reuse_separations_sides = 0;  // these small programs count as large ones
+  o.memo = std::make_shared<QuantizeMemo>();
+  std::vector<RectLayout> first = row;
+  quantize(first, o);
+  for (const RectLayout& r : first) ASSERT_EQ(height(r.layout), 2);
+
+  std::vector<RectLayout> second = row;
+  second.back() = rectangle({0, 0}, {2, 20});
+  std::vector<RectLayout> whole = second;
+  quantize(second, o);
+  for (std::size_t i = 0; i < second.size(); ++i) {
+    EXPECT_EQ(height(second[i].layout), 2) << i;
+    EXPECT_EQ(check_layout(second[i].layout), "") << i;
+    if (i + 2 < second.size()) EXPECT_EQ(second[i].layout.lattice, first[i].layout.lattice) << i;
+  }
+  QuantizeOptions all = o;
+  all.localize_rings = -1;
+  all.memo = std::make_shared<QuantizeMemo>();
+  first = row;
+  quantize(first, all);
+  quantize(whole, all);
+  for (const RectLayout& r : whole) {
+    EXPECT_GT(height(r.layout), 2);
+    EXPECT_EQ(height(r.layout), height(whole.front().layout));
+  }
+}

@@ -53,6 +53,11 @@ struct QuantizeOptions {
                                               ///< round costs a tenth of a second and the carried separations
                                               ///< narrow the optimum (delta_box 200 m, 4 rotations, medians:
                                               ///< 22.1 -> 22.9 interior singular nodes per 1000 quads)
+  int localize_rings = 1;  ///< joint programs of more than reuse_separations_sides sides whose layouts mostly met
+                           ///< an earlier map of the part (a split round, a repair round, the pulled snaps) solve
+                           ///< only what changed and this many couplings around it, the rest keeping its
+                           ///< counts (quantize_locally); -1 = always the whole program
+  double localize_max_fraction = 0.5;  ///< ... when that is at most this fraction of the sides
   double broken_coupling_cost = 1e4;  ///< cost per element of an elastic coupling's mismatch (quantize_layouts
                                       ///< with `broken`): above any saving in deviation, so only what cannot agree breaks
   /// Each layout's quantization alone (the separations it needs, or why it cannot close) and each joint
