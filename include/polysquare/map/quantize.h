@@ -57,7 +57,7 @@ struct QuantizeOptions {
                            ///< an earlier map of the part (a split round, a repair round, the pulled snaps) solve
                            ///< only what changed and this many couplings around it, the rest keeping its
                            ///< counts (quantize_locally); -1 = always the whole program
-  double localize_max_fraction = 0.5;  ///< ... when that is at most this fraction of the sides
+  double localize_max_fraction = 0.3;  ///< ... when that is at most this fraction of the sides
   double broken_coupling_cost = 1e4;  ///< cost per element of an elastic coupling's mismatch (quantize_layouts
                                       ///< with `broken`): above any saving in deviation, so only what cannot agree breaks
   /// Each layout's quantization alone (the separations it needs, or why it cannot close) and each joint
