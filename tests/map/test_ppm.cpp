@@ -593,6 +593,7 @@ TEST(InterfaceQuantization, AMapMetAgainSolvesOnlyWhatChangedAndItsNeighbours) {
   };
   QuantizeOptions o;
   o.reuse_separations_sides = 0;  // these small programs count as large ones
+  o.localize_max_fraction = 0.5;  // the piece: 2 of the 4 layouts
   o.memo = std::make_shared<QuantizeMemo>();
   std::vector<RectLayout> first = row;
   quantize(first, o);
@@ -607,14 +608,21 @@ TEST(InterfaceQuantization, AMapMetAgainSolvesOnlyWhatChangedAndItsNeighbours) {
     EXPECT_EQ(check_layout(second[i].layout), "") << i;
     if (i + 2 < second.size()) EXPECT_EQ(second[i].layout.lattice, first[i].layout.lattice) << i;
   }
+  // The whole program: without localizing, or with a piece above the default fraction (0.3) of the sides.
   QuantizeOptions all = o;
   all.localize_rings = -1;
-  all.memo = std::make_shared<QuantizeMemo>();
-  first = row;
-  quantize(first, all);
-  quantize(whole, all);
-  for (const RectLayout& r : whole) {
-    EXPECT_GT(height(r.layout), 2);
-    EXPECT_EQ(height(r.layout), height(whole.front().layout));
+  QuantizeOptions capped = o;
+  capped.localize_max_fraction = QuantizeOptions{}.localize_max_fraction;
+  for (const QuantizeOptions& w : {all, capped}) {
+    QuantizeOptions fresh = w;
+    fresh.memo = std::make_shared<QuantizeMemo>();
+    first = row;
+    quantize(first, fresh);
+    std::vector<RectLayout> again = whole;
+    quantize(again, fresh);
+    for (const RectLayout& r : again) {
+      EXPECT_GT(height(r.layout), 2);
+      EXPECT_EQ(height(r.layout), height(again.front().layout));
+    }
   }
 }
