@@ -183,27 +183,37 @@ void add_side_rows(IntegerProgram& P, const JointProblem& jp, std::size_t l, con
   }
 }
 
+// Appends sign * (the count of layout l's segment k) to a row: sign * sg * (X_b - X_a).
+void add_count_terms(std::vector<std::pair<int, double>>& row, const JointProblem& jp, std::size_t l, int k,
+                     double sign) {
+  const LayoutSegment& s = jp.layouts[l]->segments[static_cast<std::size_t>(k)];
+  const double sg = sign * label_sign(s.label);
+  const int axis = label_axis(s.label);
+  row.push_back({jp.col(l, axis, s.break_b), sg});
+  row.push_back({jp.col(l, axis, s.break_a), -sg});
+}
+
+// Transition fans on a coupling row n_a - n_b = 2 (fans on b's side - fans on a's side); a fan costs as a
+// relative deviation of the coupled target t_a.
+void add_fan_terms(IntegerProgram& P, std::vector<std::pair<int, double>>& row, double t_a,
+                   const QuantizeOptions& options) {
+  const int f = P.add_columns(2, 0.0, IntegerProgram::inf, options.transition_cost / std::max(t_a, 1.0), true);
+  P.round_first(f, 0.0), P.round_first(f + 1, 0.0);
+  row.insert(row.end(), {{f, -2.0}, {f + 1, 2.0}});
+}
+
 // Equal counts on the two sides of every coupling; elastic ones may break, transition ones differ by 2 per fan.
 void add_coupling_rows(IntegerProgram& P, const JointProblem& jp, const std::vector<SegmentCoupling>& couplings,
                        const std::vector<std::vector<double>>& target, const QuantizeOptions& options, bool elastic) {
   for (const SegmentCoupling& c : couplings) {
-    const LayoutSegment& s = jp.layouts[c.layout_a]->segments[c.segment_a];
-    const LayoutSegment& t = jp.layouts[c.layout_b]->segments[c.segment_b];
-    const double ss = label_sign(s.label), st = label_sign(t.label);
-    const int sa = jp.col(c.layout_a, label_axis(s.label), s.break_a), sb = jp.col(c.layout_a, label_axis(s.label), s.break_b);
-    const int ta = jp.col(c.layout_b, label_axis(t.label), t.break_a), tb = jp.col(c.layout_b, label_axis(t.label), t.break_b);
-    std::vector<std::pair<int, double>> row{{sb, ss}, {sa, -ss}, {tb, -st}, {ta, st}};
+    std::vector<std::pair<int, double>> row;
+    add_count_terms(row, jp, c.layout_a, c.segment_a, 1.0);
+    add_count_terms(row, jp, c.layout_b, c.segment_b, -1.0);
     if (elastic) {
       const int e = P.add_columns(2, 0.0, IntegerProgram::inf, options.broken_coupling_cost);
       row.insert(row.end(), {{e, 1.0}, {e + 1, -1.0}});
     }
-    if (c.transition) {
-      // n_a - n_b = 2 (fans on b's side - fans on a's side); a fan costs as a relative deviation of the target.
-      const double t_c = std::max(target[c.layout_a][static_cast<std::size_t>(c.segment_a)], 1.0);
-      const int f = P.add_columns(2, 0.0, IntegerProgram::inf, options.transition_cost / t_c, true);
-      P.round_first(f, 0.0), P.round_first(f + 1, 0.0);
-      row.insert(row.end(), {{f, -2.0}, {f + 1, 2.0}});
-    }
+    if (c.transition) add_fan_terms(P, row, target[c.layout_a][static_cast<std::size_t>(c.segment_a)], options);
     P.add_row(row, 0.0, 0.0);
   }
 }
@@ -212,16 +222,9 @@ void add_coupling_rows(IntegerProgram& P, const JointProblem& jp, const std::vec
 void add_fixed_rows(IntegerProgram& P, const JointProblem& jp, const std::vector<std::vector<double>>& target,
                     const QuantizeOptions& options) {
   for (const JointProblem::FixedCount& f : jp.fixed) {
-    const LayoutSegment& s = jp.layouts[f.layout]->segments[static_cast<std::size_t>(f.segment)];
-    const double sg = label_sign(s.label);
-    const int axis = label_axis(s.label);
-    std::vector<std::pair<int, double>> row{{jp.col(f.layout, axis, s.break_b), sg}, {jp.col(f.layout, axis, s.break_a), -sg}};
-    if (f.transition) {
-      const double t_c = std::max(target[f.layout][static_cast<std::size_t>(f.segment)], 1.0);
-      const int c = P.add_columns(2, 0.0, IntegerProgram::inf, options.transition_cost / t_c, true);
-      P.round_first(c, 0.0), P.round_first(c + 1, 0.0);
-      row.insert(row.end(), {{c, -2.0}, {c + 1, 2.0}});
-    }
+    std::vector<std::pair<int, double>> row;
+    add_count_terms(row, jp, f.layout, f.segment, 1.0);
+    if (f.transition) add_fan_terms(P, row, target[f.layout][static_cast<std::size_t>(f.segment)], options);
     const double n = static_cast<double>(f.count);
     P.add_row(row, n, n);
   }
@@ -234,13 +237,7 @@ void add_even_rows(IntegerProgram& P, const JointProblem& jp, const std::vector<
     const double offset = i < jp.even_offset.size() ? static_cast<double>(jp.even_offset[i]) : 0.0;
     const int m = P.add_columns(1, 0.0, IntegerProgram::inf, 0.0, true);
     std::vector<std::pair<int, double>> terms{{m, -2.0}};
-    for (const auto& [l, k] : g) {
-      const LayoutSegment& s = jp.layouts[l]->segments[static_cast<std::size_t>(k)];
-      const double sg = label_sign(s.label);
-      const int axis = label_axis(s.label);
-      terms.push_back({jp.col(l, axis, s.break_b), sg});
-      terms.push_back({jp.col(l, axis, s.break_a), -sg});
-    }
+    for (const auto& [l, k] : g) add_count_terms(terms, jp, l, k, 1.0);
     P.add_row(terms, -offset, -offset);
   }
 }
@@ -268,6 +265,20 @@ IntegerProgram joint_program(JointProblem& jp, const std::vector<SegmentCoupling
 MeshingError no_integer_solution(const std::string& part_name) {
   return MeshingError(part_name + ": quantization has no integer solution (the labelled sides cannot close into "
                                   "poly-squares without overlapping)");
+}
+
+// A segment's element count in a quantized lattice.
+long long lattice_count(const LayoutSegment& s, const std::vector<std::array<long long, 2>>& lattice) {
+  const auto a = lattice[static_cast<std::size_t>(s.break_a)], b = lattice[static_cast<std::size_t>(s.break_b)];
+  return std::llabs(b[0] - a[0]) + std::llabs(b[1] - a[1]);
+}
+
+// max over a quantized layout's segments of |n - target| / max(target, 1).
+double max_relative_deviation(const Layout& layout) {
+  double out = 0.0;
+  for (const LayoutSegment& s : layout.segments)
+    out = std::max(out, std::abs(static_cast<double>(lattice_count(s, layout.lattice)) - s.target) / std::max(s.target, 1.0));
+  return out;
 }
 
 // Adds the separations from `first` on to the program, solves it and reads the lattice of every layout.
@@ -303,20 +314,14 @@ void solve_joint(JointProblem& jp, IntegerProgram& P, const std::vector<SegmentC
           throw MeshingError(part_name + ": quantization returned a fractional coordinate " + std::to_string(v));
         layout.lattice[b][static_cast<std::size_t>(axis)] = std::llround(v);
       }
-    for (const LayoutSegment& s : layout.segments) {
-      const auto pa = layout.lattice[s.break_a], pb = layout.lattice[s.break_b];
-      const double n = static_cast<double>(std::llabs(pb[0] - pa[0]) + std::llabs(pb[1] - pa[1]));
-      stats.max_relative_deviation = std::max(stats.max_relative_deviation, std::abs(n - s.target) / std::max(s.target, 1.0));
-    }
+    stats.max_relative_deviation = std::max(stats.max_relative_deviation, max_relative_deviation(layout));
     stats.segments += static_cast<int>(layout.segments.size());
     stats.variables += jp.ncls[l][0] + jp.ncls[l][1];
   }
   if (broken)
     for (std::size_t c = 0; c < couplings.size(); ++c) {
       auto count = [&](std::size_t l, int k) {
-        const LayoutSegment& s = jp.layouts[l]->segments[static_cast<std::size_t>(k)];
-        const auto pa = jp.layouts[l]->lattice[s.break_a], pb = jp.layouts[l]->lattice[s.break_b];
-        return std::llabs(pb[0] - pa[0]) + std::llabs(pb[1] - pa[1]);
+        return lattice_count(jp.layouts[l]->segments[static_cast<std::size_t>(k)], jp.layouts[l]->lattice);
       };
       if (count(couplings[c].layout_a, couplings[c].segment_a) != count(couplings[c].layout_b, couplings[c].segment_b))
         broken->push_back(c);
@@ -761,12 +766,6 @@ QuantizeStats quantize_unmemoized(const std::vector<Layout*>& layouts,
   return stats;
 }
 
-// A segment's element count in a quantized lattice.
-long long lattice_count(const LayoutSegment& s, const std::vector<std::array<long long, 2>>& lattice) {
-  const auto a = lattice[static_cast<std::size_t>(s.break_a)], b = lattice[static_cast<std::size_t>(s.break_b)];
-  return std::llabs(b[0] - a[0]) + std::llabs(b[1] - a[1]);
-}
-
 // A large joint program whose layouts mostly kept the lattices an earlier map of the part gave them (`known`,
 // empty where a layout is new): only the new layouts, those whose known counts disagree with a neighbour's or
 // that border a patch (even groups), and their neighbours out to options.localize_rings couplings are solved; the
@@ -818,12 +817,13 @@ std::optional<QuantizeStats> quantize_locally(const std::vector<Layout*>& layout
   if (static_cast<double>(solved_sides) > options.localize_max_fraction * static_cast<double>(sides)) return std::nullopt;
   // The smaller program: the solved layouts, their couplings among themselves, and the known counts across.
   std::vector<std::int64_t> index(n, -1);
+  std::vector<std::size_t> full;  // the layout of each in the smaller program
   std::vector<Layout*> sub;
   std::vector<const std::vector<Vec2>*> sub_deformed;
   for (std::size_t l = 0; l < n; ++l)
     if (solve[l]) {
       index[l] = static_cast<std::int64_t>(sub.size());
-      sub.push_back(layouts[l]), sub_deformed.push_back(deformed[l]);
+      full.push_back(l), sub.push_back(layouts[l]), sub_deformed.push_back(deformed[l]);
     }
   std::vector<SegmentCoupling> sub_couplings;
   std::vector<JointProblem::FixedCount> fixed;
@@ -860,7 +860,7 @@ std::optional<QuantizeStats> quantize_locally(const std::vector<Layout*>& layout
                                   std::move(even_offset));
     } catch (const LayoutsCannotClose& e) {  // as in the whole program: those layouts do not close alone
       std::vector<std::size_t> which;
-      for (std::size_t i : e.layouts) which.push_back(static_cast<std::size_t>(std::find(index.begin(), index.end(), static_cast<std::int64_t>(i)) - index.begin()));
+      for (std::size_t i : e.layouts) which.push_back(full[i]);
       throw LayoutsCannotClose(part_name + ": " + std::to_string(which.size()) + " of " + std::to_string(n) +
                                    " poly-squares cannot close alone (" + e.reasons.front() + ")",
                                std::move(which), e.reasons);
@@ -873,8 +873,7 @@ std::optional<QuantizeStats> quantize_locally(const std::vector<Layout*>& layout
   for (std::size_t l = 0; l < n; ++l) {
     Layout& layout = *layouts[l];
     if (!solve[l]) layout.lattice = known[l];
-    for (const LayoutSegment& s : layout.segments)
-      stats.max_relative_deviation = std::max(stats.max_relative_deviation, std::abs(static_cast<double>(lattice_count(s, layout.lattice)) - s.target) / std::max(s.target, 1.0));
+    stats.max_relative_deviation = std::max(stats.max_relative_deviation, max_relative_deviation(layout));
     stats.segments += static_cast<int>(layout.segments.size());
   }
   spdlog::debug("{}: joint quantization solved locally: {} of {} layouts ({} of {} sides), {:.2f} s", part_name, sub.size(), n,
